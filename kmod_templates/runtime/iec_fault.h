@@ -1,0 +1,243 @@
+/* SPDX-License-Identifier: GPL-2.0-only OR MIT */
+/*
+ * iec_fault.h - per-task runtime context and defined runtime faults.
+ *
+ * Every POU body receives the task's struct iec_ctx.  It carries the time
+ * the task cycle started (timers read it, so one cycle sees one time), the
+ * loop budget of the cycle, and the first runtime fault of the cycle.
+ *
+ * Fault protocol (what the code generator must emit):
+ *
+ *  1. Operations that can fail are done by helpers that take the ctx:
+ *     iec_div_<t>, iec_mod_<t>, iec_index, iec_range_<t>, iec_enum_check,
+ *     iec_mux_index, iec_loop_tick, iec_div_time ...  On failure a helper
+ *     records the fault (iec_fault_raise) and returns a defined value
+ *     (0, a safe index, the subrange's low bound) so the rest of the
+ *     expression is still well defined.
+ *  2. After each statement that contains such a helper or a call to another
+ *     POU, the generated code does
+ *             IEC_FAULT_CHECK(ctx, "POU_NAME", line);
+ *     which, if a fault is pending, records where (only the innermost POU,
+ *     the first to locate it, is kept) and returns from the body.  A
+ *     function returns its (defined) result variable; use
+ *     IEC_FAULT_CHECK_RET(ctx, pou, line, retval) there.
+ *  3. Loops: every iteration of WHILE, REPEAT and FOR starts with
+ *             if (!iec_loop_tick(ctx)) { IEC_FAULT_LOCATE...; return; }
+ *     (IEC_LOOP_TICK(ctx, pou, line) does exactly this.)  The budget is
+ *     set by iec_ctx_cycle_begin() and counts iterations over the whole
+ *     cycle, so a loop that never ends records IEC_FAULT_LOOP and the task
+ *     regains control.
+ *  4. The task loop calls iec_ctx_cycle_begin() before the programs of a
+ *     cycle, reads ctx->fault after them, accounts it, and decides (stop or
+ *     go on); iec_fault_clear() resets the fault state.  A fault left set
+ *     makes every later body return at its first check.
+ *
+ * Only the first fault of a cycle is kept in code/pou/line; fault_count
+ * counts every raise.
+ */
+#ifndef IEC_FAULT_H
+#define IEC_FAULT_H
+
+#include "iec_types.h"
+
+enum iec_fault_code {
+	IEC_FAULT_NONE = 0,
+	IEC_FAULT_DIV_ZERO,	/* integer or TIME division / MOD by zero */
+	IEC_FAULT_INDEX,	/* array index out of its declared range */
+	IEC_FAULT_RANGE,	/* value outside a subrange type */
+	IEC_FAULT_ENUM,		/* value that is not one of the enum's */
+	IEC_FAULT_LOOP,		/* loop budget of the cycle exhausted */
+	IEC_FAULT_MUX,		/* MUX selector K out of range */
+	IEC_FAULT_USER,		/* raised by the program itself */
+	IEC_FAULT__COUNT
+};
+
+/* Default iteration budget per cycle when the task sets none. */
+#define IEC_LOOP_BUDGET_DEFAULT	10000000U
+
+struct iec_ctx {
+	iec_s64 now_ns;			/* time the task cycle started */
+	iec_u32 loop_budget;		/* iterations left in this cycle */
+	iec_u32 loop_budget_cycle;	/* budget granted at cycle start */
+	enum iec_fault_code fault;	/* first fault, IEC_FAULT_NONE if none */
+	const char *fault_pou;		/* POU that raised it (NULL: unknown) */
+	int fault_line;			/* source line in that POU, 0: unknown */
+	iec_u32 fault_count;		/* faults raised since the last clear */
+};
+
+static inline void iec_ctx_init(struct iec_ctx *ctx, iec_u32 loop_budget)
+{
+	iec_memset(ctx, 0, sizeof(*ctx));
+	ctx->loop_budget_cycle = loop_budget ? loop_budget :
+					       IEC_LOOP_BUDGET_DEFAULT;
+	ctx->loop_budget = ctx->loop_budget_cycle;
+}
+
+static inline void iec_ctx_cycle_begin(struct iec_ctx *ctx, iec_s64 now_ns)
+{
+	ctx->now_ns = now_ns;
+	ctx->loop_budget = ctx->loop_budget_cycle;
+}
+
+static inline void iec_fault_clear(struct iec_ctx *ctx)
+{
+	ctx->fault = IEC_FAULT_NONE;
+	ctx->fault_pou = NULL;
+	ctx->fault_line = 0;
+	ctx->fault_count = 0;
+}
+
+static inline void iec_fault_raise(struct iec_ctx *ctx,
+				   enum iec_fault_code code)
+{
+	if (ctx->fault == IEC_FAULT_NONE)
+		ctx->fault = code;
+	if (ctx->fault_count != IEC_U32_MAX)
+		ctx->fault_count++;
+}
+
+/* Record where the pending fault was noticed; the first caller wins. */
+static inline void iec_fault_locate(struct iec_ctx *ctx, const char *pou,
+				    int line)
+{
+	if (!ctx->fault_pou) {
+		ctx->fault_pou = pou;
+		ctx->fault_line = line;
+	}
+}
+
+static inline const char *iec_fault_name(enum iec_fault_code code)
+{
+	switch (code) {
+	case IEC_FAULT_NONE:
+		return "none";
+	case IEC_FAULT_DIV_ZERO:
+		return "division by zero";
+	case IEC_FAULT_INDEX:
+		return "array index out of range";
+	case IEC_FAULT_RANGE:
+		return "subrange value out of range";
+	case IEC_FAULT_ENUM:
+		return "invalid enumerated value";
+	case IEC_FAULT_LOOP:
+		return "endless loop (loop budget exhausted)";
+	case IEC_FAULT_MUX:
+		return "MUX selector out of range";
+	case IEC_FAULT_USER:
+		return "fault raised by the program";
+	default:
+		return "unknown fault";
+	}
+}
+
+#define IEC_FAULT_CHECK(ctx, pou, line)					\
+	do {								\
+		if (iec_unlikely((ctx)->fault != IEC_FAULT_NONE)) {	\
+			iec_fault_locate((ctx), (pou), (line));		\
+			return;						\
+		}							\
+	} while (0)
+
+#define IEC_FAULT_CHECK_RET(ctx, pou, line, retval)			\
+	do {								\
+		if (iec_unlikely((ctx)->fault != IEC_FAULT_NONE)) {	\
+			iec_fault_locate((ctx), (pou), (line));		\
+			return (retval);				\
+		}							\
+	} while (0)
+
+/* Returns false (and records IEC_FAULT_LOOP) once the budget is used up. */
+static inline bool iec_loop_tick(struct iec_ctx *ctx)
+{
+	if (iec_likely(ctx->loop_budget != 0)) {
+		ctx->loop_budget--;
+		return true;
+	}
+	iec_fault_raise(ctx, IEC_FAULT_LOOP);
+	return false;
+}
+
+#define IEC_LOOP_TICK(ctx, pou, line)					\
+	do {								\
+		if (iec_unlikely(!iec_loop_tick(ctx))) {		\
+			iec_fault_locate((ctx), (pou), (line));		\
+			return;						\
+		}							\
+	} while (0)
+
+#define IEC_LOOP_TICK_RET(ctx, pou, line, retval)			\
+	do {								\
+		if (iec_unlikely(!iec_loop_tick(ctx))) {		\
+			iec_fault_locate((ctx), (pou), (line));		\
+			return (retval);				\
+		}							\
+	} while (0)
+
+/*
+ * Array index check.  ARRAY[lo..hi]: returns idx - lo, the zero-based C
+ * index, when lo <= idx <= hi; otherwise records IEC_FAULT_INDEX and
+ * returns 0, an index that is always valid.  Computed without overflow for
+ * any 64-bit bounds.
+ */
+static inline iec_u64 iec_index(struct iec_ctx *ctx, iec_s64 idx, iec_s64 lo,
+				 iec_s64 hi)
+{
+	if (iec_likely(idx >= lo && idx <= hi))
+		return (iec_u64)idx - (iec_u64)lo;
+	iec_fault_raise(ctx, IEC_FAULT_INDEX);
+	return 0;
+}
+
+/*
+ * MUX(K, IN0, ..., IN(n-1)): returns K when 0 <= K < n; otherwise records
+ * IEC_FAULT_MUX and returns 0 (IN0 is selected).
+ */
+static inline iec_u32 iec_mux_index(struct iec_ctx *ctx, iec_s64 k,
+				    iec_u32 n)
+{
+	if (iec_likely(k >= 0 && (iec_u64)k < n))
+		return (iec_u32)k;
+	iec_fault_raise(ctx, IEC_FAULT_MUX);
+	return 0;
+}
+
+/*
+ * Subrange check for a value about to be stored in a subrange variable:
+ * returns v when lo <= v <= hi, else records IEC_FAULT_RANGE and returns
+ * lo (a valid value of the type).  Signed values go through the _lint
+ * variant, unsigned ones through _ulint.
+ */
+static inline iec_s64 iec_range_lint(struct iec_ctx *ctx, iec_s64 v,
+				     iec_s64 lo, iec_s64 hi)
+{
+	if (iec_likely(v >= lo && v <= hi))
+		return v;
+	iec_fault_raise(ctx, IEC_FAULT_RANGE);
+	return lo;
+}
+
+static inline iec_u64 iec_range_ulint(struct iec_ctx *ctx, iec_u64 v,
+				      iec_u64 lo, iec_u64 hi)
+{
+	if (iec_likely(v >= lo && v <= hi))
+		return v;
+	iec_fault_raise(ctx, IEC_FAULT_RANGE);
+	return lo;
+}
+
+/*
+ * Enumerated value check for enums whose values are lo..hi (contiguous;
+ * the compiler checks other sets with a switch and iec_fault_raise).
+ * Returns v, or records IEC_FAULT_ENUM and returns dflt (the enum's
+ * initial value).
+ */
+static inline iec_s64 iec_enum_check(struct iec_ctx *ctx, iec_s64 v,
+				     iec_s64 lo, iec_s64 hi, iec_s64 dflt)
+{
+	if (iec_likely(v >= lo && v <= hi))
+		return v;
+	iec_fault_raise(ctx, IEC_FAULT_ENUM);
+	return dflt;
+}
+
+#endif /* IEC_FAULT_H */

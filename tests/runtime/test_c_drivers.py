@@ -1,0 +1,28 @@
+# SPDX-License-Identifier: MIT
+"""Run the C test drivers in tests/runtime/c, each built twice: with the
+strict warning flags and with UBSan+ASan (no recovery)."""
+import re
+
+import pytest
+
+from conftest import MODES, cfile, rt, run_driver
+
+# driver -> runtime sources it links
+DRIVERS = {
+    "test_int.c": [],
+}
+
+pytestmark = pytest.mark.execution
+
+
+@pytest.mark.parametrize("mode", sorted(MODES))
+@pytest.mark.parametrize("driver", sorted(DRIVERS))
+def test_driver(builder, driver, mode):
+    exe = builder.build([cfile(driver), *rt(*DRIVERS[driver])], mode=mode,
+                        libs=["-lm"])
+    r = run_driver(exe)
+    out = r.stdout + r.stderr
+    assert r.returncode == 0, out
+    m = re.search(r"^(\d+) passed, (\d+) failed$", r.stdout, re.M)
+    assert m, out
+    assert int(m.group(1)) > 0 and int(m.group(2)) == 0, out
