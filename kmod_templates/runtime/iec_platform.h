@@ -27,6 +27,7 @@ typedef u8 iec_u8;
 typedef u16 iec_u16;
 typedef u32 iec_u32;
 typedef u64 iec_u64;
+typedef size_t iec_size_t;
 
 #else /* user space */
 
@@ -42,6 +43,7 @@ typedef uint8_t iec_u8;
 typedef uint16_t iec_u16;
 typedef uint32_t iec_u32;
 typedef uint64_t iec_u64;
+typedef size_t iec_size_t;
 
 #endif /* __KERNEL__ */
 

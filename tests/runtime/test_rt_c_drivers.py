@@ -5,11 +5,12 @@ import re
 
 import pytest
 
-from conftest import MODES, cfile, rt, run_driver
+from rt_helpers import MODES, cfile, rt, run_driver
 
 # driver -> runtime sources it links
 DRIVERS = {
     "test_int.c": [],
+    "test_string.c": ["iec_string.c"],
 }
 
 pytestmark = pytest.mark.execution
