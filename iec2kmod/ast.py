@@ -1,0 +1,285 @@
+"""Expression nodes built by the parser's object processors.
+
+Statements, declarations and POUs stay textX model objects (their classes are
+generated from the grammar); expressions are rebuilt into these small nodes so
+that the flat operand/operator sequences of the grammar become precedence
+trees.  Every node keeps the character offset it starts at (``pos``).
+"""
+
+from __future__ import annotations
+
+
+class Expr:
+    __slots__ = ("pos", "type", "const")
+
+    def __init__(self, pos):
+        self.pos = pos
+        self.type = None   # filled by the type checker
+        self.const = None  # folded constant value, when known
+
+
+class BinOp(Expr):
+    __slots__ = ("op", "left", "right")
+
+    def __init__(self, pos, op, left, right):
+        super().__init__(pos)
+        self.op = op
+        self.left = left
+        self.right = right
+
+    def __repr__(self):
+        return f"({self.left!r} {self.op} {self.right!r})"
+
+
+class UnOp(Expr):
+    __slots__ = ("op", "operand")
+
+    def __init__(self, pos, op, operand):
+        super().__init__(pos)
+        self.op = op
+        self.operand = operand
+
+    def __repr__(self):
+        return f"({self.op} {self.operand!r})"
+
+
+class Lit(Expr):
+    """A literal: ``kind`` is int, real, bool, time, date, tod, dt, string,
+    wstring or enum; ``value`` its Python value; ``type_name`` the explicit
+    type prefix (``INT#5``) or None."""
+
+    __slots__ = ("text", "kind", "value", "type_name")
+
+    def __init__(self, pos, text, kind, value, type_name=None):
+        super().__init__(pos)
+        self.text = text
+        self.kind = kind
+        self.value = value
+        self.type_name = type_name
+
+    def __repr__(self):
+        return self.text
+
+
+class Ref(Expr):
+    """A variable access: ``name`` then accessors: ('index', [exprs], pos),
+    ('member', name, pos) or ('bit', n, pos)."""
+
+    __slots__ = ("name", "accessors", "symbol")
+
+    def __init__(self, pos, name, accessors):
+        super().__init__(pos)
+        self.name = name
+        self.accessors = accessors
+        self.symbol = None
+
+    def __repr__(self):
+        out = self.name
+        for kind, val, _ in self.accessors:
+            if kind == "index":
+                out += "[" + ", ".join(map(repr, val)) + "]"
+            else:
+                out += f".{val}"
+        return out
+
+
+class Direct(Expr):
+    """A directly represented variable such as %IX0.1."""
+
+    __slots__ = ("address",)
+
+    def __init__(self, pos, address):
+        super().__init__(pos)
+        self.address = address
+
+    def __repr__(self):
+        return self.address
+
+
+class Arg:
+    """A call argument: ``kind`` is 'pos', 'in' (name := value) or
+    'out' (name => target)."""
+
+    __slots__ = ("pos", "kind", "name", "value", "negate")
+
+    def __init__(self, pos, kind, name, value, negate=False):
+        self.pos = pos
+        self.kind = kind
+        self.name = name
+        self.value = value
+        self.negate = negate
+
+    def __repr__(self):
+        if self.kind == "pos":
+            return repr(self.value)
+        return f"{self.name} {':=' if self.kind == 'in' else '=>'} {self.value!r}"
+
+
+class Call(Expr):
+    __slots__ = ("name", "args", "target", "bound")
+
+    def __init__(self, pos, name, args):
+        super().__init__(pos)
+        self.name = name
+        self.args = args
+        self.target = None  # resolved POU, FB instance Var or standard function
+        self.bound = None   # upper parameter name -> Arg, for user POUs
+
+    def __repr__(self):
+        return f"{self.name}({', '.join(map(repr, self.args))})"
+
+
+# --------------------------------------------------------------------------
+# Declarations, statements and POUs.  Plain picklable objects, so parsed
+# files can travel between worker processes and into the parse cache.
+
+
+class Node:
+    __slots__ = ("pos",)
+    fields: tuple = ()
+
+    def __init__(self, pos=None, **kw):
+        self.pos = pos
+        for name in self.__slots__:
+            if name != "pos":
+                setattr(self, name, kw.get(name))
+
+    def __repr__(self):
+        inner = ", ".join(f"{k}={getattr(self, k)!r}" for k in self.__slots__
+                          if k not in ("pos",) and getattr(self, k) not in (None, [], ()))
+        return f"{type(self).__name__}({inner})"
+
+
+# type specifications
+class NamedSpec(Node):
+    __slots__ = ("name",)
+
+
+class StringSpec(Node):
+    __slots__ = ("wide", "length")
+
+
+class SubrangeSpec(Node):
+    __slots__ = ("base", "low", "high")
+
+
+class EnumSpec(Node):
+    __slots__ = ("base", "values")  # values: [(name, expr|None, pos)]
+
+
+class ArraySpec(Node):
+    __slots__ = ("ranges", "element")  # ranges: [(low expr, high expr)]
+
+
+class StructSpec(Node):
+    __slots__ = ("members",)  # [VarDecl] with one name each
+
+
+class ArrayInit(Node):
+    __slots__ = ("items",)  # [(count|None, value|None)]
+
+
+class StructInit(Node):
+    __slots__ = ("fields",)  # [(name, value, pos)]
+
+
+class TypeDef(Node):
+    __slots__ = ("name", "spec", "init", "src")
+
+
+class VarDecl(Node):
+    __slots__ = ("names", "location", "edge", "spec", "init")  # names: [(name, pos)]
+
+
+class AccessDecl(Node):
+    __slots__ = ("name", "path", "spec", "direction")
+
+
+class ConfigDecl(Node):
+    __slots__ = ("path", "location", "spec", "init")
+
+
+class VarBlock(Node):
+    __slots__ = ("kind", "qualifiers", "decls")
+
+
+class POU(Node):
+    __slots__ = ("kind", "name", "result", "blocks", "body", "language", "src", "end_pos")
+
+
+# statements
+class Assign(Node):
+    __slots__ = ("target", "value")
+
+
+class CallStmt(Node):
+    __slots__ = ("call",)
+
+
+class If(Node):
+    __slots__ = ("branches", "else_")  # branches: [(cond, [stmt])]
+
+
+class Case(Node):
+    __slots__ = ("selector", "elements", "else_")  # elements: [([(low, high|None)], [stmt])]
+
+
+class For(Node):
+    __slots__ = ("var", "var_pos", "start", "end", "step", "body")
+
+
+class While(Node):
+    __slots__ = ("cond", "body")
+
+
+class Repeat(Node):
+    __slots__ = ("body", "cond")
+
+
+class Exit(Node):
+    __slots__ = ()
+
+
+class Return(Node):
+    __slots__ = ()
+
+
+class Empty(Node):
+    __slots__ = ()
+
+
+class ILInstr(Node):
+    """One IL instruction.  ``op`` is the upper-case operator (LD, ADD, CAL,
+    ...), or None for a function call (``fn``); ``nested`` holds the
+    instructions of a deferred ``op(`` ... ``)`` whose first operand is
+    ``operand``; ``args`` are formal arguments of CAL or a function."""
+
+    __slots__ = ("label", "label_pos", "op", "operand", "deferred", "nested", "fb",
+                 "fn", "args", "operands", "call")
+
+
+# configuration
+class Task(Node):
+    __slots__ = ("name", "props")  # props: {KEY: (expr, pos)}
+
+
+class Connection(Node):
+    __slots__ = ("name", "direction", "value")  # direction: 'in' | 'out'
+
+
+class ProgramConfig(Node):
+    __slots__ = ("name", "retain", "task", "task_pos", "type", "type_pos", "connections")
+
+
+class Resource(Node):
+    __slots__ = ("name", "processor", "blocks", "tasks", "programs")
+
+
+class Configuration(Node):
+    __slots__ = ("name", "blocks", "resources", "access", "src")
+
+
+class SourceUnit(Node):
+    """One parsed file: its types, POUs and configurations in order."""
+
+    __slots__ = ("src", "types", "pous", "configurations")

@@ -1,0 +1,90 @@
+"""Semantic checks: the passes after parsing.  ``check_project`` runs them in
+order, collecting every diagnostic, and returns the checked Project."""
+
+from __future__ import annotations
+
+import time
+
+from .body import BodyChecker
+from .config import ConfigChecker
+from .declare import Declarer
+from .symbols import Project
+from .types import FBType
+
+
+def check_project(units, diags, timings=None) -> Project:
+    timings = timings if timings is not None else {}
+    project = Project(units=units)
+    decl = Declarer(project, diags)
+
+    t = time.perf_counter()
+    decl.declare_types(units)
+    decl.declare_pous(units)
+    timings["declare"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    for pou in project.pous.values():
+        BodyChecker(project, decl, diags, pou).check()
+    timings["resolve"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    check_recursion(project, diags)
+    ConfigChecker(project, decl, diags).check(units)
+    timings["configure"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    lint(project, diags)
+    timings["lint"] = time.perf_counter() - t
+    return project
+
+
+def check_recursion(project, diags):
+    """No POU may call or contain itself, directly or indirectly."""
+    graph = {}
+    for pou in project.pous.values():
+        deps = set(k for k in pou.calls if k in project.pous)
+        for v in pou.vars.values():
+            if isinstance(v.type, FBType) and not v.type.pou.standard:
+                deps.add(v.type.pou.key)
+        graph[pou.key] = deps
+    state = {}
+    reported = set()
+
+    def visit(key, path):
+        state[key] = 1
+        for dep in sorted(graph.get(key, ())):
+            if state.get(dep) == 1:
+                cycle = path[path.index(dep):] + [dep] if dep in path else [key, dep]
+                first = project.pous[cycle[0]]
+                if frozenset(cycle) not in reported:
+                    reported.add(frozenset(cycle))
+                    names = " -> ".join(project.pous[k].name for k in cycle)
+                    diags.error(first.src, first.node.pos,
+                                f"recursion is not allowed: {names}")
+            elif state.get(dep) is None:
+                visit(dep, path + [dep])
+        state[key] = 2
+
+    for key in sorted(graph):
+        if state.get(key) is None:
+            visit(key, [key])
+
+
+def lint(project, diags):
+    for pou in project.pous.values():
+        for v in pou.vars.values():
+            if v.used or v.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "RESULT"):
+                continue
+            if v.section == "VAR_GLOBAL":
+                continue
+            what = {"VAR_EXTERNAL": "external variable", "VAR_TEMP": "temporary variable"}.get(
+                v.section, "variable")
+            diags.warning(pou.src, v.pos, f"unused {what} '{v.name}'")
+    for cfg in project.configurations:
+        for g in cfg.globals.values():
+            if not g.used and not g.location:
+                diags.warning(cfg.src, g.pos, f"unused global variable '{g.name}'")
+        for r in cfg.resources:
+            for g in r.globals.values():
+                if not g.used and not g.location:
+                    diags.warning(cfg.src, g.pos, f"unused global variable '{g.name}'")

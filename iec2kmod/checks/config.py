@@ -1,0 +1,457 @@
+"""Pass 'configure': configurations, resources, tasks and program instances;
+VAR_EXTERNAL matched against globals; the seed's rules on directly
+represented variables."""
+
+from __future__ import annotations
+
+from .. import ast
+from .body import BodyChecker
+from .declare import ConstError, address_span, check_address_type
+from .symbols import ConfigInfo, POUInfo, ProgramInstance, ResourceInfo, TaskInfo, Var
+from .types import BOOL, ERROR, ErrorT, FBType, assignable, same
+
+MAX_PRIORITY = 48   # IEC 0 (most urgent) .. 48 -> SCHED_FIFO 49 .. 1
+
+
+class ConfigChecker:
+    def __init__(self, project, declarer, diags):
+        self.p = project
+        self.decl = declarer
+        self.diags = diags
+        # address -> [(owner description, resource name or None, src, pos)]
+        self.addresses: dict = {}
+
+    def error(self, src, pos, msg):
+        self.diags.error(src, pos, msg)
+
+    def warning(self, src, pos, msg):
+        self.diags.warning(src, pos, msg)
+
+    def check(self, units):
+        names = {}
+        for unit in units:
+            for node in unit.configurations:
+                key = node.name.upper()
+                if key in names:
+                    self.error(node.src, node.pos, f"configuration '{node.name}' is already "
+                                                   "defined")
+                    continue
+                names[key] = node
+                self.p.configurations.append(self.configuration(node))
+        if len(self.p.configurations) > 1:
+            c = self.p.configurations[1]
+            self.error(c.src, c.node.pos, "only one configuration per project: iec2kmod runs "
+                                          "one configuration at a time")
+
+    # ---------------------------------------------------------------
+    def configuration(self, node) -> ConfigInfo:
+        src = node.src
+        cfg = ConfigInfo(node.name, node, src)
+        for block in node.blocks:
+            if block.kind != "VAR_GLOBAL":
+                self.error(src, block.pos, f"{block.kind} is not allowed here: a configuration "
+                                           "declares VAR_GLOBAL, VAR_ACCESS and VAR_CONFIG")
+                continue
+            for v in self.decl.declare_block(block, cfg, src, cfg.globals, allow_located=True):
+                self.note_address(v, None, src)
+        self.decl.global_constants = {k: _const(self.decl, v) for k, v in cfg.globals.items()
+                                      if v.constant and v.init is not None}
+        self.decl.global_constants = {k: v for k, v in self.decl.global_constants.items()
+                                      if v is not None}
+        res_names = {}
+        for rnode in node.resources:
+            r = self.resource(rnode, cfg)
+            key = (r.name or "").upper()
+            if key in res_names:
+                self.error(src, rnode.pos, f"resource '{r.name}' is already defined")
+                continue
+            res_names[key] = r
+            cfg.resources.append(r)
+        for block in node.access:
+            if block.kind == "VAR_GLOBAL":
+                self.error(src, block.pos, "VAR_GLOBAL must come before the resources")
+            elif block.kind == "VAR_ACCESS":
+                self.access(block, cfg)
+            elif block.kind == "VAR_CONFIG":
+                self.var_config(block, cfg)
+            else:
+                self.error(src, block.pos, f"{block.kind} is not allowed in a configuration")
+        self.check_address_rules(src)
+        return cfg
+
+    def resource(self, rnode, cfg) -> ResourceInfo:
+        src = cfg.src
+        r = ResourceInfo(rnode.name or cfg.name, rnode.processor, rnode)
+        for block in rnode.blocks:
+            if block.kind != "VAR_GLOBAL":
+                self.error(src, block.pos, f"{block.kind} is not allowed in a resource")
+                continue
+            for v in self.decl.declare_block(block, r, src, r.globals, allow_located=True):
+                if v.key in cfg.globals:
+                    self.warning(src, v.pos, f"resource global '{v.name}' hides the "
+                                             "configuration global of the same name")
+                self.note_address(v, r.name, src)
+        for t in rnode.tasks:
+            if t.name.upper() in r.tasks:
+                self.error(src, t.pos, f"task '{t.name}' is already defined")
+                continue
+            r.tasks[t.name.upper()] = self.task(t, r, cfg)
+        inst_names = set()
+        for pc in rnode.programs:
+            if pc.name.upper() in inst_names:
+                self.error(src, pc.pos, f"program instance '{pc.name}' is already defined")
+                continue
+            inst_names.add(pc.name.upper())
+            inst = self.program_instance(pc, r, cfg)
+            if inst is not None:
+                r.programs.append(inst)
+        return r
+
+    def task(self, t, r, cfg) -> TaskInfo:
+        src = cfg.src
+        info = TaskInfo(t.name, t.pos)
+        for key, (expr, pos) in t.props.items():
+            if key == "INTERVAL":
+                try:
+                    v = self.decl.const_value(expr, src, "INTERVAL")
+                except ConstError:
+                    self.error(src, expr.pos, "INTERVAL must be a constant TIME, e.g. T#10ms")
+                    continue
+                if not (isinstance(expr, ast.Lit) and expr.kind == "time") or v <= 0:
+                    self.error(src, expr.pos, "INTERVAL must be a positive TIME literal, e.g. "
+                                              "T#10ms")
+                    continue
+                if v < 50_000:
+                    self.error(src, expr.pos, "INTERVAL below 50 us cannot be met by a kernel "
+                                              "thread; use at least T#50us")
+                    continue
+                info.interval_ns = v
+            elif key == "PRIORITY":
+                try:
+                    v = self.decl.const_value(expr, src, "PRIORITY")
+                except ConstError:
+                    self.error(src, expr.pos, "PRIORITY must be an integer constant")
+                    continue
+                if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= MAX_PRIORITY:
+                    self.error(src, expr.pos, f"PRIORITY must be 0 (most urgent) .. "
+                                              f"{MAX_PRIORITY}")
+                    continue
+                info.priority = v
+            elif key == "SINGLE":
+                if not isinstance(expr, ast.Ref) or expr.accessors:
+                    self.error(src, expr.pos, "SINGLE must name a BOOL global variable")
+                    continue
+                v = r.globals.get(expr.name.upper()) or cfg.globals.get(expr.name.upper())
+                if v is None:
+                    self.error(src, expr.pos, f"unknown global variable '{expr.name}'")
+                    continue
+                if v.type is not BOOL:
+                    self.error(src, expr.pos, f"SINGLE variable '{expr.name}' must be BOOL, "
+                                              f"not {v.type.name}")
+                    continue
+                v.used = True
+                info.single = v
+                info.single_name = v.name
+        if "PRIORITY" not in t.props:
+            self.error(src, t.pos, f"task '{t.name}' needs a PRIORITY")
+        if info.interval_ns is None and info.single is None and \
+                "INTERVAL" not in t.props and "SINGLE" not in t.props:
+            self.error(src, t.pos, f"task '{t.name}' needs an INTERVAL (periodic) or a SINGLE "
+                                   "(event) variable")
+        if "INTERVAL" in t.props and "SINGLE" in t.props:
+            self.error(src, t.pos, f"task '{t.name}' has both INTERVAL and SINGLE: a task is "
+                                   "periodic or event-driven")
+        return info
+
+    def program_instance(self, pc, r, cfg):
+        src = cfg.src
+        pou = self.p.pous.get(pc.type.upper())
+        task = None
+        if pc.task is not None:
+            task = r.tasks.get(pc.task.upper())
+            if task is None:
+                self.error(src, pc.task_pos, f"unknown task '{pc.task}' in resource '{r.name}'")
+        if pou is None or pou.kind != "PROGRAM":
+            if pou is None:
+                self.error(src, pc.type_pos, f"unknown program type '{pc.type}'")
+            else:
+                self.error(src, pc.type_pos, f"'{pc.type}' is a "
+                                             f"{pou.kind.lower().replace('_', ' ')}, not a program")
+            return None
+        if task is None and pc.task is None:
+            self.error(src, pc.pos, f"program instance '{pc.name}' has no task: associate it "
+                                    "WITH a TASK so the resource knows when to run it")
+        inst = ProgramInstance(pc.name, pou, task, pc)
+        seen = set()
+        for conn in pc.connections:
+            param = pou.var(conn.name)
+            if conn.name.upper() in seen:
+                self.error(src, conn.pos, f"'{conn.name}' is connected twice")
+                continue
+            seen.add(conn.name.upper())
+            want = "VAR_INPUT" if conn.direction == "in" else "VAR_OUTPUT"
+            if param is None or param.section != want:
+                kind = "input" if conn.direction == "in" else "output"
+                self.error(src, conn.pos, f"program '{pou.name}' has no {kind} '{conn.name}'")
+                continue
+            self.connection(conn, param, r, cfg, inst)
+        self.bind_externals(pou, r, cfg, inst, src)
+        return inst
+
+    def visible(self, r, cfg, name):
+        return r.globals.get(name.upper()) or cfg.globals.get(name.upper())
+
+    def connection(self, conn, param, r, cfg, inst):
+        src = cfg.src
+        value = conn.value
+        if isinstance(value, ast.Direct):
+            self.note_direct(value.address, r.name, src, value.pos,
+                             f"connection of {inst.name}.{conn.name}")
+            check_address_type(self.decl, src, value.pos, value.address, param.type)
+        elif conn.direction == "out":
+            if not isinstance(value, ast.Ref) or value.accessors:
+                self.error(src, value.pos, "an output must be connected to a global variable "
+                                           "or a direct address")
+                return
+            g = self.visible(r, cfg, value.name)
+            if g is None:
+                self.error(src, value.pos, f"unknown global variable '{value.name}'")
+                return
+            if g.constant:
+                self.error(src, value.pos, f"cannot connect output to constant '{g.name}'")
+            g.used = g.assigned = True
+            value.symbol = g
+            value.type = g.type
+            self.note_global_use(g, r, src, value.pos)
+            if not assignable(param.type, g.type):
+                self.error(src, value.pos, f"output '{param.name}' is {param.type.name}; "
+                                           f"'{g.name}' is {g.type.name}")
+        else:
+            t = self.connection_value_type(value, r, cfg)
+            if t is None:
+                return
+            if not isinstance(t, ErrorT) and not assignable(t, param.type):
+                self.error(src, value.pos, f"input '{param.name}' is {param.type.name}; the "
+                                           f"value is {t.name}")
+        (inst.inputs if conn.direction == "in" else inst.outputs).append((param, value))
+
+    def connection_value_type(self, value, r, cfg):
+        src = cfg.src
+        if isinstance(value, ast.Ref):
+            if value.accessors:
+                self.error(src, value.pos, "connect a whole global variable")
+                return None
+            g = self.visible(r, cfg, value.name)
+            if g is not None:
+                g.used = True
+                value.symbol = g
+                value.type = g.type
+                self.note_global_use(g, r, src, value.pos)
+                return g.type
+            hits = self.decl.enum_values.get(value.name.upper(), [])
+            if len(hits) == 1:
+                value.type = hits[0]
+                return hits[0]
+            self.error(src, value.pos, f"unknown global variable '{value.name}'")
+            return None
+        try:
+            self.decl.const_value(value, src, "connection")
+        except ConstError:
+            if not (isinstance(value, ast.Lit) and value.kind in ("string", "wstring")):
+                self.error(src, value.pos, "an input must be connected to a global variable, a "
+                                           "direct address or a constant")
+                return None
+        fake = POUInfo("PROGRAM", "<connection>", src=src)
+        checker = BodyChecker(self.p, self.decl, self.diags, fake)
+        return checker.expr(value)
+
+    # ------------------------------------------------------- externals
+    def bind_externals(self, pou, r, cfg, inst, src):
+        """VAR_EXTERNAL of the program and of every FB instance inside it
+        must match a global of the same name and type in scope."""
+        scope = {}
+        scope.update(cfg.globals)
+        scope.update(r.globals)
+        self._bind(pou, scope, r, inst, set(), src)
+
+    def _bind(self, pou, scope, r, inst, stack, src):
+        if pou.key in stack:
+            return  # recursion is reported by the call-graph check
+        stack = stack | {pou.key}
+        for v in pou.vars.values():
+            if v.section == "VAR_EXTERNAL":
+                g = scope.get(v.key)
+                if g is None:
+                    self.error(v.src, v.pos, f"VAR_EXTERNAL '{v.name}' has no matching global "
+                                             f"variable in resource '{r.name}' (used by "
+                                             f"program instance '{inst.name}')")
+                    continue
+                if not _same_type(g.type, v.type):
+                    self.error(v.src, v.pos, f"VAR_EXTERNAL '{v.name}' is {v.type.name} but the "
+                                             f"global is {g.type.name}")
+                    continue
+                if g.constant and not v.constant:
+                    self.error(v.src, v.pos, f"global '{g.name}' is CONSTANT: declare the "
+                                             "external VAR_EXTERNAL CONSTANT")
+                if v.assigned and g.constant:
+                    pass
+                g.used = True
+                if v.assigned:
+                    g.assigned = True
+                if pou is inst.pou:
+                    inst.externals[v.key] = g
+                self.note_global_use(g, r, src, None)
+        inner = dict(scope)
+        for v in pou.vars.values():
+            if v.section == "VAR_GLOBAL":
+                inner[v.key] = v
+        for v in pou.vars.values():
+            if isinstance(v.type, FBType) and not v.type.pou.standard:
+                self._bind(v.type.pou, inner, r, inst, stack, src)
+
+    # ------------------------------------------------ access, VAR_CONFIG
+    def access(self, block, cfg):
+        src = cfg.src
+        names = set()
+        for d in block.decls:
+            if d.name.upper() in names:
+                self.error(src, d.pos, f"access path '{d.name}' is already declared")
+                continue
+            names.add(d.name.upper())
+            t = self.decl.type_of_spec(d.spec, src)
+            target = self.resolve_path(d.path, cfg, src, d.pos)
+            if target is not None and t is not ERROR and not _same_type(target.type, t):
+                self.error(src, d.pos, f"access path '{d.name}' is declared {t.name} but "
+                                       f"{d.path} is {target.type.name}")
+            if target is not None and d.direction == "READ_WRITE" and target.constant:
+                self.error(src, d.pos, f"{d.path} is CONSTANT: its access path must be "
+                                       "READ_ONLY")
+            cfg.access.append((d.name, d.path, target, d.direction))
+
+    def resolve_path(self, path, cfg, src, pos):
+        """A.B.C: configuration global, resource.global, or
+        resource.instance.variable (or instance.variable)."""
+        if path.startswith("%"):
+            for entry in self.addresses.get(path, []):
+                if entry[4] is not None:
+                    return entry[4]
+            self.error(src, pos, f"no variable is located at {path}")
+            return None
+        parts = path.split(".")
+        if len(parts) == 1:
+            g = cfg.globals.get(parts[0].upper())
+            if g is None:
+                self.error(src, pos, f"unknown global variable '{path}'")
+            return g
+        res = {r.name.upper(): r for r in cfg.resources}
+        r = res.get(parts[0].upper())
+        rest = parts[1:]
+        if r is None:
+            if len(cfg.resources) == 1:
+                r, rest = cfg.resources[0], parts
+            else:
+                self.error(src, pos, f"unknown resource '{parts[0]}' in '{path}'")
+                return None
+        if len(rest) == 1:
+            g = r.globals.get(rest[0].upper())
+            if g is None:
+                self.error(src, pos, f"resource '{r.name}' has no global '{rest[0]}'")
+            return g
+        inst = next((i for i in r.programs if i.name.upper() == rest[0].upper()), None)
+        if inst is None:
+            self.error(src, pos, f"resource '{r.name}' has no program instance '{rest[0]}'")
+            return None
+        pou = inst.pou
+        v = None
+        for part in rest[1:]:
+            v = pou.var(part) if pou is not None else None
+            if v is None:
+                self.error(src, pos, f"'{path}': no variable '{part}'")
+                return None
+            pou = v.type.pou if isinstance(v.type, FBType) else None
+        return v
+
+    def var_config(self, block, cfg):
+        src = cfg.src
+        for d in block.decls:
+            target = self.resolve_path(d.path, cfg, src, d.pos)
+            if target is None:
+                continue
+            t = self.decl.type_of_spec(d.spec, src)
+            if t is not ERROR and not _same_type(target.type, t):
+                self.error(src, d.pos, f"'{d.path}' is {target.type.name}, not {t.name}")
+                continue
+            if d.location:
+                if not (target.location or "").endswith("*"):
+                    self.error(src, d.pos, f"'{d.path}' is not declared with an incomplete "
+                                           "address AT %I*, %Q* or %M*")
+                elif target.location[:2] != d.location[:2]:
+                    self.error(src, d.pos, f"{d.location} is not in the area of "
+                                           f"{target.location}")
+                else:
+                    check_address_type(self.decl, src, d.pos, d.location, target.type)
+                    self.note_direct(d.location, None, src, d.pos, f"VAR_CONFIG {d.path}")
+            if d.init is not None and t is not ERROR:
+                self.decl.check_initializer(d.init, t, src)
+
+    # -------------------------------------------------- located rules
+    def note_address(self, v: Var, resource, src):
+        if v.location:
+            self.note_direct(v.location, resource, src, v.pos, f"'{v.name}'", var=v)
+
+    def note_direct(self, addr, resource, src, pos, who, var=None):
+        # [who, declaring resource, src, pos, variable, resources using it]
+        self.addresses.setdefault(addr, []).append([who, resource, src, pos, var, set()])
+
+    def note_global_use(self, g, r, src, pos):
+        """A located configuration global used by a program of resource r."""
+        if not g.location:
+            return
+        for entry in self.addresses.get(g.location, []):
+            if entry[4] is g:
+                entry[5].add(r.name)
+
+    def check_address_rules(self, src):
+        spans = []
+        for addr, entries in self.addresses.items():
+            if len(entries) > 1:
+                first = entries[0]
+                for e in entries[1:]:
+                    self.error(e[2], e[3], f"address {addr} is already used by {first[0]}: one "
+                                           "address is accessed by exactly one variable")
+            for e in entries:
+                resources = set(e[5])
+                if e[1] is not None:
+                    resources.add(e[1])
+                if len(resources) > 1:
+                    self.error(e[2], e[3], f"located variable {e[0]} at {addr} is used by "
+                                           f"resources {', '.join(sorted(resources))}: a located "
+                                           "address belongs to one resource")
+            span = address_span(addr)
+            if span is not None:
+                spans.append((span, addr, entries[0]))
+        spans.sort(key=lambda s: (s[0][0], s[0][1]))
+        for (a, b) in zip(spans, spans[1:]):
+            (area1, start1, n1), addr1, e1 = a
+            (area2, start2, n2), addr2, e2 = b
+            if area1 == area2 and start2 < start1 + n1:
+                self.error(e2[2], e2[3], f"address {addr2} overlaps {addr1} ({e1[0]}): one "
+                                         "address is accessed by exactly one variable")
+
+
+def _same_type(a, b):
+    if a is b or same(a, b):
+        return True
+    from .types import StringT
+    if isinstance(a, StringT) and isinstance(b, StringT):
+        return a.wide == b.wide and a.length == b.length
+    if isinstance(a, FBType) and isinstance(b, FBType):
+        return a.pou is b.pou
+    return False
+
+
+def _const(decl, v):
+    try:
+        return decl.const_value(v.init, v.src) if isinstance(v.init, ast.Expr) else None
+    except ConstError:
+        return None

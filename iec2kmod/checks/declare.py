@@ -1,0 +1,536 @@
+"""Pass 'declare': user types and POU interfaces into the project's symbol
+tables, constant expressions evaluated, duplicates reported."""
+
+from __future__ import annotations
+
+from .. import ast
+from . import stdlib
+from .symbols import POUInfo, Project, Var
+from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, LiteralT,
+                    StringT, StructT, SubrangeT, Type, assignable)
+
+SECTIONS_IN_POU = {
+    "FUNCTION": {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP"},
+    "FUNCTION_BLOCK": {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP",
+                       "VAR_EXTERNAL"},
+    "PROGRAM": {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP", "VAR_EXTERNAL",
+                "VAR_GLOBAL"},
+}
+
+MAX_STRING = 65534
+
+
+class ConstError(Exception):
+    pass
+
+
+class Declarer:
+    def __init__(self, project: Project, diags):
+        self.p = project
+        self.diags = diags
+        self.enum_values: dict[str, list] = {}  # upper value name -> [EnumT]
+        self._pending_types: dict[str, ast.TypeDef] = {}
+        self._resolving: set = set()
+
+    # ------------------------------------------------------------ errors
+    def error(self, src, pos, msg):
+        self.diags.error(src, pos, msg)
+
+    def warning(self, src, pos, msg):
+        self.diags.warning(src, pos, msg)
+
+    # ------------------------------------------------------- constants
+    def const_value(self, expr, src, what="value"):
+        """Evaluates a constant expression (literals, enum values,
+        arithmetic); raises ConstError with a message."""
+        if isinstance(expr, ast.Lit):
+            if expr.kind in ("int", "real", "bool", "time", "date", "tod", "dt"):
+                return expr.value
+            if expr.kind == "enum":
+                t = self.lookup_type(expr.type_name, src, expr.pos, report=False)
+                if isinstance(t, EnumT) and t.has(expr.value):
+                    return t.values[expr.value.upper()][1]
+                raise ConstError(f"unknown enumeration value {expr.text}")
+            return expr.value
+        if isinstance(expr, ast.UnOp):
+            v = self.const_value(expr.operand, src, what)
+            if expr.op == "-":
+                return -v
+            if expr.op == "+":
+                return v
+            if isinstance(v, bool):
+                return not v
+            return ~v
+        if isinstance(expr, ast.BinOp):
+            a = self.const_value(expr.left, src, what)
+            b = self.const_value(expr.right, src, what)
+            op = expr.op
+            try:
+                if op == "+":
+                    return a + b
+                if op == "-":
+                    return a - b
+                if op == "*":
+                    return a * b
+                if op == "/":
+                    if isinstance(a, int) and isinstance(b, int):
+                        q = abs(a) // abs(b)
+                        return q if (a >= 0) == (b >= 0) else -q
+                    return a / b
+                if op == "MOD":
+                    r = abs(a) % abs(b)
+                    return r if a >= 0 else -r
+                if op == "**":
+                    return float(a) ** b
+            except ZeroDivisionError:
+                raise ConstError("division by zero in a constant expression") from None
+        if isinstance(expr, ast.Ref) and not expr.accessors:
+            hits = self.enum_values.get(expr.name.upper(), [])
+            if len(hits) == 1:
+                return hits[0].values[expr.name.upper()][1]
+            const = self.global_constants.get(expr.name.upper()) if hasattr(
+                self, "global_constants") else None
+            if const is not None:
+                return const
+        raise ConstError(f"{what} must be a constant expression")
+
+    def const_int(self, expr, src, what):
+        try:
+            v = self.const_value(expr, src, what)
+        except ConstError as exc:
+            self.error(src, expr.pos, str(exc))
+            return None
+        if isinstance(v, bool) or not isinstance(v, int):
+            self.error(src, expr.pos, f"{what} must be an integer constant")
+            return None
+        return v
+
+    # ------------------------------------------------------------ types
+    def declare_types(self, units):
+        for unit in units:
+            for td in unit.types:
+                key = td.name.upper()
+                if key in self._pending_types or key in ELEMENTARY or key in ("STRING", "WSTRING"):
+                    self.error(td.src, td.pos, f"type '{td.name}' is already defined" if
+                               key in self._pending_types else
+                               f"'{td.name}' is an elementary type and cannot be redefined")
+                    continue
+                if key in stdlib.FUNCTION_BLOCKS:
+                    self.error(td.src, td.pos, f"'{td.name}' is a standard function block")
+                    continue
+                self._pending_types[key] = td
+        # enumerations first, so their values can appear in other declarations
+        for key, td in self._pending_types.items():
+            if isinstance(td.spec, ast.EnumSpec):
+                self.resolve_named(key)
+        for key in list(self._pending_types):
+            self.resolve_named(key)
+
+    def resolve_named(self, key):
+        if key in self.p.types:
+            return self.p.types[key]
+        td = self._pending_types.get(key)
+        if td is None:
+            return None
+        if key in self._resolving:
+            self.error(td.src, td.pos, f"type '{td.name}' is defined in terms of itself")
+            self.p.types[key] = ERROR
+            return ERROR
+        self._resolving.add(key)
+        t = self.type_of_spec(td.spec, td.src, name=td.name)
+        self._resolving.discard(key)
+        self.p.types[key] = t
+        if td.init is not None and t is not ERROR:
+            self.check_initializer(td.init, t, td.src)
+            self.p.types.setdefault("__init__", {})[key] = td.init
+        return t
+
+    def lookup_type(self, name, src, pos, report=True):
+        if name is None:
+            return None
+        key = name.upper()
+        if key in ELEMENTARY:
+            return ELEMENTARY[key]
+        t = self.resolve_named(key)
+        if t is not None:
+            return t
+        if key in self.p.pous and self.p.pous[key].kind == "FUNCTION_BLOCK":
+            return FBType(self.p.pous[key].name, self.p.pous[key])
+        if key in stdlib.FUNCTION_BLOCKS:
+            return FBType(key, stdlib.FUNCTION_BLOCKS[key])
+        if report:
+            if key in self.p.pous:
+                self.error(src, pos, f"'{name}' is a {self.p.pous[key].kind.lower().replace('_', ' ')}"
+                                     ", not a type")
+            else:
+                self.error(src, pos, f"unknown type '{name}'")
+        return None
+
+    def type_of_spec(self, spec, src, name=None) -> Type:
+        if isinstance(spec, ast.NamedSpec):
+            t = self.lookup_type(spec.name, src, spec.pos)
+            return t if t is not None else ERROR
+        if isinstance(spec, ast.StringSpec):
+            length = 254
+            if spec.length is not None:
+                length = self.const_int(spec.length, src, "string length")
+                if length is None:
+                    return ERROR
+                if not 1 <= length <= MAX_STRING:
+                    self.error(src, spec.length.pos,
+                               f"string length must be 1..{MAX_STRING}, not {length}")
+                    return ERROR
+            return StringT(length, spec.wide)
+        if isinstance(spec, ast.SubrangeSpec):
+            base = self.lookup_type(spec.base, src, spec.pos)
+            if base is None:
+                return ERROR
+            if not (isinstance(base, Elementary) and base.cat in ("sint", "uint")):
+                self.error(src, spec.pos, f"a subrange needs an integer base type, not {base.name}")
+                return ERROR
+            lo = self.const_int(spec.low, src, "subrange limit")
+            hi = self.const_int(spec.high, src, "subrange limit")
+            if lo is None or hi is None:
+                return ERROR
+            rng = base.range
+            if lo > hi:
+                self.error(src, spec.low.pos, f"empty subrange {lo}..{hi}")
+                return ERROR
+            if lo < rng[0] or hi > rng[1]:
+                self.error(src, spec.low.pos, f"subrange {lo}..{hi} exceeds {base.name}")
+                return ERROR
+            return SubrangeT(name or f"{base.name}({lo}..{hi})", base, lo, hi)
+        if isinstance(spec, ast.EnumSpec):
+            base = None
+            if spec.base:
+                base = self.lookup_type(spec.base, src, spec.pos)
+                if base is None:
+                    return ERROR
+                if not (isinstance(base, Elementary) and base.cat in ("sint", "uint", "bit")):
+                    self.error(src, spec.pos,
+                               f"an enumeration's base type must be an integer, not {base.name}")
+                    return ERROR
+            t = EnumT(name or "enum", base)
+            nxt = 0
+            seen_vals = {}
+            for vname, vexpr, vpos in spec.values:
+                if vname.upper() in t.values:
+                    self.error(src, vpos, f"duplicate enumeration value '{vname}'")
+                    continue
+                if vexpr is not None:
+                    v = self.const_int(vexpr, src, "enumeration value")
+                    if v is None:
+                        continue
+                    nxt = v
+                if base is not None and not base.range[0] <= nxt <= base.range[1]:
+                    self.error(src, vpos, f"value {nxt} of '{vname}' does not fit {base.name}")
+                if nxt in seen_vals:
+                    self.error(src, vpos, f"'{vname}' has the same value {nxt} as "
+                                          f"'{seen_vals[nxt]}'")
+                seen_vals[nxt] = vname
+                t.values[vname.upper()] = (vname, nxt)
+                self.enum_values.setdefault(vname.upper(), []).append(t)
+                nxt += 1
+            return t
+        if isinstance(spec, ast.ArraySpec):
+            dims = []
+            for lo_e, hi_e in spec.ranges:
+                lo = self.const_int(lo_e, src, "array bound")
+                hi = self.const_int(hi_e, src, "array bound")
+                if lo is None or hi is None:
+                    return ERROR
+                if lo > hi:
+                    self.error(src, lo_e.pos, f"empty array range {lo}..{hi}")
+                    return ERROR
+                dims.append((lo, hi))
+            elem = self.type_of_spec(spec.element, src)
+            if elem is ERROR:
+                return ERROR
+            t = ArrayT(dims, elem)
+            if t.count > 1 << 24:
+                self.error(src, spec.pos, f"array of {t.count} elements is too large")
+                return ERROR
+            return t
+        if isinstance(spec, ast.StructSpec):
+            t = StructT(name or "struct")
+            for m in spec.members:
+                mname, mpos = m.names[0]
+                if mname.upper() in t.fields:
+                    self.error(src, mpos, f"duplicate structure member '{mname}'")
+                    continue
+                if m.location:
+                    self.error(src, mpos, "located structure members are not supported: "
+                                          "declare a located global instead")
+                mt = self.type_of_spec(m.spec, src)
+                if isinstance(mt, FBType):
+                    self.error(src, m.spec.pos, "a structure cannot contain a function block")
+                    mt = ERROR
+                if m.init is not None and mt is not ERROR:
+                    self.check_initializer(m.init, mt, src)
+                t.fields[mname.upper()] = (mname, mt, m.init)
+            return t
+        raise AssertionError(f"unknown spec {spec!r}")
+
+    # ---------------------------------------------------- initializers
+    def check_initializer(self, init, t, src):
+        if isinstance(init, ast.ArrayInit):
+            if not isinstance(t, ArrayT):
+                self.error(src, init.pos, f"an array initializer cannot initialize {t.name}")
+                return
+            n = 0
+            for count, value in init.items:
+                k = count if count is not None else 1
+                if count is not None and count < 1:
+                    self.error(src, init.pos, "repetition count must be at least 1")
+                n += k
+                if value is not None:
+                    self.check_initializer(value, t.elem, src)
+            if n > t.count:
+                self.error(src, init.pos, f"{n} initial values for an array of {t.count} elements")
+            return
+        if isinstance(init, ast.StructInit):
+            if not isinstance(t, StructT):
+                if isinstance(t, FBType):
+                    pou = t.pou
+                    for fname, fval, fpos in init.fields:
+                        v = pou.var(fname)
+                        if v is None or v.section not in ("VAR_INPUT", "VAR_OUTPUT", "VAR"):
+                            self.error(src, fpos, f"'{t.name}' has no member '{fname}'")
+                        else:
+                            self.check_initializer(fval, v.type, src)
+                    return
+                self.error(src, init.pos, f"a structure initializer cannot initialize {t.name}")
+                return
+            for fname, fval, fpos in init.fields:
+                f = t.fields.get(fname.upper())
+                if f is None:
+                    self.error(src, fpos, f"structure '{t.name}' has no member '{fname}'")
+                    continue
+                self.check_initializer(fval, f[1], src)
+            return
+        # an expression: a constant of an assignable type
+        try:
+            v = self.const_value(init, src, "initial value")
+        except ConstError as exc:
+            if isinstance(init, ast.Ref) and isinstance(t, EnumT) and t.has(init.name) \
+                    and not init.accessors:
+                return
+            if isinstance(init, ast.Lit) and init.kind in ("string", "wstring"):
+                v = init.value
+            else:
+                self.error(src, init.pos, str(exc))
+                return
+        self.check_const_fits(v, init, t, src)
+
+    def check_const_fits(self, v, expr, t, src):
+        if t is ERROR:
+            return
+        base = t.base
+        lit_kind = getattr(expr, "kind", None) if isinstance(expr, ast.Lit) else None
+        if isinstance(t, EnumT):
+            if isinstance(expr, ast.Lit) and expr.kind == "enum":
+                et = self.lookup_type(expr.type_name, src, expr.pos, report=False)
+                if et is not t:
+                    self.error(src, expr.pos, f"{expr.text} is not a value of {t.name}")
+                return
+            if isinstance(expr, ast.Ref) and t.has(expr.name):
+                return
+            self.error(src, expr.pos, f"initial value of an enumeration must be one of its values")
+            return
+        if isinstance(base, StringT):
+            if lit_kind not in ("string", "wstring"):
+                self.error(src, expr.pos, f"cannot initialize {t.name} with a non-string value")
+            elif (lit_kind == "wstring") != base.wide:
+                self.error(src, expr.pos, f"cannot initialize {t.name} with a "
+                                          f"{'WSTRING' if lit_kind == 'wstring' else 'STRING'}")
+            elif len(v) > base.length:
+                self.warning(src, expr.pos, f"initial string of {len(v)} characters is "
+                                            f"truncated to {base.length}")
+            return
+        if not isinstance(base, Elementary):
+            self.error(src, expr.pos, f"cannot initialize {t.name} with a single value")
+            return
+        if isinstance(expr, ast.Lit) and expr.type_name and expr.kind in ("int", "real", "bool"):
+            lt = ELEMENTARY.get(expr.type_name.upper())
+            if lt is not None and not assignable(lt, base):
+                self.error(src, expr.pos, f"cannot initialize {t.name} with {lt.name}")
+                return
+        if isinstance(v, bool):
+            if base.cat not in ("bool", "bit"):
+                self.error(src, expr.pos, f"cannot initialize {t.name} with a BOOL")
+            return
+        if isinstance(v, float):
+            if base.cat != "real":
+                self.error(src, expr.pos, f"cannot initialize {t.name} with a REAL value")
+            return
+        if lit_kind in ("time", "date", "tod", "dt"):
+            if base.cat != lit_kind:
+                self.error(src, expr.pos, f"cannot initialize {t.name} with a {lit_kind.upper()} "
+                                          "literal")
+            return
+        if base.cat in ("time", "date", "tod", "dt"):
+            self.error(src, expr.pos, f"cannot initialize {t.name} with an integer")
+            return
+        if base.cat != "real":
+            lo, hi = base.range
+            if base.cat == "bool" and v not in (0, 1):
+                self.error(src, expr.pos, f"{v} is not a BOOL value")
+            elif not lo <= v <= hi:
+                self.error(src, expr.pos, f"initial value {v} is out of range for {base.name}")
+                return
+        if isinstance(t, SubrangeT) and not t.low <= v <= t.high:
+            self.error(src, expr.pos, f"initial value {v} is outside the subrange "
+                                      f"{t.low}..{t.high}")
+
+    # ------------------------------------------------------------ POUs
+    def declare_pous(self, units):
+        for unit in units:
+            for node in unit.pous:
+                key = node.name.upper()
+                if key in self.p.pous:
+                    self.error(node.src, node.pos, f"'{node.name}' is already defined")
+                    continue
+                if key in self._pending_types:
+                    self.error(node.src, node.pos, f"'{node.name}' is already defined as a type")
+                    continue
+                if stdlib.is_std_function(key) or key in stdlib.FUNCTION_BLOCKS:
+                    self.error(node.src, node.pos,
+                               f"'{node.name}' is the name of a standard function or block")
+                    continue
+                if key in ELEMENTARY:
+                    self.error(node.src, node.pos, f"'{node.name}' is an elementary type")
+                    continue
+                self.p.pous[key] = POUInfo(node.kind, node.name, node=node, src=node.src)
+        for pou in self.p.pous.values():
+            self.declare_interface(pou)
+
+    def declare_interface(self, pou: POUInfo):
+        node = pou.node
+        src = node.src
+        if pou.kind == "FUNCTION":
+            pou.result = self.type_of_spec(node.result, src)
+            if isinstance(pou.result, FBType):
+                self.error(src, node.result.pos, "a function cannot return a function block")
+                pou.result = ERROR
+            pou.vars[pou.key] = Var(pou.name, pou.result, "RESULT", node.pos, src, owner=pou)
+        allowed = SECTIONS_IN_POU[pou.kind]
+        for block in node.blocks:
+            if block.kind not in allowed:
+                self.error(src, block.pos, f"{block.kind} is not allowed in a "
+                                           f"{pou.kind.lower().replace('_', ' ')}")
+                continue
+            self.declare_block(block, pou, src, pou.vars)
+        for v in pou.vars.values():
+            if v.section == "VAR_INPUT":
+                pou.inputs.append(v)
+            elif v.section == "VAR_OUTPUT":
+                pou.outputs.append(v)
+            elif v.section == "VAR_IN_OUT":
+                pou.inouts.append(v)
+
+    def declare_block(self, block, owner, src, table, allow_located=False):
+        constant = "CONSTANT" in block.qualifiers
+        retain = True if "RETAIN" in block.qualifiers else (
+            False if "NON_RETAIN" in block.qualifiers else None)
+        if constant and block.kind in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP"):
+            self.error(src, block.pos, f"{block.kind} cannot be CONSTANT")
+        if retain is not None and block.kind in ("VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL"):
+            self.error(src, block.pos, f"{block.kind} cannot be RETAIN or NON_RETAIN")
+        if "RETAIN" in block.qualifiers and "NON_RETAIN" in block.qualifiers:
+            self.error(src, block.pos, "RETAIN and NON_RETAIN exclude each other")
+        out = []
+        for decl in block.decls:
+            t = self.type_of_spec(decl.spec, src)
+            if decl.edge:
+                if block.kind != "VAR_INPUT":
+                    self.error(src, decl.pos, f"{decl.edge} is allowed only on VAR_INPUT")
+                elif t is not BOOL:
+                    self.error(src, decl.spec.pos, f"{decl.edge} input must be BOOL")
+            if isinstance(t, FBType):
+                if block.kind in ("VAR_INPUT", "VAR_OUTPUT", "VAR_EXTERNAL", "VAR_GLOBAL") or \
+                        (isinstance(owner, POUInfo) and owner.kind == "FUNCTION"):
+                    where = ("a function" if isinstance(owner, POUInfo) and
+                             owner.kind == "FUNCTION" else block.kind)
+                    self.error(src, decl.spec.pos,
+                               f"function block instances cannot be declared in {where}")
+            if decl.location:
+                self.check_location_decl(decl, block, owner, src, t, allow_located)
+            if constant and decl.init is None and block.kind != "VAR_EXTERNAL":
+                self.error(src, decl.pos, "a CONSTANT needs an initial value")
+            if decl.init is not None:
+                if block.kind in ("VAR_EXTERNAL", "VAR_IN_OUT"):
+                    self.error(src, decl.init.pos, f"{block.kind} cannot have an initial value")
+                elif t is not ERROR:
+                    self.check_initializer(decl.init, t, src)
+            for name, pos in decl.names:
+                key = name.upper()
+                if key in table:
+                    self.error(src, pos, f"'{name}' is already declared")
+                    continue
+                if isinstance(owner, POUInfo) and key == owner.key and owner.kind != "FUNCTION":
+                    pass
+                v = Var(name, t, block.kind, pos, src, constant=constant, retain=retain,
+                        edge=decl.edge, location=decl.location, init=decl.init, owner=owner)
+                table[key] = v
+                out.append(v)
+        return out
+
+    def check_location_decl(self, decl, block, owner, src, t, allow_located):
+        addr = decl.location
+        if not allow_located:
+            if addr.endswith("*") and isinstance(owner, POUInfo) and owner.kind == "PROGRAM" and \
+                    block.kind == "VAR":
+                return  # completed by VAR_CONFIG
+            self.error(src, decl.pos,
+                       f"located variable AT {addr}: directly represented variables may appear "
+                       "only in configuration and resource declarations and in program "
+                       "connections")
+            return
+        if addr.endswith("*"):
+            self.error(src, decl.pos, f"incomplete address {addr} is allowed only in programs "
+                                      "(completed by VAR_CONFIG)")
+            return
+        check_address_type(self, src, decl.pos, addr, t)
+
+
+SIZE_PREFIX_BITS = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
+
+
+def address_span(addr: str):
+    """(area, first bit, bit count) of a direct address, or None when it has
+    more than the two levels byte.bit."""
+    area = addr[1]
+    rest = addr[2:]
+    size = "X"
+    if rest and rest[0] in SIZE_PREFIX_BITS:
+        size, rest = rest[0], rest[1:]
+    parts = rest.split(".")
+    if size == "X":
+        if len(parts) == 2:
+            return area, int(parts[0]) * 8 + int(parts[1]), 1
+        if len(parts) == 1:
+            return area, int(parts[0]), 1
+        return None
+    if len(parts) != 1:
+        return None
+    nbytes = SIZE_PREFIX_BITS[size] // 8
+    return area, int(parts[0]) * nbytes * 8, SIZE_PREFIX_BITS[size]
+
+
+def check_address_type(decl_ctx, src, pos, addr, t):
+    rest = addr[2:]
+    size = rest[0] if rest and rest[0] in SIZE_PREFIX_BITS else "X"
+    if size == "X" and rest and rest[0] != "X" and "." not in rest:
+        size = "X"
+    bits = SIZE_PREFIX_BITS[size]
+    base = t.base if t is not ERROR else None
+    if base is None or not isinstance(base, Elementary):
+        decl_ctx.error(src, pos, f"located variable at {addr} must have an elementary type")
+        return
+    if bits == 1:
+        if base is not BOOL:
+            decl_ctx.error(src, pos, f"{addr} is a bit address: its variable must be BOOL, "
+                                     f"not {base.name}")
+    elif base.bits != bits or base.cat == "bool":
+        decl_ctx.error(src, pos, f"{addr} holds {bits} bits; {base.name} has "
+                                 f"{base.bits if base.cat != 'bool' else 1}")

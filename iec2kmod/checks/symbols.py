@@ -1,0 +1,106 @@
+"""Symbols: variables, POU interfaces, resources and the checked project that
+the code generator consumes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(eq=False)
+class Var:
+    """A declared variable.  ``section`` is the VAR kind (VAR, VAR_INPUT,
+    VAR_OUTPUT, VAR_IN_OUT, VAR_EXTERNAL, VAR_GLOBAL, VAR_TEMP) or RESULT
+    for a function's return value."""
+
+    name: str
+    type: object
+    section: str
+    pos: int | None = None
+    src: object = None
+    constant: bool = False
+    retain: bool | None = None
+    edge: str | None = None
+    location: str | None = None
+    init: object = None           # initializer AST (expression, ArrayInit, StructInit)
+    owner: object = None          # POUInfo, ResourceInfo or ConfigInfo
+    used: bool = False
+    assigned: bool = False
+
+    @property
+    def key(self) -> str:
+        return self.name.upper()
+
+
+@dataclass(eq=False)
+class POUInfo:
+    kind: str                    # FUNCTION, FUNCTION_BLOCK, PROGRAM
+    name: str
+    node: object = None          # ast.POU, None for standard FBs
+    src: object = None
+    result: object = None        # Type of a FUNCTION
+    vars: dict = field(default_factory=dict)     # upper name -> Var, declaration order
+    inputs: list = field(default_factory=list)   # [Var] VAR_INPUT in order
+    outputs: list = field(default_factory=list)  # [Var] VAR_OUTPUT in order
+    inouts: list = field(default_factory=list)   # [Var] VAR_IN_OUT in order
+    standard: bool = False
+    calls: set = field(default_factory=set)      # upper names of POUs this one uses
+    uses_real: bool = False
+    labels: dict = field(default_factory=dict)   # IL labels
+
+    @property
+    def key(self) -> str:
+        return self.name.upper()
+
+    def var(self, name: str):
+        return self.vars.get(name.upper())
+
+
+@dataclass(eq=False)
+class TaskInfo:
+    name: str
+    pos: int
+    interval_ns: int | None = None
+    priority: int = 0
+    single: Var | None = None
+    single_name: str | None = None
+
+
+@dataclass(eq=False)
+class ProgramInstance:
+    name: str
+    pou: POUInfo
+    task: TaskInfo | None
+    node: object
+    inputs: list = field(default_factory=list)   # [(Var of the program, value expr)]
+    outputs: list = field(default_factory=list)  # [(Var of the program, target expr)]
+    externals: dict = field(default_factory=dict)  # upper external name -> global Var
+
+
+@dataclass(eq=False)
+class ResourceInfo:
+    name: str
+    processor: str | None
+    node: object
+    globals: dict = field(default_factory=dict)
+    tasks: dict = field(default_factory=dict)
+    programs: list = field(default_factory=list)
+
+
+@dataclass(eq=False)
+class ConfigInfo:
+    name: str
+    node: object
+    src: object
+    globals: dict = field(default_factory=dict)
+    resources: list = field(default_factory=list)
+    access: list = field(default_factory=list)
+
+
+@dataclass(eq=False)
+class Project:
+    """The checked model: what code generation starts from."""
+
+    types: dict = field(default_factory=dict)        # upper name -> Type
+    pous: dict = field(default_factory=dict)         # upper name -> POUInfo (user)
+    configurations: list = field(default_factory=list)
+    units: list = field(default_factory=list)

@@ -1,0 +1,179 @@
+"""The front end as a pipeline of named passes:
+
+    parse       files -> iec2kmod.ast units (textX), in parallel over files
+    declare     build the symbol tables: types, POUs, configurations
+    resolve     name resolution and type checking of every POU body
+    configure   configurations, resources, tasks, program instances
+    lint        warnings (unused variables)
+
+Every pass adds to one Diagnostics collector; code generation starts only
+when it holds no error.  Timings per pass are kept for the benchmark.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import pickle
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from . import __version__
+from .diagnostics import Diagnostic, Diagnostics, SourceFile
+
+
+@dataclass
+class FrontEndResult:
+    units: list
+    diags: Diagnostics
+    project: object = None          # checks.Project when parsing succeeded
+    timings: dict = field(default_factory=dict)
+    cached: bool = False
+
+    @property
+    def ok(self) -> bool:
+        return not self.diags.errors
+
+
+class InputError(Exception):
+    """A file cannot be read (usage or I/O error, exit code 2)."""
+
+
+def collect_files(paths) -> list[str]:
+    """Expands directories into their .st/.il/.iec files, sorted."""
+    out = []
+    for p in paths:
+        path = Path(p)
+        if path.is_dir():
+            found = sorted(str(f) for f in path.rglob("*")
+                           if f.suffix.lower() in (".st", ".il", ".iec", ".txt") and f.is_file())
+            if not found:
+                raise InputError(f"{p}: no .st, .il or .iec files in this directory")
+            out += found
+        elif path.is_file():
+            out.append(str(path))
+        elif path.exists():
+            raise InputError(f"{p}: not a regular file")
+        else:
+            raise InputError(f"{p}: no such file or directory")
+    if not out:
+        raise InputError("no input files")
+    return out
+
+
+def _read(path: str) -> SourceFile:
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: {exc.strerror or exc}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        text = data.decode("latin-1")
+    return SourceFile(path, text)
+
+
+def _parse_one(src: SourceFile):
+    from .parser import parse_source
+    diags = Diagnostics()
+    unit = parse_source(src, diags)
+    return unit, diags.items
+
+
+def _fingerprint() -> str:
+    """Identifies this compiler build: its version and its sources."""
+    h = hashlib.sha256(__version__.encode())
+    root = Path(__file__).resolve().parent
+    for f in sorted(root.rglob("*")):
+        if f.suffix in (".py", ".tx") and "__pycache__" not in f.parts:
+            h.update(f.name.encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("IEC2KMOD_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "iec2kmod")
+    return Path(base)
+
+
+def parse_all(sources: list[SourceFile], jobs: int | None = None):
+    """Parses every file; more than one file uses all cores."""
+    from .parser import metamodel
+    metamodel()  # build once, before forking, so workers inherit it
+    jobs = jobs or min(len(sources), os.cpu_count() or 1)
+    if jobs <= 1 or len(sources) <= 1:
+        return [_parse_one(s) for s in sources]
+    import multiprocessing
+    ctx = multiprocessing.get_context("fork")
+    # biggest files first so the cores finish together
+    order = sorted(range(len(sources)), key=lambda i: -len(sources[i].text))
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+        results = dict(zip(order, pool.map(_parse_one, [sources[i] for i in order])))
+    return [results[i] for i in range(len(sources))]
+
+
+def run(paths, use_cache: bool = True, jobs: int | None = None) -> FrontEndResult:
+    """Parses and checks a project: every diagnostic is collected."""
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    sources = [_read(p) for p in collect_files(paths)]
+    timings["read"] = time.perf_counter() - t0
+
+    key = None
+    if use_cache:
+        h = hashlib.sha256(_fingerprint().encode())
+        for s in sources:
+            h.update(s.path.encode() + b"\0" + s.text.encode() + b"\0")
+        key = h.hexdigest()
+        cached = _load_cached(key)
+        if cached is not None:
+            diags = Diagnostics()
+            diags.items = cached
+            timings["cache"] = time.perf_counter() - t0
+            return FrontEndResult([], diags, None, timings, cached=True)
+
+    diags = Diagnostics()
+    t = time.perf_counter()
+    parsed = parse_all(sources, jobs)
+    timings["parse"] = time.perf_counter() - t
+    units = []
+    for unit, items in parsed:
+        for d in items:
+            diags.items.append(d)
+        if unit is not None:
+            units.append(unit)
+
+    project = None
+    if not diags.errors:
+        from .checks import check_project
+        project = check_project(units, diags, timings)
+    if key is not None:
+        _store_cached(key, diags.items)
+    return FrontEndResult(units, diags, project, timings)
+
+
+def _load_cached(key: str):
+    path = cache_dir() / "check" / key
+    try:
+        with open(path, "rb") as f:
+            items = pickle.load(f)
+    except (OSError, pickle.PickleError, EOFError, AttributeError, ImportError):
+        return None
+    if not all(isinstance(d, Diagnostic) for d in items):
+        return None
+    return items
+
+
+def _store_cached(key: str, items) -> None:
+    path = cache_dir() / "check" / key
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        with open(tmp, "wb") as f:
+            pickle.dump(list(items), f, protocol=pickle.HIGHEST_PROTOCOL)
+        os.replace(tmp, path)
+    except OSError:
+        pass  # a cache that cannot be written is only slower

@@ -1,0 +1,503 @@
+"""Pass 1: parse.  textX grammar -> model, expressions rebuilt into
+precedence trees (iec2kmod.ast), syntax errors turned into diagnostics."""
+
+from __future__ import annotations
+
+import re
+from functools import lru_cache
+from pathlib import Path
+
+from textx import metamodel_from_file
+from textx.exceptions import TextXSyntaxError, TextXSemanticError
+
+from . import ast
+from .diagnostics import Diagnostics, SourceFile
+from .literals import LiteralError, classify
+
+GRAMMAR = Path(__file__).resolve().parent / "grammar" / "iec61131.tx"
+
+# Binary operator precedence, lowest first (IEC 61131-3 ed.3 table 71);
+# ** and the unary operators are handled by the grammar itself.
+PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "&": 3, "=": 4, "<>": 4,
+              "<": 5, ">": 5, "<=": 5, ">=": 5, "+": 6, "-": 6,
+              "*": 7, "/": 7, "MOD": 7}
+
+
+class _Ctx:
+    """Per-parse state shared with the object processors."""
+
+    src: SourceFile | None = None
+    diags: Diagnostics | None = None
+
+
+_ctx = _Ctx()
+
+
+def _pos(obj):
+    return obj._tx_position
+
+
+def _expression(obj):
+    operands = obj.operands
+    ops = obj.ops
+    if not ops:
+        return operands[0]
+    # precedence climbing over the flat sequence
+    ops = [op.upper() if op[0].isalpha() else op for op in ops]
+    it = iter(range(len(ops)))
+    out_vals = [operands[0]]
+    out_ops: list[str] = []
+    for i in it:
+        op = ops[i]
+        prec = PRECEDENCE[op]
+        while out_ops and PRECEDENCE[out_ops[-1]] >= prec:
+            _reduce(out_vals, out_ops)
+        out_ops.append(op)
+        out_vals.append(operands[i + 1])
+    while out_ops:
+        _reduce(out_vals, out_ops)
+    return out_vals[0]
+
+
+def _reduce(vals, ops):
+    right = vals.pop()
+    left = vals.pop()
+    op = ops.pop()
+    if op == "&":
+        op = "AND"
+    vals.append(ast.BinOp(left.pos, op, left, right))
+
+
+def _unary(obj):
+    operands = obj.operands
+    node = operands[0]
+    for rhs in operands[1:]:
+        node = ast.BinOp(node.pos, "**", node, rhs)
+    for op in reversed(obj.ops):
+        node = ast.UnOp(_pos(obj), "NOT" if op[0] in "nN" else op, node)
+    return node
+
+
+def _paren(obj):
+    return obj.expr
+
+
+def _literal(obj):
+    text = obj.text
+    pos = _pos(obj)
+    try:
+        kind, value, type_name = classify(text)
+    except (LiteralError, ValueError) as exc:
+        _ctx.diags.error(_ctx.src, pos, f"invalid literal {text}: {exc}")
+        kind, value, type_name = "int", 0, None
+    return ast.Lit(pos, text, kind, value, type_name)
+
+
+def _path_accessors(path, pos, out):
+    """Member and bit accessors of a '.a.b.3' path starting at offset pos."""
+    for part in path.split("."):
+        if part:
+            if part[0].isdigit():
+                out.append(("bit", int(part), pos))
+            else:
+                out.append(("member", part, pos))
+        pos += len(part) + 1
+
+
+def _variable(obj):
+    name, _, rest = obj.name.partition(".")
+    pos = _pos(obj)
+    accessors = []
+    if rest:
+        _path_accessors(rest, pos + len(name) + 1, accessors)
+    for idx in obj.indexes:
+        accessors.append(("index", list(idx.indexes), _pos(idx)))
+        if idx.members:
+            _path_accessors(idx.members[1:], idx._tx_position_end - len(idx.members) + 1,
+                            accessors)
+    return ast.Ref(pos, name, accessors)
+
+
+def _args(call_args):
+    out = []
+    for a in call_args.args:
+        cls = a.__class__.__name__
+        if cls == "Positional":
+            out.append(ast.Arg(_pos(a), "pos", None, a.value))
+        elif cls == "FormalInput":
+            out.append(ast.Arg(_pos(a), "in", a.name, a.value))
+        else:
+            words = a.name.split()
+            out.append(ast.Arg(_pos(a), "out", words[-1], a.target, len(words) > 1))
+    return out
+
+
+def _call_or_variable(obj):
+    var = obj.var
+    if obj.call is None:
+        return var
+    if var.accessors:
+        _ctx.diags.error(_ctx.src, var.pos, f"'{var!r}' cannot be called")
+    return ast.Call(var.pos, var.name, _args(obj.call))
+
+
+def _direct(obj):
+    return ast.Direct(_pos(obj), obj.address.upper())
+
+
+def _call_args(obj):
+    obj.arglist = _args(obj)
+    return None
+
+
+@lru_cache(maxsize=1)
+def metamodel():
+    mm = metamodel_from_file(str(GRAMMAR), ignore_case=True, autokwd=True,
+                             memoization=False, skipws=True)
+    mm.register_obj_processors({
+        "Expression": _expression,
+        "Unary": _unary,
+        "Paren": _paren,
+        "Literal": _literal,
+        "Variable": _variable,
+        "CallOrVariable": _call_or_variable,
+        "DirectVariable": _direct,
+        "CallArgs": _call_args,
+        "ILCallArgs": _call_args,
+    })
+    return mm
+
+
+_PRAGMA_SCAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|(\{[^}]*\})",
+                          re.S)
+
+
+def _warn_pragmas(src: SourceFile, diags: Diagnostics) -> None:
+    if "{" not in src.text:
+        return
+    for m in _PRAGMA_SCAN.finditer(src.text):
+        if m.group(1):
+            diags.warning(src, m.start(1), "pragma ignored")
+
+
+def _describe_expected(err) -> str:
+    rules = getattr(err, "expected_rules", None) or []
+    names = []
+    for r in rules:
+        name = getattr(r, "rule_name", "") or ""
+        to_match = getattr(r, "to_match", None)
+        if isinstance(to_match, str) and r.__class__.__name__ == "StrMatch":
+            label = f"'{to_match}'"
+        elif name in _TOKEN_NAMES:
+            label = _TOKEN_NAMES[name]
+        elif name:
+            label = name
+        else:
+            continue
+        if label not in names:
+            names.append(label)
+    if not names:
+        return "syntax error"
+    if len(names) > 8:
+        names = names[:8] + ["..."]
+    if len(names) == 1:
+        return f"expected {names[0]}"
+    return "expected " + ", ".join(names[:-1]) + " or " + names[-1]
+
+
+_TOKEN_NAMES = {
+    "ID": "identifier", "ANY_NAME": "name", "INTEGER": "integer",
+    "LITERAL": "literal", "DIRECT_ADDRESS": "direct address",
+    "BINARY_OP": "operator", "UNARY_OP": "unary operator",
+    "IL_OP": "IL operator", "IL_CALL_OP": "CAL", "EOL": "end of line",
+    "EOF": "end of file",
+}
+
+
+def parse_source(src: SourceFile, diags: Diagnostics):
+    """Parses one source file; returns the model or None (errors in diags)."""
+    _ctx.src = src
+    _ctx.diags = diags
+    _warn_pragmas(src, diags)
+    try:
+        model = metamodel().model_from_str(src.text, file_name=src.path)
+    except TextXSyntaxError as err:
+        line, col = err.line or 1, err.col or 1
+        offset = min(src.offset(line, col), len(src.text))
+        what = _describe_expected(err)
+        token = re.match(r"\w+|\S", src.text[offset:])
+        what += f", found '{token.group(0)}'" if token else ", found end of file"
+        diags.error(src, offset, what)
+        return None
+    except TextXSemanticError as err:
+        diags.error(src, None, str(err.message), line=err.line or 1, col=err.col or 1)
+        return None
+    finally:
+        _ctx.src = None
+    return to_ast(model, src, diags)
+
+
+def parse_file(path: str, diags: Diagnostics):
+    """Reads and parses one file: (SourceFile, SourceUnit | None)."""
+    text = Path(path).read_text(encoding="utf-8", errors="replace")
+    src = SourceFile(path, text)
+    return src, parse_source(src, diags)
+
+
+# --------------------------------------------------------------------------
+# textX model -> iec2kmod.ast (picklable, independent of the metamodel)
+
+
+def _cls(obj):
+    return obj.__class__.__name__
+
+
+def _spec(t):
+    c = _cls(t)
+    pos = _pos(t)
+    if c == "NamedType":
+        return ast.NamedSpec(pos, name=t.name)
+    if c == "StringSpec":
+        return ast.StringSpec(pos, wide=t.kind.upper() == "WSTRING", length=t.length)
+    if c == "SubrangeSpec":
+        return ast.SubrangeSpec(pos, base=t.base, low=t.low, high=t.high)
+    if c == "EnumSpec":
+        return ast.EnumSpec(pos, base=t.base or None,
+                            values=[(v.name, v.value, _pos(v)) for v in t.values])
+    if c == "ArraySpec":
+        return ast.ArraySpec(pos, ranges=[(r.low, r.high) for r in t.ranges],
+                             element=_spec(t.element))
+    if c == "StructSpec":
+        return ast.StructSpec(pos, members=[
+            ast.VarDecl(_pos(m), names=[(m.name, _pos(m))],
+                        location=m.location.address.upper() if m.location else None,
+                        edge=None, spec=_spec(m.spec), init=_init(m.init))
+            for m in t.members])
+    raise AssertionError(f"unknown type specification {c}")
+
+
+def _init(i):
+    if i is None or isinstance(i, ast.Expr):
+        return i
+    c = _cls(i)
+    if c == "ArrayInit":
+        return ast.ArrayInit(_pos(i), items=[
+            (int(it.count.replace("_", "")) if it.count else None, _init(it.value))
+            for it in i.items])
+    if c == "StructInit":
+        return ast.StructInit(_pos(i), fields=[(f.name, _init(f.value), _pos(f))
+                                               for f in i.fields])
+    raise AssertionError(f"unknown initializer {c}")
+
+
+def _path(p):
+    if p.location:
+        return p.location.upper() if isinstance(p.location, str) else p.location.address.upper()
+    parts = list(p.parts)
+    if p.bit:
+        parts.append(p.bit)
+    return ".".join(parts)
+
+
+def _block(b):
+    kind = b.kind.upper()
+    pos = _pos(b)
+    if kind == "VAR_ACCESS":
+        decls = [ast.AccessDecl(_pos(d), name=d.name, path=_path(d.path), spec=_spec(d.spec),
+                                direction=(d.direction or "READ_WRITE").upper())
+                 for d in b.decls]
+        return ast.VarBlock(pos, kind=kind, qualifiers=(), decls=decls)
+    if kind == "VAR_CONFIG":
+        decls = [ast.ConfigDecl(_pos(d), path=_path(d.path),
+                                location=d.location.address.upper() if d.location else None,
+                                spec=_spec(d.spec), init=_init(d.init))
+                 for d in b.decls]
+        return ast.VarBlock(pos, kind=kind, qualifiers=(), decls=decls)
+    decls = []
+    for d in b.decls:
+        # names carry their own offsets: find each name in the source
+        names = _names_with_pos(d)
+        decls.append(ast.VarDecl(_pos(d), names=names,
+                                 location=d.location.address.upper() if d.location else None,
+                                 edge=d.edge.upper() if d.edge else None,
+                                 spec=_spec(d.spec), init=_init(d.init)))
+    return ast.VarBlock(pos, kind=kind, qualifiers=tuple(q.upper() for q in b.qualifiers),
+                        decls=decls)
+
+
+_NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _names_with_pos(d):
+    text = _ctx.src.text
+    pos = _pos(d)
+    out = []
+    for name in d.names:
+        m = _NAME_RE.search(text, pos)
+        while m and m.group(0) != name:
+            m = _NAME_RE.search(text, m.end())
+        if m is None:
+            out.append((name, _pos(d)))
+            continue
+        out.append((name, m.start()))
+        pos = m.end()
+    return out
+
+
+def _stmts(lst):
+    return [_stmt(s) for s in lst]
+
+
+def _stmt(s):
+    c = _cls(s)
+    pos = _pos(s)
+    if c == "AssignOrCall":
+        if s.assign:
+            return ast.Assign(pos, target=s.target, value=s.value)
+        target = s.target
+        if target.accessors:
+            _ctx.diags.error(_ctx.src, target.pos, f"'{target!r}' cannot be called")
+        return ast.CallStmt(pos, call=ast.Call(target.pos, target.name, s.call.arglist))
+    if c == "IfStmt":
+        branches = [(s.cond, _stmts(s.then.statements))]
+        branches += [(e.cond, _stmts(e.body.statements)) for e in s.elsifs]
+        return ast.If(pos, branches=branches,
+                      else_=_stmts(s.else_.statements) if s.else_ else None)
+    if c == "CaseStmt":
+        elements = [([(lab.low, lab.high) for lab in el.labels], _stmts(el.body.statements))
+                    for el in s.cases]
+        return ast.Case(pos, selector=s.selector, elements=elements,
+                        else_=_stmts(s.else_.statements) if s.else_ else None)
+    if c == "ForStmt":
+        m = _NAME_RE.search(_ctx.src.text, pos + 3)
+        return ast.For(pos, var=s.var, var_pos=m.start() if m else pos, start=s.start,
+                       end=s.end, step=s.step, body=_stmts(s.body.statements))
+    if c == "WhileStmt":
+        return ast.While(pos, cond=s.cond, body=_stmts(s.body.statements))
+    if c == "RepeatStmt":
+        return ast.Repeat(pos, body=_stmts(s.body.statements), cond=s.cond)
+    if c == "ExitStmt":
+        return ast.Exit(pos)
+    if c == "ReturnStmt":
+        return ast.Return(pos)
+    if c == "EmptyStmt":
+        return ast.Empty(pos)
+    raise AssertionError(f"unknown statement {c}")
+
+
+_LABEL_END = re.compile(r":[ \t\r\n]*")
+
+
+def _il(instrs):
+    """Rebuilds the nesting of deferred operations from the flat lines."""
+    top: list = []
+    stack = [top]
+    opened = []
+    text = _ctx.src.text
+    for i in instrs:
+        pos = _pos(i)
+        label = i.label or None
+        ipos = pos
+        if label:
+            m = _LABEL_END.match(text, text.index(":", pos))
+            ipos = m.end() if m else pos
+        if i.close:
+            if len(stack) == 1:
+                _ctx.diags.error(_ctx.src, ipos, "')' without a deferred operation to close")
+                continue
+            stack.pop()
+            opened.pop()
+            if label:
+                _ctx.diags.error(_ctx.src, pos, "a label cannot stand before ')'")
+            continue
+        op = i.op.upper() if i.op else None
+        if op == "&":
+            op = "AND"
+        elif op == "&N":
+            op = "ANDN"
+        deferred = bool(i.deferred)
+        instr = ast.ILInstr(
+            ipos, label=label, label_pos=pos if label else None, op=op,
+            operand=i.operand, deferred=deferred,
+            nested=[] if deferred else None, fb=i.fb or None, fn=i.fn or None,
+            args=i.args.arglist if i.args else None,
+            operands=list(i.operands) if i.operands else [])
+        stack[-1].append(instr)
+        if deferred:
+            stack.append(instr.nested)
+            opened.append(instr)
+    for instr in opened:
+        _ctx.diags.error(_ctx.src, instr.pos, f"'{instr.op}(' is never closed with ')'")
+    return top
+
+
+def _pou(e, kind, src):
+    body = e.body
+    if body.il is not None:
+        language, stmts = "IL", _il(body.il.instructions)
+    else:
+        language, stmts = "ST", _stmts(body.st.statements)
+    return ast.POU(_pos(e), kind=kind, name=e.name,
+                   result=_spec(e.result) if kind == "FUNCTION" else None,
+                   blocks=[_block(b) for b in e.blocks], body=stmts, language=language,
+                   src=src, end_pos=e._tx_position_end)
+
+
+def _resource_body(body, name, processor, blocks, pos):
+    tasks = [ast.Task(_pos(t), name=t.name,
+                      props={p.key.upper(): (p.value, _pos(p)) for p in t.props})
+             for t in body.tasks]
+    programs = []
+    text = _ctx.src.text
+    for p in body.programs:
+        task_pos = type_pos = _pos(p)
+        if p.task:
+            m = re.compile(r"\bWITH\s+", re.I).search(text, _pos(p))
+            task_pos = m.end() if m else _pos(p)
+        m = re.compile(r":\s*", re.I).search(text, task_pos)
+        type_pos = m.end() if m else _pos(p)
+        conns = [ast.Connection(_pos(c), name=c.name, direction="in" if c.input else "out",
+                                value=c.value if c.input else c.target)
+                 for c in p.connections]
+        programs.append(ast.ProgramConfig(_pos(p), name=p.name,
+                                          retain=p.retain.upper() if p.retain else None,
+                                          task=p.task or None, task_pos=task_pos,
+                                          type=p.type, type_pos=type_pos, connections=conns))
+    return ast.Resource(pos, name=name, processor=processor, blocks=blocks, tasks=tasks,
+                        programs=programs)
+
+
+def _configuration(e, src):
+    if e.single is not None:
+        resources = [_resource_body(e.single, None, None, [], _pos(e.single))]
+    else:
+        resources = [_resource_body(r.body, r.name, r.processor, [_block(b) for b in r.blocks],
+                                    _pos(r))
+                     for r in e.resources]
+    blocks = [_block(b) for b in e.blocks]
+    access = [_block(b) for b in e.access]
+    return ast.Configuration(_pos(e), name=e.name, blocks=blocks, resources=resources,
+                             access=access, src=src)
+
+
+def to_ast(model, src: SourceFile, diags: Diagnostics) -> ast.SourceUnit:
+    unit = ast.SourceUnit(0, src=src, types=[], pous=[], configurations=[])
+    _ctx.src = src
+    _ctx.diags = diags
+    try:
+        for e in model.elements:
+            c = _cls(e)
+            if c == "DataTypeDecl":
+                unit.types += [ast.TypeDef(_pos(t), name=t.name, spec=_spec(t.spec),
+                                           init=_init(t.init), src=src) for t in e.types]
+            elif c == "FunctionDecl":
+                unit.pous.append(_pou(e, "FUNCTION", src))
+            elif c == "FunctionBlockDecl":
+                unit.pous.append(_pou(e, "FUNCTION_BLOCK", src))
+            elif c == "ProgramDecl":
+                unit.pous.append(_pou(e, "PROGRAM", src))
+            else:
+                unit.configurations.append(_configuration(e, src))
+    finally:
+        _ctx.src = None
+    return unit

@@ -1,0 +1,1 @@
+"""plc-manager: loads, swaps and stops iec2kmod kernel modules (sysfs + generic netlink)."""
