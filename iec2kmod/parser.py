@@ -206,7 +206,9 @@ def _describe_expected(err) -> str:
 
 
 _TOKEN_NAMES = {
-    "ID": "identifier", "ANY_NAME": "name", "INTEGER": "integer",
+    "ID": "identifier", "ANY_NAME": "name", "VAR_PATH": "identifier",
+    "TYPE_NAME": "type name", "MEMBER_PATH": "'.'", "INPUT_NAME": "identifier",
+    "OUTPUT_NAME": "identifier", "INTEGER": "integer",
     "LITERAL": "literal", "DIRECT_ADDRESS": "direct address",
     "BINARY_OP": "operator", "UNARY_OP": "unary operator",
     "IL_OP": "IL operator", "IL_CALL_OP": "CAL", "EOL": "end of line",
@@ -433,7 +435,9 @@ def _il(instrs):
 
 def _pou(e, kind, src):
     body = e.body
-    if body.il is not None:
+    if body is None or (body.il is None and body.st is None):
+        language, stmts = "ST", []
+    elif body.il is not None:
         language, stmts = "IL", _il(body.il.instructions)
     else:
         language, stmts = "ST", _stmts(body.st.statements)

@@ -114,10 +114,16 @@ class BodyChecker:
                     self.error(value.pos, f"{v} is outside the subrange {tt.low}..{tt.high} "
                                           f"of {tt.name}")
             return
-        if isinstance(vt, LiteralT) and isinstance(tt.base, Elementary) and \
-                tt.base.cat in ("sint", "uint", "bit") and vt.cat == "int":
-            self.error(value.pos, f"{vt.value} is out of range for {tt.name}")
-            return
+        if isinstance(vt, LiteralT) and isinstance(tt.base, Elementary) and vt.cat == "int":
+            if tt.base.cat in ("sint", "uint", "bit", "bool"):
+                self.error(value.pos, f"{vt.value} is out of range for {tt.name}")
+                return
+            if tt.base.cat in ("time", "date", "tod", "dt"):
+                example = {"time": "T#5s", "date": "D#2024-01-31", "tod": "TOD#08:30:00",
+                           "dt": "DT#2024-01-31-08:30:00"}[tt.base.cat]
+                self.error(value.pos, f"an integer is not a {tt.base.name}: write a literal "
+                                      f"such as {example}")
+                return
         msg = f"cannot assign {vt.name} to {what or _describe(target_node)} of type {tt.name}"
         s, d = concrete(vt).base, tt.base
         if isinstance(s, (Elementary, StringT)) and isinstance(d, (Elementary, StringT)) and \
@@ -163,6 +169,12 @@ class BodyChecker:
                     e.type = st
                     return st.values[e.value.upper()][1]
             self.error(e.pos, f"CASE label must be a value of {st.name}")
+            return None
+        if (isinstance(e, ast.Lit) and e.kind == "enum") or (
+                isinstance(e, ast.Ref) and not e.accessors and self.pou.var(e.name) is None
+                and self.decl.enum_values.get(e.name.upper())):
+            self.error(e.pos, f"CASE label {e!r} is an enumeration value; the selector is "
+                              f"{st.name}")
             return None
         try:
             v = self.decl.const_value(e, self.src, "CASE label")
@@ -478,7 +490,7 @@ class BodyChecker:
         key = c.name.upper()
         if not statement or self.pou.var(c.name) is not None:
             v = self.pou.var(c.name)
-            if v is not None:
+            if v is not None and v.section != "RESULT":
                 if isinstance(v.type, FBType):
                     if not statement:
                         self.error(c.pos, f"function block instance '{c.name}' called inside an "

@@ -20,6 +20,7 @@ class ConfigChecker:
         self.diags = diags
         # address -> [(owner description, resource name or None, src, pos)]
         self.addresses: dict = {}
+        self.reported_externals: set = set()
 
     def error(self, src, pos, msg):
         self.diags.error(src, pos, msg)
@@ -282,6 +283,9 @@ class ConfigChecker:
             if v.section == "VAR_EXTERNAL":
                 g = scope.get(v.key)
                 if g is None:
+                    if (id(v), r.name) in self.reported_externals:
+                        continue
+                    self.reported_externals.add((id(v), r.name))
                     self.error(v.src, v.pos, f"VAR_EXTERNAL '{v.name}' has no matching global "
                                              f"variable in resource '{r.name}' (used by "
                                              f"program instance '{inst.name}')")
