@@ -4,6 +4,7 @@ precedence trees (iec2kmod.ast), syntax errors turned into diagnostics."""
 from __future__ import annotations
 
 import re
+import sys
 from functools import lru_cache
 from pathlib import Path
 
@@ -13,6 +14,10 @@ from textx.exceptions import TextXSyntaxError, TextXSemanticError
 from . import ast
 from .diagnostics import Diagnostics, SourceFile
 from .literals import LiteralError, classify
+
+# Arpeggio descends about 25 Python frames per parenthesis; Python 3.11 keeps
+# pure-Python frames off the C stack, so this allows ~300 nested levels.
+RECURSION_LIMIT = 8000
 
 GRAMMAR = Path(__file__).resolve().parent / "grammar" / "iec61131.tx"
 
@@ -188,6 +193,8 @@ def _describe_expected(err) -> str:
         to_match = getattr(r, "to_match", None)
         if isinstance(to_match, str) and r.__class__.__name__ == "StrMatch":
             label = f"'{to_match}'"
+        elif name == "Comment":
+            continue
         elif name in _TOKEN_NAMES:
             label = _TOKEN_NAMES[name]
         elif name:
@@ -221,6 +228,8 @@ def parse_source(src: SourceFile, diags: Diagnostics):
     _ctx.src = src
     _ctx.diags = diags
     _warn_pragmas(src, diags)
+    if sys.getrecursionlimit() < RECURSION_LIMIT:
+        sys.setrecursionlimit(RECURSION_LIMIT)
     try:
         model = metamodel().model_from_str(src.text, file_name=src.path)
     except TextXSyntaxError as err:
@@ -234,9 +243,34 @@ def parse_source(src: SourceFile, diags: Diagnostics):
     except TextXSemanticError as err:
         diags.error(src, None, str(err.message), line=err.line or 1, col=err.col or 1)
         return None
+    except RecursionError:
+        diags.error(src, _deepest_nesting(src.text),
+                    "nested too deeply for the parser (simplify this expression or statement)")
+        return None
     finally:
         _ctx.src = None
-    return to_ast(model, src, diags)
+    if not hasattr(model, "elements"):  # an empty file
+        return ast.SourceUnit(0, src=src, types=[], pous=[], configurations=[])
+    try:
+        return to_ast(model, src, diags)
+    except RecursionError:
+        diags.error(src, _deepest_nesting(src.text),
+                    "nested too deeply for the parser (simplify this expression or statement)")
+        return None
+
+
+def _deepest_nesting(text: str) -> int:
+    """Offset of the first parenthesis at the deepest nesting level."""
+    depth = best = 0
+    where = 0
+    for i, ch in enumerate(text):
+        if ch in "([":
+            depth += 1
+            if depth > best:
+                best, where = depth, i
+        elif ch in ")]":
+            depth -= 1
+    return where
 
 
 def parse_file(path: str, diags: Diagnostics):
