@@ -11,6 +11,7 @@ from rt_helpers import MODES, cfile, rt, run_driver
 DRIVERS = {
     "test_int.c": [],
     "test_string.c": ["iec_string.c"],
+    "test_fb.c": ["iec_std_fb.c"],
 }
 
 pytestmark = pytest.mark.execution

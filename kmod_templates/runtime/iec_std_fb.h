@@ -1,0 +1,188 @@
+/* SPDX-License-Identifier: GPL-2.0-only OR MIT */
+/*
+ * iec_std_fb.h - the standard function blocks.
+ *
+ * An FB type is a struct (inputs, outputs, then internal state, member
+ * names are the IEC names in lower case) and a body:
+ *
+ *   struct iec_fb_<name> inst;            TON -> struct iec_fb_ton
+ *   void iec_fb_<name>(struct iec_fb_<name> *self, struct iec_ctx *ctx);
+ *
+ * A call  t1(IN := x, PT := T#5s);  is emitted as
+ *   t1.in = x; t1.pt = 5000000000; iec_fb_ton(&t1, ctx);
+ * and outputs are read from the struct afterwards (t1.q, t1.et).
+ *
+ * The all-zero struct is every FB's initial state (CV = 0, Q = FALSE,
+ * timers idle), so instances in zero-initialised storage need no init
+ * call; iec_fb_<name>_init() exists for re-initialisation and sets zero.
+ *
+ * FBs:
+ *   SR, RS                  bistables (set / reset dominant)
+ *   R_TRIG, F_TRIG          edge detectors.  F_TRIG's memory starts as
+ *                           "CLK was FALSE", so no edge is reported on the
+ *                           first call (the ed.2 text initialises M so that
+ *                           a FALSE CLK on the first call gives Q = TRUE;
+ *                           the runtime follows ed.3 practice instead).
+ *   CTU, CTD, CTUD          INT counters; _INT, _DINT, _LINT, _UDINT,
+ *                           _ULINT variants (CTU_DINT -> iec_fb_ctu_dint).
+ *                           CV never passes the type's limits (PVmax,
+ *                           PVmin); CTD/CTUD: Q/QD = (CV <= 0).
+ *   TP, TON, TOF            timers; _LTIME variants are the same with LTIME.
+ *
+ * Timers read ctx->now_ns (the cycle start) and work on unsigned 64-bit
+ * differences, so the clock may wrap.  A negative PT acts as T#0s.  PT is
+ * read at every call.  Each timer is one of the automaton states of the
+ * reference model: Init (ET = 0), Work (0 <= ET < PT, timing), Tout
+ * (ET = PT):
+ *   TON  IN FALSE -> Init: Q = FALSE, ET = 0.  IN TRUE in Init -> Work,
+ *        timing from this call.  Work: ET = elapsed; once elapsed >= PT ->
+ *        Tout: Q = TRUE, ET = PT, until IN is FALSE.  PT = 0 gives Q on
+ *        the call IN is first TRUE.
+ *   TOF  IN TRUE -> Q = TRUE, ET = 0.  IN FALSE after TRUE -> Work,
+ *        Q stays TRUE, ET = elapsed; once elapsed >= PT -> Tout: Q = FALSE,
+ *        ET = PT until IN is TRUE again.  Initially Q = FALSE, ET = 0.
+ *   TP   a rising edge of IN seen while not timing starts a pulse: Work,
+ *        Q = TRUE, ET = elapsed, not retriggerable.  When elapsed >= PT
+ *        the pulse ends (Q = FALSE): ET = PT while IN stays TRUE (Tout),
+ *        ET = 0 once IN is FALSE (Init; also on the call the pulse ends if
+ *        IN is FALSE then).  PT = 0 gives no pulse.
+ * IN pulses shorter than a cycle are only seen if a call sees them.
+ */
+#ifndef IEC_STD_FB_H
+#define IEC_STD_FB_H
+
+#include "iec_fault.h"
+
+/* Timer automaton states (struct member "state"). */
+enum iec_timer_state {
+	IEC_TIMER_INIT = 0,
+	IEC_TIMER_WORK = 1,
+	IEC_TIMER_TOUT = 2,
+	IEC_TIMER_ON = 3,	/* TOF only: IN is TRUE */
+};
+
+struct iec_fb_sr {
+	iec_bool s1;
+	iec_bool r;
+	iec_bool q1;
+};
+
+struct iec_fb_rs {
+	iec_bool s;
+	iec_bool r1;
+	iec_bool q1;
+};
+
+struct iec_fb_r_trig {
+	iec_bool clk;
+	iec_bool q;
+	iec_bool prev;		/* CLK of the previous call (standard: M) */
+};
+
+struct iec_fb_f_trig {
+	iec_bool clk;
+	iec_bool q;
+	iec_bool prev;		/* CLK of the previous call (standard: NOT M) */
+};
+
+#define IEC__DECL_COUNTERS(n, T)					\
+struct iec_fb_ctu##n {							\
+	iec_bool cu;							\
+	iec_bool r;							\
+	T pv;								\
+	iec_bool q;							\
+	T cv;								\
+	iec_bool cu_prev;						\
+};									\
+struct iec_fb_ctd##n {							\
+	iec_bool cd;							\
+	iec_bool ld;							\
+	T pv;								\
+	iec_bool q;							\
+	T cv;								\
+	iec_bool cd_prev;						\
+};									\
+struct iec_fb_ctud##n {							\
+	iec_bool cu;							\
+	iec_bool cd;							\
+	iec_bool r;							\
+	iec_bool ld;							\
+	T pv;								\
+	iec_bool qu;							\
+	iec_bool qd;							\
+	T cv;								\
+	iec_bool cu_prev;						\
+	iec_bool cd_prev;						\
+};									\
+void iec_fb_ctu##n(struct iec_fb_ctu##n *self, struct iec_ctx *ctx);	\
+void iec_fb_ctd##n(struct iec_fb_ctd##n *self, struct iec_ctx *ctx);	\
+void iec_fb_ctud##n(struct iec_fb_ctud##n *self, struct iec_ctx *ctx);	\
+static inline void iec_fb_ctu##n##_init(struct iec_fb_ctu##n *self)	\
+{									\
+	iec_memset(self, 0, sizeof(*self));				\
+}									\
+static inline void iec_fb_ctd##n##_init(struct iec_fb_ctd##n *self)	\
+{									\
+	iec_memset(self, 0, sizeof(*self));				\
+}									\
+static inline void iec_fb_ctud##n##_init(struct iec_fb_ctud##n *self)	\
+{									\
+	iec_memset(self, 0, sizeof(*self));				\
+}
+
+IEC__DECL_COUNTERS(, iec_int)
+IEC__DECL_COUNTERS(_int, iec_int)
+IEC__DECL_COUNTERS(_dint, iec_dint)
+IEC__DECL_COUNTERS(_lint, iec_lint)
+IEC__DECL_COUNTERS(_udint, iec_udint)
+IEC__DECL_COUNTERS(_ulint, iec_ulint)
+
+#define IEC__DECL_TIMER(n, T)						\
+struct iec_fb_##n {							\
+	iec_bool in;							\
+	T pt;								\
+	iec_bool q;							\
+	T et;								\
+	iec_u8 state;		/* enum iec_timer_state */		\
+	iec_bool prev_in;	/* TP: IN of the previous call */	\
+	iec_s64 start;		/* ctx->now_ns when timing started */	\
+};									\
+void iec_fb_##n(struct iec_fb_##n *self, struct iec_ctx *ctx);		\
+static inline void iec_fb_##n##_init(struct iec_fb_##n *self)		\
+{									\
+	iec_memset(self, 0, sizeof(*self));				\
+}
+
+IEC__DECL_TIMER(tp, iec_time)
+IEC__DECL_TIMER(ton, iec_time)
+IEC__DECL_TIMER(tof, iec_time)
+IEC__DECL_TIMER(tp_ltime, iec_ltime)
+IEC__DECL_TIMER(ton_ltime, iec_ltime)
+IEC__DECL_TIMER(tof_ltime, iec_ltime)
+
+void iec_fb_sr(struct iec_fb_sr *self, struct iec_ctx *ctx);
+void iec_fb_rs(struct iec_fb_rs *self, struct iec_ctx *ctx);
+void iec_fb_r_trig(struct iec_fb_r_trig *self, struct iec_ctx *ctx);
+void iec_fb_f_trig(struct iec_fb_f_trig *self, struct iec_ctx *ctx);
+
+static inline void iec_fb_sr_init(struct iec_fb_sr *self)
+{
+	iec_memset(self, 0, sizeof(*self));
+}
+
+static inline void iec_fb_rs_init(struct iec_fb_rs *self)
+{
+	iec_memset(self, 0, sizeof(*self));
+}
+
+static inline void iec_fb_r_trig_init(struct iec_fb_r_trig *self)
+{
+	iec_memset(self, 0, sizeof(*self));
+}
+
+static inline void iec_fb_f_trig_init(struct iec_fb_f_trig *self)
+{
+	iec_memset(self, 0, sizeof(*self));
+}
+
+#endif /* IEC_STD_FB_H */

@@ -1,0 +1,47 @@
+/* SPDX-License-Identifier: GPL-2.0-only OR MIT */
+/*
+ * fb_layout.c - exported sizes and offsets of the FB and ctx structs, so
+ * the ctypes mirrors in test_rt_fb.py are checked against the C layout.
+ */
+#include "iec_std_fb.h"
+
+#define OFF(s, m) (long)__builtin_offsetof(struct s, m)
+
+long iec_test_layout(const char *what);
+long iec_test_layout(const char *what)
+{
+	static const struct {
+		const char *name;
+		long v;
+	} t[] = {
+		{ "ctx", sizeof(struct iec_ctx) },
+		{ "ctx.now_ns", OFF(iec_ctx, now_ns) },
+		{ "ctx.fault", OFF(iec_ctx, fault) },
+		{ "ctx.fault_count", OFF(iec_ctx, fault_count) },
+		{ "ton", sizeof(struct iec_fb_ton) },
+		{ "ton.pt", OFF(iec_fb_ton, pt) },
+		{ "ton.q", OFF(iec_fb_ton, q) },
+		{ "ton.et", OFF(iec_fb_ton, et) },
+		{ "ton.state", OFF(iec_fb_ton, state) },
+		{ "ton.start", OFF(iec_fb_ton, start) },
+		{ "ctud_lint", sizeof(struct iec_fb_ctud_lint) },
+		{ "ctud_lint.pv", OFF(iec_fb_ctud_lint, pv) },
+		{ "ctud_lint.cv", OFF(iec_fb_ctud_lint, cv) },
+		{ "ctud_lint.cd_prev", OFF(iec_fb_ctud_lint, cd_prev) },
+		{ "ctud", sizeof(struct iec_fb_ctud) },
+		{ "ctud.cv", OFF(iec_fb_ctud, cv) },
+	};
+	unsigned int i;
+
+	for (i = 0; i < sizeof(t) / sizeof(t[0]); i++) {
+		const char *a = t[i].name, *b = what;
+
+		while (*a && *a == *b) {
+			a++;
+			b++;
+		}
+		if (!*a && !*b)
+			return t[i].v;
+	}
+	return -1;
+}
