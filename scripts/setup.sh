@@ -13,6 +13,7 @@
 #      extract it (NOT install it) into $IEC2KMOD_CACHE/kernel/<kver>/, which is
 #      what the QEMU test guest boots (vmlinuz + lib/modules/<kver>/kernel/...);
 #   3. pip install -e .[test] of this repository (re-run when pyproject.toml changes);
+#      and extract the PVH-bootable kernel for fast QEMU boots;
 #   4. start dockerd if it is not running and build the project's module-build
 #      container image if it is missing (skipped with --no-container).
 #
@@ -121,7 +122,9 @@ else
     PY_REAL=$("$PYTHON" -c 'import sys; print(sys.executable)')
     STAMP="$CACHE/pip-$(echo "$PY_REAL" | md5sum | cut -c1-8)-$(cat "$REPO/pyproject.toml" | md5sum | cut -c1-12).stamp"
     editable_ok() {
-        "$PYTHON" - "$REPO" <<'EOF'
+        # from / so that an iec2kmod.egg-info in the checkout does not shadow
+        # the installed distribution's metadata
+        (cd / && "$PYTHON" - "$REPO") <<'EOF'
 import json, sys
 from importlib import metadata
 try:
@@ -137,11 +140,19 @@ EOF
         say "iec2kmod installed in editable mode for $PY_REAL"
     else
         say "pip install -e '$REPO[test]' with $PY_REAL"
-        "$PYTHON" -m pip install -q -e "$REPO[test]" || die "pip install -e $REPO[test] failed"
+        "$PYTHON" -m pip install -q --root-user-action=ignore -e "$REPO[test]" || die "pip install -e $REPO[test] failed"
         mkdir -p "$CACHE"
         rm -f "$CACHE"/pip-"$(echo "$PY_REAL" | md5sum | cut -c1-8)"-*.stamp
         touch "$STAMP"
     fi
+fi
+
+# ------------------------------------ 3b. PVH kernel for fast guest boots ---
+if [ "$NO_PIP" = 1 ] && ! "$PYTHON" -c 'import iec2kmod' 2>/dev/null; then
+    say "skipping the PVH kernel extraction (iec2kmod not importable, --no-pip)"
+else
+    (cd "$REPO" && "$PYTHON" -m iec2kmod.vm prepare) | sed 's/^/[setup] /' \
+        || die "QEMU guest prerequisites are incomplete (see above)"
 fi
 
 # ------------------------------------------------- 4. docker + image --------

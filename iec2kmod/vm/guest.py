@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import base64
 import collections
+import contextlib
 import math
 import os
 import re
@@ -336,7 +337,8 @@ class Guest:
             self._connect(sockpath, t0 + 20)
             line = self._read_until_line(_MARK + "-READY", t0 + self.boot_timeout, boot=True)
             self.guest_uptime_at_ready = float(line.split()[1])
-        except GuestError:
+        except GuestError as e:
+            self._dead_reason = str(e)
             self.kill()
             raise
         self.boot_seconds = time.monotonic() - t0
@@ -672,13 +674,15 @@ class Guest:
             self._sock = None
         if self._proc is not None and self._proc.stdout:
             self._wait_console()
-        # keep the console log if it was asked for explicitly
-        for fn in ("initrd.cpio", "ctl.sock"):
-            try:
-                os.unlink(os.path.join(self._rundir, fn))
-            except OSError:
-                pass
-        if not self.console_log.startswith(self._rundir):
+        # The run directory goes; a default console log inside it stays only
+        # when the guest died or hung, since error messages point at it.
+        keep_log = (self._dead_reason is not None
+                    and self.console_log.startswith(self._rundir + os.sep))
+        if keep_log:
+            for fn in ("initrd.cpio", "ctl.sock"):
+                with contextlib.suppress(OSError):
+                    os.unlink(os.path.join(self._rundir, fn))
+        else:
             shutil.rmtree(self._rundir, ignore_errors=True)
 
     def __enter__(self) -> "Guest":
