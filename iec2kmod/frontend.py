@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import pickle
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -82,6 +83,55 @@ def _parse_one(src: SourceFile):
     return unit, diags.items
 
 
+_TOP_END = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|\{[^}]*\}|"
+                      r"\b(END_FUNCTION_BLOCK|END_FUNCTION|END_PROGRAM|END_TYPE|"
+                      r"END_CONFIGURATION)\b", re.S | re.I)
+
+
+def split_source(src: SourceFile, pieces: int) -> list[SourceFile]:
+    """Cuts a file after top-level END_* keywords into about ``pieces``
+    parts of similar size.  Each part keeps the offsets of the whole file:
+    the text before it is blanked (newlines kept), so positions, lines and
+    columns of every node and diagnostic stay those of the real file."""
+    text = src.text
+    if pieces <= 1 or len(text) < 20000:
+        return [src]
+    cuts = [m.end() for m in _TOP_END.finditer(text) if m.group(1)]
+    target = len(text) / pieces
+    bounds = [0]
+    for c in cuts:
+        if c - bounds[-1] >= target and len(text) - c > target / 2:
+            bounds.append(c)
+    bounds.append(len(text))
+    if len(bounds) <= 2:
+        return [src]
+    parts = []
+    for a, b in zip(bounds, bounds[1:]):
+        blank = re.sub(r"[^\n]", " ", text[:a])
+        parts.append(SourceFile(src.path, blank + text[a:b]))
+    return parts
+
+
+def _merge(src: SourceFile, results):
+    """One unit from the parsed parts of a file, pointing at the real text."""
+    from . import ast
+    items = []
+    unit = ast.SourceUnit(0, src=src, types=[], pous=[], configurations=[])
+    ok = True
+    for part_unit, part_items in results:
+        for d in part_items:
+            items.append(Diagnostic(d.path, d.line, d.col, d.severity, d.message,
+                                    src.line_text(d.line)))
+        if part_unit is None:
+            ok = False
+            continue
+        for name in ("types", "pous", "configurations"):
+            for node in getattr(part_unit, name):
+                node.src = src
+                getattr(unit, name).append(node)
+    return (unit if ok else None), items
+
+
 def _fingerprint() -> str:
     """Identifies this compiler build: its version and its sources."""
     h = hashlib.sha256(__version__.encode())
@@ -100,19 +150,28 @@ def cache_dir() -> Path:
 
 
 def parse_all(sources: list[SourceFile], jobs: int | None = None):
-    """Parses every file; more than one file uses all cores."""
+    """Parses every file, using every core: big files are cut at top-level
+    declarations so that one large file also spreads over the cores."""
     from .parser import metamodel
     metamodel()  # build once, before forking, so workers inherit it
-    jobs = jobs or min(len(sources), os.cpu_count() or 1)
-    if jobs <= 1 or len(sources) <= 1:
+    jobs = jobs or os.cpu_count() or 1
+    total = sum(len(s.text) for s in sources)
+    if jobs <= 1 or total < 40000:
         return [_parse_one(s) for s in sources]
+    parts = []  # (file index, part)
+    for i, s in enumerate(sources):
+        share = max(1, round(2 * jobs * len(s.text) / total))
+        parts += [(i, p) for p in split_source(s, share)]
     import multiprocessing
     ctx = multiprocessing.get_context("fork")
-    # biggest files first so the cores finish together
-    order = sorted(range(len(sources)), key=lambda i: -len(sources[i].text))
+    # biggest parts first so the cores finish together
+    order = sorted(range(len(parts)), key=lambda k: -len(parts[k][1].text.lstrip()))
     with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
-        results = dict(zip(order, pool.map(_parse_one, [sources[i] for i in order])))
-    return [results[i] for i in range(len(sources))]
+        done = dict(zip(order, pool.map(_parse_one, [parts[k][1] for k in order])))
+    out = []
+    for i, s in enumerate(sources):
+        out.append(_merge(s, [done[k] for k in range(len(parts)) if parts[k][0] == i]))
+    return out
 
 
 def run(paths, use_cache: bool = True, jobs: int | None = None) -> FrontEndResult:

@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""Benchmark: `iec2kmod check` on a generated 10,000-line project.
+
+Prints the cold time (fresh process, no cache), the repeat time (unchanged
+files, result cache warm), lines per second, and where the time goes (each
+pass, from `check --timings`).  Targets (issue 2): cold <= 6 s, repeat <= 1 s
+on the 2-core reference machine.
+
+    python benchmarks/check_throughput.py [--lines 10000] [--files 8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from gen_project import project  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def split_files(text: str, nfiles: int) -> list[str]:
+    """Splits the generated project at POU boundaries into nfiles files."""
+    pous = []
+    current = []
+    for line in text.splitlines(keepends=True):
+        current.append(line)
+        if line.strip().upper() in ("END_FUNCTION_BLOCK", "END_PROGRAM", "END_FUNCTION",
+                                    "END_CONFIGURATION"):
+            pous.append("".join(current))
+            current = []
+    per = max(1, len(pous) // nfiles)
+    return ["".join(pous[i:i + per]) for i in range(0, len(pous), per)]
+
+
+def check(paths, cache_dir, extra=()):
+    env = dict(os.environ, IEC2KMOD_CACHE=str(cache_dir), PYTHONPATH=str(ROOT))
+    t = time.perf_counter()
+    p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "check", "--timings", *extra,
+                        *map(str, paths)], env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    if p.returncode != 0:
+        sys.exit(f"check failed ({p.returncode}):\n{p.stderr[-3000:]}")
+    timings = {}
+    for line in p.stderr.splitlines():
+        name, _, ms = line.partition(":")
+        if ms.strip().endswith("ms"):
+            timings[name.strip()] = float(ms.split()[0]) / 1000
+    return wall, timings
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--lines", type=int, default=10000)
+    ap.add_argument("--files", type=int, default=8)
+    ap.add_argument("--runs", type=int, default=3)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        text = project(args.lines)
+        paths = []
+        for i, part in enumerate(split_files(text, args.files)):
+            p = tmp / f"part{i:02d}.st"
+            p.write_text(part)
+            paths.append(p)
+        nlines = sum(p.read_text().count("\n") for p in paths)
+        print(f"project: {nlines} lines in {len(paths)} files, {os.cpu_count()} cores")
+        colds = []
+        for run in range(args.runs):
+            cache = tmp / f"cache{run}"
+            wall, timings = check(paths, cache)
+            colds.append((wall, timings))
+        wall, timings = min(colds, key=lambda c: c[0])
+        print(f"cold check:   {wall:6.2f} s  ({nlines / wall:,.0f} lines/s)  best of {args.runs}")
+        inproc = sum(timings.values())
+        for name, secs in timings.items():
+            print(f"  {name:>10}: {secs:6.3f} s")
+        print(f"  {'startup':>10}: {wall - inproc:6.3f} s (interpreter, imports, output)")
+        reps = [check(paths, tmp / "cache0")[0] for _ in range(args.runs)]
+        print(f"repeat check: {min(reps):6.2f} s  (unchanged files, result cache)")
+        one, _ = check([tmp / "all.st"] if (tmp / "all.st").write_text(text) else [],
+                       tmp / "cache-single")
+        print(f"single file:  {one:6.2f} s  (the same project as one file: one core)")
+        print("targets: cold <= 6 s, repeat <= 1 s;",
+              "MET" if wall <= 6 and min(reps) <= 1 else "NOT MET")
+
+
+if __name__ == "__main__":
+    main()
