@@ -221,7 +221,7 @@ class If(Node):
 
 
 class Case(Node):
-    __slots__ = ("selector", "elements", "else_")  # elements: [([(low, high|None)], [stmt])]
+    __slots__ = ("selector", "elements", "else_", "values")  # elements: [([(low, high|None)], [stmt])]
 
 
 class For(Node):
@@ -255,7 +255,7 @@ class ILInstr(Node):
     ``operand``; ``args`` are formal arguments of CAL or a function."""
 
     __slots__ = ("label", "label_pos", "op", "operand", "deferred", "nested", "fb",
-                 "fn", "args", "operands", "call")
+                 "fn", "args", "operands", "call", "cr_in", "cr_out")
 
 
 # configuration

@@ -8,7 +8,9 @@ import sys
 from functools import lru_cache
 from pathlib import Path
 
+from arpeggio import EndOfFile, Terminal
 from textx import metamodel_from_file
+from textx.const import MULT_ASSIGN_ERROR
 from textx.exceptions import TextXSyntaxError, TextXSemanticError
 
 from . import ast
@@ -171,6 +173,224 @@ def metamodel():
         "ILCallArgs": _call_args,
     })
     return mm
+
+
+# --------------------------------------------------------------------------
+# Lean model builder.
+#
+# textX's generic builder (model_from_str) walks the parse tree computing a
+# line/column for every node, registers every named object for reference
+# resolution, resolves references (this grammar has none), checks the whole
+# model for postponed objects and walks it once more to call the object
+# processors.  The builder below does the same construction in one pass over
+# the parse tree of the parser textX generates from the grammar, from the
+# metamodel's own information: class rules carry their class (_tx_class),
+# assignment rules their attribute (_attr_name) and kind (rule name
+# __asgn_plain/optional/zeroormore/oneormore/list), and each class its
+# attributes (_tx_attrs).  Object processors run in the same order as
+# textX's (children first) and replace values the same way.
+# tests/unit/test_fast_builder.py checks it against model_from_str.
+
+
+class FastBuilder:
+    """Builds the textX model of a parse tree, as model_from_str does."""
+
+    def __init__(self, mm):
+        from textx.const import (MULT_ONEORMORE, MULT_ZEROORMORE, RULE_ABSTRACT,
+                                 RULE_MATCH)
+        from textx.lang import BASE_TYPE_NAMES, python_type
+        self._mm = mm
+        self._procs = mm._obj_processors
+        self._many = (MULT_ONEORMORE, MULT_ZEROORMORE)
+        self._abstract = RULE_ABSTRACT
+        self._match = RULE_MATCH
+        self._base_types = BASE_TYPE_NAMES
+        self._python_type = python_type
+        self._classes = set(mm)  # the metamodel's classes
+        self._handlers = {}      # id(grammar rule) -> function(node) -> value
+        self.parser = None       # the parser of the current parse (for errors)
+
+    # -- dispatch
+    def build(self, node):
+        """The model value of one parse-tree node."""
+        try:
+            return self._handlers[id(node.rule)](node)
+        except KeyError:
+            pass
+        rule = node.rule
+        if isinstance(node, Terminal):
+            handler = self._terminal
+            if isinstance(rule, EndOfFile):  # a fresh rule object each time
+                return handler(node)
+        elif rule._tx_class._tx_type == self._abstract:
+            handler = self._abstract_value
+        elif rule._tx_class._tx_type == self._match:
+            handler = self._match_value
+        else:
+            handler = self._class_handler(rule._tx_class)
+        self._handlers[id(rule)] = handler
+        return handler(node)
+
+    # -- rule kinds (the cases of textX's process_node)
+    def _terminal(self, node):
+        proc = self._procs.get(node.rule_name)
+        return node.value if proc is None else proc(node.value)
+
+    def _abstract_value(self, node):
+        if len(node) > 1:
+            for n in node:
+                if not isinstance(n, Terminal):
+                    return self.build(n)
+            return "".join(str(n) for n in node)
+        return self.build(node[0])
+
+    def _match_value(self, nt):
+        if isinstance(nt, Terminal):
+            value = nt.value
+        elif len(nt) > 1:
+            value = "".join(str(self._match_value(n)) for n in nt)
+        else:
+            value = self._match_value(nt[0])
+        proc = self._procs.get(nt.rule_name)
+        return value if proc is None else proc(value)
+
+    def _value_processor(self, attr_cls):
+        """The object processing textX applies (call_obj_processors) to a
+        value of an attribute declared with class attr_cls, as a function
+        value -> replacement or None; None when there is nothing to call."""
+        if attr_cls._tx_type == self._match:
+            return None
+        procs = self._procs
+        grammar_proc = procs.get(attr_cls.__name__)
+        if attr_cls._tx_type != self._abstract and grammar_proc is None:
+            return None  # values are always instances of attr_cls itself
+        classes = self._classes
+        own_procs = {}
+
+        def process(value):
+            cls = value.__class__
+            try:
+                own = own_procs[cls]
+            except KeyError:
+                own = None
+                if cls in classes and cls._tx_fqn != attr_cls._tx_fqn:
+                    own = procs.get(cls.__name__)
+                own_procs[cls] = own
+            current = own(value) if own is not None else None
+            grammar = grammar_proc(value) if grammar_proc is not None else None
+            return current if current is not None else grammar
+
+        return process
+
+    def _class_handler(self, mclass):
+        build = self.build
+        many = self._many
+        lists = []
+        defaults = {}
+        for attr in mclass._tx_attrs.values():
+            if attr.mult in many:
+                lists.append(attr.name)
+            elif attr.cls.__name__ in self._base_types:
+                if self._mm.auto_init_attributes:
+                    defaults[attr.name] = self._python_type(attr.cls.__name__)()
+                else:
+                    defaults[attr.name] = False if attr.bool_assignment else None
+            else:
+                defaults[attr.name] = None
+        # id(child rule) -> (attribute, op, is_list, processor), or None
+        # for children that are not assignments (keywords, separators, ...)
+        assigns = {}
+        new = mclass.__new__
+
+        def assignment(rule):
+            if not rule.rule_name.startswith("__asgn"):
+                info = None
+            else:
+                name = rule._attr_name
+                metaattr = mclass._tx_attrs[name]
+                info = (name, rule.rule_name.split("_")[-1], metaattr.mult in many,
+                        self._value_processor(metaattr.cls))
+            if not isinstance(rule, EndOfFile):
+                assigns[id(rule)] = info
+            return info
+
+        def instance(node):
+            inst = new(mclass)
+            d = inst.__dict__
+            d.update(defaults)
+            for name in lists:
+                d[name] = []
+            d["_tx_position"] = node.position
+            d["_tx_position_end"] = node.position_end
+            for n in node:
+                try:
+                    info = assigns[id(n.rule)]
+                except KeyError:
+                    info = assignment(n.rule)
+                if info is None:
+                    continue
+                name, op, is_list, proc = info
+                if op == "plain":
+                    if not is_list:
+                        old = d[name]
+                        if old and not isinstance(old, list):
+                            raise TextXSemanticError(
+                                message=f"Multiple assignments to attribute {name} at "
+                                        f"{self.parser.pos_to_linecol(n.position)}",
+                                err_type=MULT_ASSIGN_ERROR)
+                    value = build(n[0])
+                    if proc is not None:
+                        r = proc(value)
+                        if r is not None:
+                            value = r
+                    if is_list:
+                        d[name].append(value)
+                    else:
+                        d[name] = value
+                elif op == "optional":
+                    d[name] = True
+                else:
+                    out = d[name]
+                    for m in n:
+                        if m.rule_name != "sep":
+                            value = build(m)
+                            if proc is not None:
+                                r = proc(value)
+                                if r is not None:
+                                    value = r
+                            out.append(value)
+            return inst
+        return instance
+
+    def model(self, parse_tree):
+        """The model of a whole parse (the tree returned by parser.parse):
+        the root and the object processor of its own class."""
+        root = self.build(parse_tree[0])
+        if root.__class__ in self._classes:
+            proc = self._procs.get(root.__class__.__name__)
+            if proc is not None:
+                r = proc(root)
+                if r is not None:
+                    root = r
+        return root
+
+
+@lru_cache(maxsize=1)
+def fast_builder() -> FastBuilder:
+    return FastBuilder(metamodel())
+
+
+def fast_model_from_str(text: str, file_name: str | None = None):
+    """The model of ``text``, like metamodel().model_from_str but built by
+    FastBuilder; raises the same TextXSyntaxError on syntax errors."""
+    builder = fast_builder()
+    parser = metamodel()._parser_blueprint.clone()
+    builder.parser = parser
+    try:
+        tree = parser.parse(text, file_name=file_name)
+        return builder.model(tree)
+    finally:
+        builder.parser = None
 
 
 _PRAGMA_SCAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|(\{[^}]*\})",
@@ -429,6 +649,7 @@ def _il(instrs):
     top: list = []
     stack = [top]
     opened = []
+    pending = None  # a label on a line of its own
     text = _ctx.src.text
     for i in instrs:
         pos = _pos(i)
@@ -447,6 +668,19 @@ def _il(instrs):
                 _ctx.diags.error(_ctx.src, pos, "a label cannot stand before ')'")
             continue
         op = i.op.upper() if i.op else None
+        if op is None and not i.fn:
+            if label:  # a label alone on its line marks the next instruction
+                pending = (label, pos) if pending is None else pending
+                if pending[0] != label:
+                    _ctx.diags.error(_ctx.src, pos, f"two labels ('{pending[0]}', '{label}') "
+                                                    "for one instruction")
+            continue
+        if pending is not None:
+            if label:
+                _ctx.diags.error(_ctx.src, pos, f"two labels ('{pending[0]}', '{label}') for "
+                                                "one instruction")
+            label, pos = pending
+            pending = None
         if op == "&":
             op = "AND"
         elif op == "&N":
@@ -464,6 +698,11 @@ def _il(instrs):
             opened.append(instr)
     for instr in opened:
         _ctx.diags.error(_ctx.src, instr.pos, f"'{instr.op}(' is never closed with ')'")
+    if pending is not None:
+        # a label at the very end: the target of a jump to the end of the body
+        top.append(ast.ILInstr(pending[1], label=pending[0], label_pos=pending[1], op="NOP",
+                               operand=None, deferred=False, nested=None, fb=None, fn=None,
+                               args=None, operands=[]))
     return top
 
 

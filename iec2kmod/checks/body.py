@@ -138,12 +138,16 @@ class BodyChecker:
                                        f"not {st.name}")
             st = ERROR
         seen: list[tuple[int, int, int]] = []
+        s.values = []
         for labels, body in s.elements:
+            values = []
+            s.values.append(values)
             for low, high in labels:
                 lo = self.case_label(low, st)
                 hi = self.case_label(high, st) if high is not None else lo
                 if lo is None or hi is None:
                     continue
+                values.append((lo, hi))
                 if lo > hi:
                     self.error(low.pos, f"empty CASE range {lo}..{hi}")
                     continue
@@ -373,6 +377,8 @@ class BodyChecker:
             return self.unop(e)
         if isinstance(e, ast.Call):
             return self.call(e, statement=False)
+        if isinstance(e, _CR):
+            return e.cr_type
         if isinstance(e, ast.Direct):
             self.error(e.pos, f"directly represented variable {e.address} used in a POU: "
                               "declare it in the configuration or resource and use its name "
@@ -714,6 +720,14 @@ class BodyChecker:
     def check_il(self, instrs):
         labels = self.pou.labels
         self._collect_labels(instrs, labels)
+        # first pass, silent: the current result's type at every jump, so
+        # that a label knows the type it is reached with
+        self.label_cr = {}
+        real_diags = self.diags
+        from ..diagnostics import Diagnostics
+        self.diags = Diagnostics()
+        self.il_list(instrs, None)
+        self.diags = real_diags
         self.il_list(instrs, None)
 
     def _collect_labels(self, instrs, labels):
@@ -733,8 +747,16 @@ class BodyChecker:
     def il_list(self, instrs, cr):
         for i in instrs:
             if i.label:
-                cr = ERROR  # reached by a jump: the current result is not known here
+                jumped = self.label_cr.get(i.label.upper())
+                if cr is None:
+                    cr = jumped
+                elif jumped is not None and not isinstance(jumped, ErrorT) and \
+                        not isinstance(cr, ErrorT) and concrete(jumped) is not concrete(cr):
+                    # an error only if an instruction reads it (LD replaces it)
+                    cr = _Conflict(i.label, concrete(cr), concrete(jumped))
+            i.cr_in = cr
             cr = self.il_instr(i, cr)
+            i.cr_out = cr
         return cr
 
     def il_operand(self, i):
@@ -747,10 +769,16 @@ class BodyChecker:
         if cr is None:
             self.error(i.pos, f"{i.op or i.fn}: no current result (load a value with LD first)")
             return ERROR
+        if isinstance(cr, _Conflict):
+            self.error(i.pos, f"{i.op or i.fn}: the current result after label '{cr.label}' "
+                              f"is {cr.a.name} or {cr.b.name}, depending on the path")
+            return ERROR
         return cr
 
     def il_instr(self, i, cr):
         op = i.op
+        if op == "NOP":
+            return cr
         if op is None:
             return self.il_function(i, cr)
         if i.deferred:
@@ -814,6 +842,8 @@ class BodyChecker:
                 self.error(i.pos, f"{op} needs a label")
             elif target.name.upper() not in self.pou.labels:
                 self.error(target.pos, f"unknown label '{target.name}'")
+            elif cr is not None:
+                self.label_cr.setdefault(target.name.upper(), cr)
             return cr if op != "JMP" else None
         if op in ("RET", "RETC", "RETCN"):
             if op != "RET":
@@ -822,7 +852,7 @@ class BodyChecker:
                     self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
             if i.operand is not None:
                 self.error(i.operand.pos, f"{op} takes no operand")
-            return cr
+            return None if op == "RET" else cr
         if op in ("CAL", "CALC", "CALCN"):
             if op != "CAL":
                 cr = self.need_cr(i, cr)
@@ -913,6 +943,15 @@ class BodyChecker:
             return self.call(c, statement=False)
         self.error(i.pos, f"unknown IL operator or function '{i.fn}'")
         return ERROR
+
+
+class _Conflict(ErrorT):
+    """The current result at a label reached with two different types."""
+
+    def __init__(self, label, a, b):
+        self.label = label
+        self.a = a
+        self.b = b
 
 
 class _CR(ast.Expr):

@@ -87,6 +87,11 @@ def _expt(name, types):
     base, exp = types
     _need(lambda t: is_num(t), base, "a number", 0, name)
     _need(is_num, exp, "a number (ANY_NUM)", 1, name)
+    if isinstance(base, LiteralT) and base.cat == "real":
+        if isinstance(exp, LiteralT):
+            return StdFunc(name, "EXPT", [base, exp], LiteralT("real", 0.0))
+        if is_real(exp):
+            return StdFunc(name, "EXPT", [exp, exp], exp)
     if isinstance(base, LiteralT) or not is_real(base):
         if not isinstance(base, LiteralT) and not isinstance(base, ErrorT):
             raise CallError(f"argument 1 of {name} must be REAL or LREAL (ANY_REAL), not "
