@@ -1,0 +1,547 @@
+"""POU bodies to C: ST statements and IL instructions.
+
+Fault protocol (kmod_templates/runtime/iec_fault.h): a statement that can
+fault (division, MOD, index, subrange, MUX, a call of a POU) is followed by
+IEC_FAULT_CHECK, which records the POU and source line and returns; every
+loop iteration ticks the cycle's loop budget."""
+
+from __future__ import annotations
+
+from .. import ast
+from ..checks import stdlib
+from ..checks.body import IL_ARITH, IL_COMPARE, IL_LOGIC, _CR
+from ..checks.symbols import Var
+from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT, FBType,
+                            LiteralT, StringT, StructT, SubrangeT, concrete)
+from . import cnames as N
+from .expr import CodegenError, CRNode, ExprEmitter, Frame, Raw, c_int, scalar_kind
+
+UNSIGNED = {8: "iec_u8", 16: "iec_u16", 32: "iec_u32", 64: "iec_u64", 1: "iec_u8"}
+
+
+class BodyEmitter:
+    def __init__(self, pou, ind="\t"):
+        self.pou = pou
+        self.src = pou.src
+        self.is_function = pou.kind == "FUNCTION"
+        self.expr = ExprEmitter(self)
+        self._temp = 0
+        self._label = 0
+        self.exit_labels: list[str] = []
+        self.cr_vars: dict[str, str] = {}   # C name -> C type
+        self.ind = ind
+        self.uses_ret_label = False
+        self.used_labels: set[str] = set()
+
+    # ---------------------------------------------------------- helpers
+    def next_temp(self):
+        self._temp += 1
+        return self._temp
+
+    def new_label(self, what):
+        self._label += 1
+        return f"{what}_{self._label}"
+
+    def line(self, pos):
+        return self.src.linecol(pos)[0] if pos is not None else 0
+
+    def fault_check(self, pos):
+        name = N.c_string(self.pou.name.encode())
+        if self.is_function:
+            return f"IEC_FAULT_CHECK_RET(ctx, {name}, {self.line(pos)}, {self.ret_value()});"
+        return f"IEC_FAULT_CHECK(ctx, {name}, {self.line(pos)});"
+
+    def loop_tick(self, pos):
+        name = N.c_string(self.pou.name.encode())
+        if self.is_function:
+            return f"IEC_LOOP_TICK_RET(ctx, {name}, {self.line(pos)}, {self.ret_value()});"
+        return f"IEC_LOOP_TICK(ctx, {name}, {self.line(pos)});"
+
+    def ret_value(self):
+        result = self.pou.vars[self.pou.key]
+        if N.is_scalar(result.type):
+            return N.var(self.pou.name)
+        return ""
+
+    def var_access(self, v: Var) -> str:
+        """C lvalue of a variable of this POU."""
+        name = N.var(v.name)
+        if self.is_function:
+            if v.section == "VAR_INPUT":
+                if isinstance(v.type, ArrayT) or N.is_scalar(v.type):
+                    return name
+                return f"(*{name})"
+            if v.section in ("VAR_OUTPUT", "VAR_IN_OUT"):
+                return name if isinstance(v.type, ArrayT) else f"(*{name})"
+            if v.section == "RESULT" and not N.is_scalar(v.type):
+                return "(*ret)"
+            return name
+        if v.section == "VAR_TEMP":
+            return name
+        if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT"):
+            # arrays are passed as a pointer to their first element
+            return f"self->{name}" if isinstance(v.type, ArrayT) else f"(*self->{name})"
+        return f"self->{name}"
+
+    def cr_var(self, t, depth=0):
+        t = concrete(t)
+        if isinstance(t, (StringT, ArrayT, StructT, FBType, ErrorT)) or t is None:
+            raise CodegenError(f"IL current result of type {getattr(t, 'name', t)}")
+        name = f"cr{depth}_{N.type_tag(t)}"
+        self.cr_vars[name] = N.ctype(t)
+        return name
+
+    # ------------------------------------------------------------- body
+    def body(self, stmts) -> list[str]:
+        if self.pou.node.language == "IL":
+            return self.il_body(stmts)
+        out = []
+        for s in stmts:
+            out += self.stmt(s)
+        return out
+
+    def wrap(self, f: Frame, lines, pos, check=True) -> list[str]:
+        """Statement lines with their temporaries and a fault check."""
+        body = f.pre + lines
+        if check and f.may_fault:
+            body.append(self.fault_check(pos))
+        if f.decls:
+            return ["{"] + [self.ind + d for d in f.decls] + [self.ind + b for b in body] + ["}"]
+        return body
+
+    def indent(self, lines):
+        return [self.ind + ln for ln in lines]
+
+    # ------------------------------------------------------- statements
+    def stmt(self, s) -> list[str]:
+        if isinstance(s, ast.Assign):
+            f = Frame(self)
+            lines = self.assign_ref(f, s.target, s.value)
+            return self.wrap(f, lines, s.pos)
+        if isinstance(s, ast.CallStmt):
+            return self.call_stmt(s.call, s.pos)
+        if isinstance(s, ast.If):
+            return self.if_(s.branches, s.else_)
+        if isinstance(s, ast.Case):
+            return self.case(s)
+        if isinstance(s, ast.For):
+            return self.for_(s)
+        if isinstance(s, ast.While):
+            return self.while_(s)
+        if isinstance(s, ast.Repeat):
+            return self.repeat(s)
+        if isinstance(s, ast.Exit):
+            self.used_labels.add(self.exit_labels[-1])
+            return [f"goto {self.exit_labels[-1]};"]
+        if isinstance(s, ast.Return):
+            return [self.return_stmt()]
+        if isinstance(s, ast.Empty):
+            return []
+        raise CodegenError(f"statement {s!r}")
+
+    def return_stmt(self):
+        if self.is_function:
+            rv = self.ret_value()
+            return f"return {rv};" if rv else "return;"
+        self.uses_ret_label = True
+        return "goto out;"
+
+    def block(self, stmts):
+        out = []
+        for s in stmts:
+            out += self.stmt(s)
+        return self.indent(out)
+
+    def cond(self, f, e):
+        return self.expr.emit(f, e, BOOL)
+
+    def if_(self, branches, else_):
+        cond, body = branches[0]
+        f = Frame(self)
+        c = self.cond(f, cond)
+        lines = [f"if ({c}) {{"] + self.block(body)
+        rest = branches[1:]
+        if rest or else_:
+            inner = self.if_(rest, else_) if rest else None
+            if inner is not None:
+                lines += ["} else {"] + self.indent(inner) + ["}"]
+            else:
+                lines += ["} else {"] + self.block(else_) + ["}"]
+        else:
+            lines.append("}")
+        return self.wrap(f, lines, cond.pos, check=False) if f.pre or f.decls else lines
+
+    def case(self, s):
+        f = Frame(self)
+        sel = self.expr.emit(f, s.selector)
+        st = concrete(s.selector.type)
+        lines = [f"switch ({sel}) {{"]
+        for (labels, body), values in zip(s.elements, s.values):
+            for lo, hi in values:
+                a, b = c_int(lo, st), c_int(hi, st)
+                lines.append(f"case {a}:" if lo == hi else f"case {a} ... {b}:")
+            lines += self.block(body) + [self.ind + "break;"]
+        lines.append("default:")
+        if s.else_:
+            lines += self.block(s.else_)
+        lines += [self.ind + "break;", "}"]
+        return self.wrap(f, lines, s.pos)
+
+    def loop(self, pos, head, body_stmts, tail=(), label=None):
+        exit_label = self.new_label("exit")
+        self.exit_labels.append(exit_label)
+        inner = self.block(body_stmts)
+        self.exit_labels.pop()
+        lines = ["for (;;) {"] + self.indent(list(head)) + [self.ind + self.loop_tick(pos)]
+        lines += inner + self.indent(list(tail)) + ["}"]
+        if exit_label in self.used_labels:
+            lines.append(f"{exit_label}:;")
+        return lines
+
+    def while_(self, s):
+        f = Frame(self)
+        c = self.cond(f, s.cond)
+        head = f.pre + [f"if (!({c}))", self.ind + "break;"]
+        if f.may_fault:
+            head.append(self.fault_check(s.pos))
+        lines = self.loop(s.pos, head, s.body)
+        return (["{"] + self.indent(f.decls + lines) + ["}"]) if f.decls else lines
+
+    def repeat(self, s):
+        f = Frame(self)
+        c = self.cond(f, s.cond)
+        tail = f.pre + ([self.fault_check(s.pos)] if f.may_fault else []) + \
+            [f"if ({c})", self.ind + "break;"]
+        lines = self.loop(s.pos, [], s.body, tail)
+        return (["{"] + self.indent(f.decls + lines) + ["}"]) if f.decls else lines
+
+    def for_(self, s):
+        v = self.pou.var(s.var)
+        vt = concrete(v.type)
+        ct = N.ctype(vt)
+        f = Frame(self)
+        var = self.var_access(v)
+        start = self.expr.emit(f, s.start, vt)
+        end = self.expr.emit(f, s.end, vt)
+        step = self.expr.emit(f, s.step, vt) if s.step is not None else c_int(1, vt)
+        n = self.next_temp()
+        e_name, s_name, nx = f"for_end{n}", f"for_step{n}", f"for_next{n}"
+        f.decls += [f"{ct} {e_name};", f"{ct} {s_name};", f"{ct} {nx};"]
+        setup = f.pre + [f"{e_name} = {end};", f"{s_name} = {step};", f"{var} = {start};"]
+        if f.may_fault:
+            setup.append(self.fault_check(s.pos))
+        signed = scalar_kind(vt) == "sint"
+        neg = f"{s_name} < 0 ? {var} < {e_name} : " if signed else ""
+        head = [f"if ({neg}{var} > {e_name})", self.ind + "break;"]
+        tail = [f"if (__builtin_add_overflow({var}, {s_name}, &{nx}))", self.ind + "break;",
+                f"{var} = {nx};"]
+        lines = setup + self.loop(s.pos, head, s.body, tail)
+        return ["{"] + self.indent(f.decls + lines) + ["}"]
+
+    # ------------------------------------------------------- assignment
+    def assign_ref(self, f, target: ast.Ref, value) -> list[str]:
+        code, t, bit = self.expr.lvalue(f, target)
+        if bit is not None:
+            return [self.set_bit(f, code, target, bit, self.expr.emit(f, value, BOOL))]
+        return self.assign_code(f, code, t, value)
+
+    def set_bit(self, f, code, target, bit, val):
+        base = target.symbol.type
+        for kind, _, _ in target.accessors[:-1]:
+            pass
+        # the variable holding the bit: its type is the expression before .bit
+        holder_t = self._holder_type(target)
+        width = holder_t.bits
+        u = UNSIGNED[width]
+        ct = N.ctype(holder_t)
+        return (f"{code} = ({ct})((({u}){code} & ~(({u})1 << {bit})) | "
+                f"(({u})({val} != 0) << {bit}));")
+
+    @staticmethod
+    def _holder_type(target):
+        t = target.symbol.type
+        for kind, val, _ in target.accessors[:-1]:
+            if kind == "index":
+                t = t.elem
+            elif kind == "member":
+                t = t.pou.var(val).type if isinstance(t, FBType) else t.fields[val.upper()][1]
+        return concrete(t).base
+
+    def assign_code(self, f, code, t, value) -> list[str]:
+        """Stores expression ``value`` into C lvalue ``code`` of IEC type t."""
+        t0 = t
+        t = concrete(t)
+        if isinstance(t, StringT):
+            w = "wstring" if t.wide else "string"
+            return [f"iec_assign_{w}({self.expr.strbuf(code, t)}, {self.expr.strv(f, value)});"]
+        if isinstance(t, ArrayT):
+            src = self.expr.emit(f, value)
+            elem, count = N.array_flat(t)
+            return [f"iec_memcpy({code}, {src}, {count} * sizeof({N.ctype(elem)}));"]
+        if isinstance(t, StructT):
+            return [f"{code} = {self.expr.emit(f, value)};"]
+        val = self.expr.emit(f, value, t)
+        if isinstance(t0, SubrangeT) and not _within(value, t0):
+            f.may_fault = True
+            wide = "ulint" if scalar_kind(t0.elem) == "uint" else "lint"
+            val = (f"(({N.ctype(t0.elem)})iec_range_{wide}(ctx, {val}, {t0.low}LL, "
+                   f"{t0.high}LL))")
+        return [f"{code} = {val};"]
+
+    # ------------------------------------------------------------ calls
+    def call_stmt(self, c: ast.Call, pos) -> list[str]:
+        f = Frame(self)
+        target = c.target
+        if isinstance(target, Var):           # a function block instance
+            lines = self.fb_call(f, c, target)
+            return self.wrap(f, lines, pos, check=not target.type.pou.standard or f.may_fault)
+        code = self.expr.emit(f, c)
+        if c.type is None or isinstance(c.type, ErrorT):
+            return self.wrap(f, [f"{code};"], pos)
+        return self.wrap(f, [f"(void){code};"], pos)
+
+    def fb_call(self, f, c, inst: Var) -> list[str]:
+        pou = inst.type.pou
+        base = self.var_access(inst)
+        lines = []
+        eno = None
+        en = None
+        for a in c.args:
+            if a.name and a.name.upper() == "EN" and a.kind == "in":
+                en = self.expr.emit(f, a.value, BOOL)
+            elif a.name and a.name.upper() == "ENO" and a.kind == "out":
+                eno = a
+        bound = c.bound or {}
+        for key, a in bound.items():
+            param = pou.var(key)
+            member = f"{base}.{N.member(pou, param.name)}"
+            if a.kind == "out":
+                continue
+            if param.section == "VAR_IN_OUT":
+                lv, _, _ = self.expr.lvalue(f, a.value)
+                lines.append(f"{member} = &{lv};" if not isinstance(param.type, ArrayT)
+                             else f"{member} = {lv};")
+            elif a.value is not None:
+                lines += self.assign_code(f, member, param.type, a.value)
+        body_fn = N.pou_prefix(pou) + ("" if pou.standard else "_body")
+        lines.append(f"{body_fn}(&{base}, ctx);")
+        if not pou.standard:
+            f.may_fault = True
+        for key, a in bound.items():
+            param = pou.var(key)
+            if a.kind != "out" or a.value is None:
+                continue
+            member = f"{base}.{N.member(pou, param.name)}"
+            lv, lt, bit = self.expr.lvalue(f, a.value)
+            val = f"((iec_bool)!{member})" if a.negate else member
+            if bit is not None:
+                lines.append(self.set_bit(f, lv, a.value, bit, val))
+            else:
+                lines.append(f"{lv} = {self.expr.convert(val, param.type, lt)};"
+                             if N.is_scalar(lt) else _copy(lv, member, lt))
+        if eno is not None and eno.value is not None:
+            lv, _, _ = self.expr.lvalue(f, eno.value)
+            lines.append(f"{lv} = 1;")
+        if en is not None:
+            return [f"if ({en}) {{"] + self.indent(lines) + ["}"] + (
+                [f"else {self.expr.lvalue(f, eno.value)[0]} = 0;"] if eno is not None and
+                eno.value is not None else [])
+        return lines
+
+    def user_function_call(self, f, c: ast.Call) -> str:
+        pou = c.target
+        bound = c.bound or {}
+        f.may_fault = True
+        args = ["ctx"]
+        result = pou.vars[pou.key]
+        ret_tmp = None
+        if not N.is_scalar(result.type):
+            ret_tmp = f.temp(result.type)
+            args.append(f"&{ret_tmp}" if not isinstance(result.type, ArrayT) else ret_tmp)
+        outs = []
+        for v in pou.vars.values():
+            if v.section not in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT"):
+                continue
+            a = bound.get(v.key)
+            if v.section == "VAR_INPUT":
+                if a is None or a.value is None:
+                    args.append(self.default_value(f, v))
+                elif N.is_scalar(v.type):
+                    args.append(self.expr.emit(f, a.value, v.type))
+                else:
+                    args.append(self.by_reference(f, a.value, v.type))
+            elif v.section == "VAR_IN_OUT":
+                lv, _, _ = self.expr.lvalue(f, a.value)
+                args.append(lv if isinstance(v.type, ArrayT) else f"&{lv}")
+            else:
+                tmp = f.temp(v.type, "out")
+                args.append(tmp if isinstance(v.type, ArrayT) else f"&{tmp}")
+                if a is not None and a.value is not None:
+                    outs.append((a, tmp, v))
+        call = f"{N.fn(pou.name)}({', '.join(args)})"
+        if ret_tmp is not None:
+            f.pre.append(f"{call};")
+            result_code = ret_tmp
+        elif outs:
+            result_code = f.temp(result.type, "ret")
+            f.pre.append(f"{result_code} = {call};")
+        else:
+            return call
+        for a, tmp, v in outs:
+            val = f"((iec_bool)!{tmp})" if a.negate else tmp
+            f.pre += self.assign_ref(f, a.value, Raw(val, v.type))
+        return result_code
+
+    def by_reference(self, f, e, t):
+        """Pointer to a string/array/struct argument (functions take them const)."""
+        if isinstance(e, ast.Ref):
+            lv, _, _ = self.expr.lvalue(f, e)
+            return lv if isinstance(t, ArrayT) else f"&{lv}"
+        tmp = f.temp(t)
+        f.pre += self.assign_code(f, tmp, t, e)
+        return tmp if isinstance(t, ArrayT) else f"&{tmp}"
+
+    def default_value(self, f, v):
+        if v.init is not None and isinstance(v.init, ast.Expr) and N.is_scalar(v.type):
+            return self.expr.emit(f, v.init, v.type)
+        t = concrete(v.type)
+        if N.is_scalar(t):
+            if isinstance(t, EnumT):
+                first = next(iter(t.values.values()))
+                return N.enum_const(t, first[0])
+            if isinstance(v.type, SubrangeT):
+                return c_int(v.type.low, t)
+            return c_int(0, t)
+        tmp = f.temp(t)
+        f.decls[-1] = f.decls[-1][:-1] + " = { 0 };"
+        if v.init is not None:
+            f.pre += self.assign_code(f, tmp, t, v.init)
+        return tmp if isinstance(t, ArrayT) else f"&{tmp}"
+
+    # --------------------------------------------------------------- IL
+    def il_body(self, instrs) -> list[str]:
+        lines = []
+        for i in instrs:
+            lines += self.il(i, 0)
+        return lines
+
+    def il(self, i, depth) -> list[str]:
+        out = []
+        if i.label:
+            out.append(f"L_{i.label.lower()}:;")
+        f = Frame(self)
+        op = i.op
+        lines = []
+        cr_in = i.cr_in
+        if op is None:
+            call = i.call
+            res = i.cr_out
+            code = self.expr.emit(f, call, res)
+            lines.append(f"{self.cr_var(res, depth)} = {code};")
+        elif i.deferred:
+            inner = []
+            if i.operand is not None:
+                inner.append(f"{self.cr_var(i.operand.type, depth + 1)} = "
+                             f"{self.expr.emit(f, i.operand, concrete(i.operand.type))};")
+            for n in i.nested:
+                inner += self.il(n, depth + 1)
+            inner_t = i.nested[-1].cr_out if i.nested else i.operand.type
+            rhs = CRNode(i.pos, inner_t, depth + 1)
+            lines += self.wrap(f, inner, i.pos)
+            f = Frame(self)
+            lines += self.il_apply(f, i, op, cr_in, rhs, depth)
+        elif op in ("LD", "LDN"):
+            t = concrete(i.operand.type) if not isinstance(i.operand.type, LiteralT) else \
+                concrete(i.cr_out)
+            val = self.expr.emit(f, i.operand, t)
+            if op == "LDN":
+                val = f"((iec_bool)!{val})" if t is BOOL else f"iec_not_{N.type_tag(t)}({val})"
+            lines.append(f"{self.cr_var(t, depth)} = {val};")
+        elif op in ("ST", "STN"):
+            cr = self.cr_var(cr_in, depth)
+            if op == "STN":
+                cr = f"((iec_bool)!{cr})" if concrete(cr_in) is BOOL else \
+                    f"iec_not_{N.type_tag(cr_in)}({cr})"
+            lines += self.assign_ref(f, i.operand, Raw(cr, cr_in))
+        elif op in ("S", "R") and not isinstance(getattr(i.operand, "type", None), FBType):
+            lv, _, bit = self.expr.lvalue(f, i.operand)
+            val = "1" if op == "S" else "0"
+            store = self.set_bit(f, lv, i.operand, bit, val) if bit is not None else \
+                f"{lv} = {val};"
+            lines += [f"if ({self.cr_var(cr_in, depth)})", self.ind + store]
+        elif op in ("S1", "R1", "CLK", "CU", "CD", "PV", "IN", "PT", "S", "R", "LD"):
+            inst = i.operand.symbol
+            pou = inst.type.pou
+            param = pou.var(op)
+            member = f"{self.var_access(inst)}.{N.member(pou, param.name)}"
+            lines += self.assign_code(f, member, param.type, Raw(self.cr_var(cr_in, depth),
+                                                                  cr_in))
+        elif op == "NOT":
+            cr = self.cr_var(cr_in, depth)
+            lines.append(f"{cr} = ((iec_bool)!{cr});" if concrete(cr_in) is BOOL else
+                         f"{cr} = iec_not_{N.type_tag(cr_in)}({cr});")
+        elif op in IL_LOGIC or op in IL_ARITH or op in IL_COMPARE:
+            lines += self.il_apply(f, i, op, cr_in, i.operand, depth)
+        elif op in ("JMP", "JMPC", "JMPCN"):
+            goto = f"goto L_{i.operand.name.lower()};"
+            if op == "JMP":
+                lines.append(goto)
+            else:
+                neg = "!" if op == "JMPCN" else ""
+                lines += [f"if ({neg}{self.cr_var(cr_in, depth)})", self.ind + goto]
+        elif op in ("RET", "RETC", "RETCN"):
+            ret = self.return_stmt()
+            if op == "RET":
+                lines.append(ret)
+            else:
+                neg = "!" if op == "RETCN" else ""
+                lines += [f"if ({neg}{self.cr_var(cr_in, depth)})", self.ind + ret]
+        elif op in ("CAL", "CALC", "CALCN"):
+            call_lines = self.fb_call(f, i.call, i.call.target)
+            if op == "CAL":
+                lines += call_lines
+            else:
+                neg = "!" if op == "CALCN" else ""
+                lines += [f"if ({neg}{self.cr_var(cr_in, depth)}) {{"] + self.indent(call_lines) + ["}"]
+            f.may_fault = f.may_fault or not i.call.target.type.pou.standard
+        else:
+            raise CodegenError(f"IL operator {op}")
+        return out + self.wrap(f, lines, i.pos)
+
+    def il_apply(self, f, i, op, cr_in, operand, depth):
+        res = concrete(i.cr_out)
+        left = CRNode(i.pos, cr_in, depth)
+        neg = op.endswith("N") and op in IL_LOGIC
+        if op in IL_LOGIC:
+            right_t = concrete(operand.type) if not isinstance(operand.type, LiteralT) else res
+            r = self.expr.emit(f, operand, res)
+            if neg:
+                r = f"((iec_bool)!{r})" if res is BOOL else f"iec_not_{N.type_tag(res)}({r})"
+            l = self.expr.convert(self.cr_var(cr_in, depth), cr_in, res)
+            fam = IL_LOGIC[op]
+            code = (f"((iec_bool)({l} {'&' if fam == 'AND' else '|' if fam == 'OR' else '^'} {r}))"
+                    if res is BOOL else f"iec_{fam.lower()}_{N.type_tag(res)}({l}, {r})")
+        elif op in IL_ARITH:
+            fres = stdlib.resolve(IL_ARITH[op], [cr_in, operand.type])
+            code = self.expr.std_apply(f, fres, [left, operand], res)
+        else:
+            fres = stdlib.resolve(op, [cr_in, operand.type])
+            code = self.expr.std_apply(f, fres, [left, operand], BOOL)
+        return [f"{self.cr_var(res, depth)} = {code};"]
+
+
+def _copy(dst, src, t):
+    t = concrete(t)
+    if isinstance(t, StringT):
+        w = "W" if t.wide else ""
+        return f"iec_assign_{w.lower()}string(IEC_{w}STRBUF({dst}), IEC_{w}STRV({src}));"
+    if isinstance(t, ArrayT):
+        elem, count = N.array_flat(t)
+        return f"iec_memcpy({dst}, {src}, {count} * sizeof({N.ctype(elem)}));"
+    return f"{dst} = {src};"
+
+
+def _within(value, t: SubrangeT) -> bool:
+    from .expr import _const_int
+    v = _const_int(value)
+    return v is not None and t.low <= v <= t.high

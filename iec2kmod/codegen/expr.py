@@ -1,0 +1,520 @@
+"""Expressions to C.
+
+Every expression becomes a C expression of the C type of its IEC type.
+Integer arithmetic goes through the runtime's wrapping helpers (two's
+complement, no undefined behaviour); division, MOD, array indexes and MUX
+go through helpers that record a runtime fault and return a defined value.
+String results need storage: they are computed into temporaries declared
+before the statement (``Frame.pre``)."""
+
+from __future__ import annotations
+
+from .. import ast
+from ..checks import stdlib
+from ..checks.body import EnumValue, _CR
+from ..checks.symbols import Var
+from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT, FBType,
+                            LiteralT, StringT, StructT, SubrangeT, cat, common, concrete)
+from . import cnames as N
+
+INT64_MIN = -(1 << 63)
+
+
+class CodegenError(Exception):
+    """Something the checker accepted but the emitter cannot lower (a bug)."""
+
+
+class CRNode(_CR):
+    """The IL current result at a nesting depth, usable as an expression."""
+
+    __slots__ = ("depth",)
+
+    def __init__(self, pos, t, depth):
+        super().__init__(pos, t)
+        self.depth = depth
+
+
+class Raw(ast.Expr):
+    """Already-emitted C code standing for an expression of a known type."""
+
+    __slots__ = ("code",)
+
+    def __init__(self, code, t):
+        super().__init__(None)
+        self.code = code
+        self.type = t
+
+
+class Frame:
+    """Per-statement emission state: temporaries and their setup code."""
+
+    def __init__(self, body):
+        self.body = body      # BodyEmitter
+        self.pre: list[str] = []
+        self.decls: list[str] = []
+        self.may_fault = False
+
+    def temp(self, t, prefix="tmp"):
+        name = f"{prefix}{self.body.next_temp()}"
+        self.decls.append(N.declare(t, name) + ";")
+        return name
+
+
+def c_int(value: int, t) -> str:
+    t = concrete(t)
+    if isinstance(t, SubrangeT):
+        t = t.elem
+    if isinstance(t, EnumT):
+        t = N.enum_base(t)
+    ct = t.c_type if isinstance(t, Elementary) else "iec_lint"
+    if isinstance(t, Elementary) and t.cat == "real":
+        return f"(({ct}){float(value)!r})"
+    if value == INT64_MIN:
+        return f"(({ct})(-9223372036854775807LL - 1))"
+    if isinstance(t, Elementary) and t.cat in ("uint", "bit") and t.bits == 64:
+        return f"(({ct}){value}ULL)"
+    if abs(value) > 0x7FFFFFFF:
+        return f"(({ct}){value}LL)"
+    return f"(({ct}){value})"
+
+
+def c_real(value: float, t) -> str:
+    t = concrete(t)
+    if value != value or value in (float("inf"), float("-inf")):
+        raise CodegenError("non-finite real literal")
+    text = repr(float(value))
+    if t is ELEMENTARY["REAL"]:
+        return f"((iec_real){text})"
+    return f"((iec_lreal){text})"
+
+
+def scalar_kind(t):
+    t = concrete(t)
+    if isinstance(t, SubrangeT):
+        t = t.elem
+    if isinstance(t, EnumT):
+        return "enum"
+    return t.cat if isinstance(t, Elementary) else None
+
+
+class ExprEmitter:
+    """Emits expressions for one POU body (``body`` knows variable access)."""
+
+    def __init__(self, body):
+        self.body = body
+
+    # ------------------------------------------------------------ entry
+    def emit(self, f: Frame, e, want=None) -> str:
+        """C code of e, converted to IEC type ``want`` when given."""
+        t = e.type
+        if isinstance(t, LiteralT) or t is None:
+            t = want if want is not None else concrete(t) if t is not None else None
+        code = self._emit(f, e, t)
+        if want is not None and t is not None:
+            return self.convert(code, t, want)
+        return code
+
+    def convert(self, code, src, dst):
+        """Implicit widening (the checker allowed it) as a C cast."""
+        src, dst = concrete(src), concrete(dst)
+        if isinstance(dst, (StringT, StructT, ArrayT, FBType)):
+            return code
+        sc, dc = N.ctype(src), N.ctype(dst)
+        if sc == dc:
+            return code
+        return f"(({dc}){code})"
+
+    def _emit(self, f, e, t):
+        if isinstance(e, ast.Lit):
+            return self.literal(f, e, t)
+        if isinstance(e, ast.Ref):
+            return self.ref_value(f, e)
+        if isinstance(e, ast.BinOp):
+            return self.binop(f, e, t)
+        if isinstance(e, ast.UnOp):
+            return self.unop(f, e, t)
+        if isinstance(e, ast.Call):
+            return self.call(f, e, t)
+        if isinstance(e, CRNode):
+            return self.body.cr_var(e.cr_type, e.depth)
+        if isinstance(e, Raw):
+            return e.code
+        raise CodegenError(f"cannot emit {e!r}")
+
+    # --------------------------------------------------------- literals
+    def literal(self, f, e: ast.Lit, t):
+        k = e.kind
+        if k in ("int", "bool"):
+            v = int(e.value)
+            if isinstance(t, EnumT):
+                raise CodegenError("integer literal typed as enumeration")
+            if scalar_kind(t) == "real":
+                return c_real(float(v), t)
+            return c_int(v, t if t is not None else ELEMENTARY["DINT"])
+        if k == "real":
+            return c_real(e.value, t if scalar_kind(t) == "real" else ELEMENTARY["LREAL"])
+        if k in ("time", "date", "tod", "dt"):
+            return c_int(e.value, ELEMENTARY["LINT"]).replace("iec_lint", N.ctype(e.type))
+        if k in ("string", "wstring"):
+            return self.string_literal(f, e)
+        if k == "enum":
+            return N.enum_const(e.type, e.value)
+        raise CodegenError(k)
+
+    def string_literal(self, f, e):
+        if e.kind == "string":
+            data = e.value.encode("latin-1", errors="replace")
+            return f"iec_strv_make({N.c_string(data)}, {len(data)}, {len(data)})"
+        name = f.temp(e.type)
+        data = ", ".join(str(ord(c) & 0xFFFF) for c in e.value) or "0"
+        arr = f"wlit{self.body.next_temp()}"
+        f.pre.append(f"static const iec_u16 {arr}[] = {{ {data} }};")
+        f.pre.append(f"iec_assign_wstring(IEC_WSTRBUF({name}), "
+                     f"iec_wstrv_make({arr}, {len(e.value)}, {len(e.value)}));")
+        return name
+
+    # -------------------------------------------------------- variables
+    def ref_value(self, f, r: ast.Ref) -> str:
+        if isinstance(r.symbol, EnumValue):
+            return N.enum_const(r.symbol.enum, r.symbol.name)
+        code, t, bit = self.lvalue(f, r)
+        if bit is not None:
+            return f"((iec_bool)(({code} >> {bit}) & 1))"
+        return code
+
+    def lvalue(self, f, r: ast.Ref):
+        """(C lvalue, IEC type, bit number or None) of a variable access."""
+        v: Var = r.symbol
+        code = self.body.var_access(v)
+        t = v.type
+        flat = None     # pending flattened index into a C array
+        bit = None
+        for kind, val, _pos in r.accessors:
+            if kind == "index":
+                offset = flat
+                for idx_expr, (lo, hi) in zip(val, t.dims):
+                    idx = self.index(f, idx_expr, lo, hi)
+                    stride = hi - lo + 1
+                    offset = idx if offset is None else f"({offset}) * {stride} + {idx}"
+                t = t.elem
+                if isinstance(t, ArrayT):
+                    flat = offset
+                    continue
+                code = f"{code}[{offset}]"
+                flat = None
+            elif kind == "member":
+                if isinstance(t, FBType):
+                    code = f"{code}.{N.member(t.pou, val)}"
+                    t = t.pou.var(val).type
+                else:
+                    code = f"{code}.{N.var(val)}"
+                    t = t.fields[val.upper()][1]
+            else:
+                bit = val
+                t = BOOL
+        return code, t, bit
+
+    def index(self, f, e, lo, hi):
+        v = _const_int(e)
+        if v is not None and lo <= v <= hi:
+            return str(v - lo)
+        f.may_fault = True
+        code = self.emit(f, e, ELEMENTARY["LINT"])
+        return f"iec_index(ctx, {code}, {lo}LL, {hi}LL)"
+
+    # -------------------------------------------------------- operators
+    def binop(self, f, e, t):
+        op = e.op
+        lt, rt = e.left.type, e.right.type
+        if op in ("=", "<>", "<", ">", "<=", ">="):
+            c = concrete(common(lt, rt))
+            if isinstance(c, StringT):
+                a, b = self.strv(f, e.left), self.strv(f, e.right)
+                fn = "iec_cmp_wstring" if c.wide else "iec_cmp_string"
+                return f"((iec_bool)({fn}({a}, {b}) {_cop(op)} 0))"
+            a = self.emit(f, e.left, c)
+            b = self.emit(f, e.right, c)
+            return f"((iec_bool)({a} {_cop(op)} {b}))"
+        if op in ("AND", "OR", "XOR"):
+            rtype = concrete(t)
+            a = self.emit(f, e.left, rtype)
+            b = self.emit(f, e.right, rtype)
+            if rtype is BOOL:
+                return f"((iec_bool)({a} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {b}))"
+            return f"iec_{op.lower()}_{N.type_tag(rtype)}({a}, {b})"
+        name = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD", "**": "EXPT"}[op]
+        fres = stdlib.resolve(name, [lt, rt])
+        return self.std_apply(f, fres, [e.left, e.right], t)
+
+    def unop(self, f, e, t):
+        rtype = concrete(t)
+        a = self.emit(f, e.operand, rtype)
+        if e.op == "+":
+            return a
+        if e.op == "NOT":
+            if rtype is BOOL:
+                return f"((iec_bool)!{a})"
+            return f"iec_not_{N.type_tag(rtype)}({a})"
+        k = scalar_kind(rtype)
+        if k == "real":
+            return f"(-{a})"
+        if k == "time":
+            return f"(({N.ctype(rtype)})iec_neg_lint({a}))"
+        return f"iec_neg_{N.type_tag(rtype)}({a})"
+
+    # ------------------------------------------------------------ calls
+    def call(self, f, c: ast.Call, t):
+        target = c.target
+        if isinstance(target, stdlib.StdFunc):
+            args = [a.value for a in c.args if a.kind == "pos" or a.name.upper() not in
+                    ("EN", "ENO")]
+            return self.std_apply(f, target, args, t)
+        return self.body.user_function_call(f, c)
+
+    def std_apply(self, f, fres: stdlib.StdFunc, args, t):
+        fam = fres.family
+        pts = fres.param_types
+        res = concrete(fres.result)
+        if isinstance(fres.result, LiteralT) and t is not None:
+            res = concrete(t)
+        vals = lambda: [self.emit(f, a, concrete(pt) if not isinstance(pt, LiteralT) else res)
+                        for a, pt in zip(args, pts)]
+        tag = lambda ty: N.type_tag(ty)
+        if fam in ("ADD", "SUB", "MUL", "DIV", "MOD"):
+            vs = [self.emit(f, a, res) for a in args]
+            if scalar_kind(res) == "real":
+                if fam == "MOD":
+                    raise CodegenError("MOD on REAL")
+                sym = {"ADD": "+", "SUB": "-", "MUL": "*", "DIV": "/"}[fam]
+                return "(" + f" {sym} ".join(vs) + ")"
+            fn = f"iec_{fam.lower()}_{tag(res)}"
+            if fam in ("DIV", "MOD"):
+                f.may_fault = True
+                return f"{fn}(ctx, {vs[0]}, {vs[1]})"
+            acc = vs[0]
+            for v in vs[1:]:
+                acc = f"{fn}({acc}, {v})"
+            return acc
+        if fam in ("ADD_TIME", "SUB_TIME"):
+            a, b = [self.emit(f, x, res) for x in args]
+            return f"iec_{fam.lower().replace('_time', '')}_{tag(res)}({a}, {b})"
+        if fam in ("ADD_TOD_TIME", "ADD_DT_TIME", "SUB_TOD_TIME", "SUB_DT_TIME",
+                   "SUB_DATE_DATE", "SUB_TOD_TOD", "SUB_DT_DT", "CONCAT_DATE_TOD"):
+            a = self.emit(f, args[0], pts[0])
+            b = self.emit(f, args[1], pts[1])
+            return f"iec_{fam.lower()}({a}, {b})"
+        if fam in ("MUL_TIME", "DIV_TIME"):
+            tt = concrete(pts[0])
+            a = self.emit(f, args[0], tt)
+            nt = concrete(args[1].type)
+            if scalar_kind(nt) == "real":
+                b = self.emit(f, args[1], ELEMENTARY["LREAL"])
+                return (f"iec_{fam.lower().replace('_time', '')}_{tag(tt)}_lreal("
+                        f"{'ctx, ' if fam == 'DIV_TIME' else ''}{a}, {b})")
+            b = self.emit(f, args[1], ELEMENTARY["LINT"])
+            if fam == "DIV_TIME":
+                f.may_fault = True
+                return f"iec_div_{tag(tt)}(ctx, {a}, {b})"
+            return f"iec_mul_{tag(tt)}({a}, {b})"
+        if fam == "EXPT":
+            a = self.emit(f, args[0], pts[0])
+            b = self.emit(f, args[1], pts[0] if scalar_kind(pts[1]) == "real" else pts[1])
+            if scalar_kind(pts[1]) == "real":
+                return f"iec_expt_{tag(pts[0])}({a}, {b})"
+            return f"iec_expt_{tag(pts[0])}_lint({a}, {self.convert(b, pts[1], ELEMENTARY['LINT'])})"
+        if fam == "MOVE":
+            return self.emit(f, args[0], res)
+        if fam == "ABS":
+            a = self.emit(f, args[0], res)
+            return f"iec_abs_{tag(res)}({a})"
+        if fam in ("SQRT", "LN", "LOG", "EXP", "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN",
+                   "ATAN2"):
+            vs = [self.emit(f, a, res) for a in args]
+            return f"iec_{fam.lower()}_{tag(res)}({', '.join(vs)})"
+        if fam in ("SHL", "SHR", "ROL", "ROR"):
+            a = self.emit(f, args[0], res)
+            n = self.emit(f, args[1], ELEMENTARY["LINT"])
+            return f"iec_{fam.lower()}_{tag(res)}({a}, {n})"
+        if fam in ("AND", "OR", "XOR"):
+            vs = [self.emit(f, a, res) for a in args]
+            if res is BOOL:
+                sym = {"AND": "&", "OR": "|", "XOR": "^"}[fam]
+                return "((iec_bool)(" + f" {sym} ".join(vs) + "))"
+            acc = vs[0]
+            for v in vs[1:]:
+                acc = f"iec_{fam.lower()}_{tag(res)}({acc}, {v})"
+            return acc
+        if fam == "NOT":
+            a = self.emit(f, args[0], res)
+            return f"((iec_bool)!{a})" if res is BOOL else f"iec_not_{tag(res)}({a})"
+        if fam in ("SEL", "MUX", "MAX", "MIN", "LIMIT") and isinstance(res, StringT):
+            return self.string_select(f, fam, args, res)
+        if fam == "SEL":
+            g = self.emit(f, args[0], BOOL)
+            a, b = self.emit(f, args[1], res), self.emit(f, args[2], res)
+            return f"({g} ? {b} : {a})"
+        if fam in ("MAX", "MIN"):
+            vs = [self.emit(f, a, res) for a in args]
+            acc = vs[0]
+            for v in vs[1:]:
+                acc = f"iec_{fam.lower()}_{tag(res)}({acc}, {v})"
+            return acc
+        if fam == "LIMIT":
+            vs = [self.emit(f, a, res) for a in args]
+            return f"iec_limit_{tag(res)}({', '.join(vs)})"
+        if fam == "MUX":
+            k = self.emit(f, args[0], ELEMENTARY["LINT"])
+            n = len(args) - 1
+            sel = f.temp(ELEMENTARY["UDINT"], "mux")
+            f.pre.append(f"{sel} = iec_mux_index(ctx, {k}, {n});")
+            f.may_fault = True
+            vs = [self.emit(f, a, res) for a in args[1:]]
+            out = vs[-1]
+            for i in range(n - 2, -1, -1):
+                out = f"({sel} == {i} ? {vs[i]} : {out})"
+            return out
+        if fam in ("GT", "GE", "EQ", "LE", "LT", "NE"):
+            c = concrete(pts[0])
+            sym = {"GT": ">", "GE": ">=", "EQ": "==", "LE": "<=", "LT": "<", "NE": "!="}[fam]
+            if isinstance(c, StringT):
+                vs = [self.strv(f, a) for a in args]
+                cmp = "iec_cmp_wstring" if c.wide else "iec_cmp_string"
+                parts = [f"({cmp}({vs[i]}, {vs[i + 1]}) {sym} 0)" for i in range(len(vs) - 1)]
+            else:
+                vs = [self.emit(f, a, c) for a in args]
+                parts = [f"({vs[i]} {sym} {vs[i + 1]})" for i in range(len(vs) - 1)]
+            return "((iec_bool)(" + " && ".join(parts) + "))"
+        if fam == "LEN":
+            s = self.strv(f, args[0])
+            return f"((iec_int)iec_len_{tag(args[0].type)}({s}))"
+        if fam == "FIND":
+            a, b = self.strv(f, args[0]), self.strv(f, args[1])
+            return f"((iec_int)iec_find_{tag(args[0].type)}({a}, {b}))"
+        if fam in ("LEFT", "RIGHT", "MID", "CONCAT", "INSERT", "DELETE", "REPLACE"):
+            return self.string_function(f, fam, args, pts, res)
+        if fam == "CONVERT":
+            return self.conversion(f, fres, args[0])
+        if fam in ("TRUNC",):
+            a = self.emit(f, args[0], ELEMENTARY["LREAL"])
+            return f"iec_lreal_trunc_dint({a})"
+        if fam in ("BCD_TO", "TO_BCD"):
+            src, dst = concrete(pts[0]), res
+            a = self.emit(f, args[0], src)
+            if fres.name == "BCD_TO_INT":
+                return f"((iec_int)iec_word_bcd_to_uint({a}))"
+            if fres.name == "INT_TO_BCD":
+                return f"iec_uint_to_bcd_word((iec_uint){a})"
+            if fam == "BCD_TO":
+                return f"iec_{tag(src)}_bcd_to_{tag(dst)}({a})"
+            return f"iec_{tag(src)}_to_bcd_{tag(dst)}({a})"
+        raise CodegenError(f"standard function family {fam} not lowered")
+
+    def conversion(self, f, fres, arg):
+        src, dst = concrete(fres.param_types[0]), concrete(fres.result)
+        if fres.name.upper().split("_TO_")[0] in ("TIME_OF_DAY", "DATE_AND_TIME") or \
+                "_TRUNC_" in fres.name.upper():
+            pass
+        if "_TRUNC_" in fres.name.upper():
+            a = self.emit(f, arg, src)
+            return f"iec_{tag_of(src)}_trunc_{tag_of(dst)}({a})"
+        if isinstance(dst, StringT):
+            out = f.temp(dst)
+            if isinstance(src, StringT):
+                f.pre.append(f"iec_{tag_of(src)}_to_{tag_of(dst)}({self.strbuf(out, dst)}, "
+                             f"{self.strv(f, arg)});")
+            else:
+                a = self.emit(f, arg, src)
+                f.pre.append(f"iec_{tag_of(src)}_to_{tag_of(dst)}({self.strbuf(out, dst)}, {a});")
+            return out
+        if isinstance(src, StringT):
+            return f"iec_{tag_of(src)}_to_{tag_of(dst)}({self.strv(f, arg)})"
+        a = self.emit(f, arg, src)
+        return f"iec_{tag_of(src)}_to_{tag_of(dst)}({a})"
+
+    # ---------------------------------------------------------- strings
+    def strv(self, f, e) -> str:
+        """A read-only view (iec_strv / iec_wstrv) of a string expression."""
+        t = concrete(e.type)
+        if isinstance(e, ast.Lit) and e.kind == "string":
+            return self.string_literal(f, e)
+        code = self.emit(f, e)
+        return f"IEC_{'W' if t.wide else ''}STRV({code})"
+
+    @staticmethod
+    def strbuf(code, t) -> str:
+        return f"IEC_{'W' if t.wide else ''}STRBUF({code})"
+
+    def string_function(self, f, fam, args, pts, res):
+        out = f.temp(res)
+        w = "wstring" if res.wide else "string"
+        buf = self.strbuf(out, res)
+        if fam == "CONCAT":
+            # CONCAT(a, b, c) = CONCAT(CONCAT(a, b), c), accumulated in out
+            first = self.strv(f, args[0])
+            second = self.strv(f, args[1])
+            f.pre.append(f"iec_concat_{w}({buf}, {first}, {second});")
+            for a in args[2:]:
+                nxt = f.temp(res)
+                f.pre.append(f"iec_concat_{w}({self.strbuf(nxt, res)}, IEC_{'W' if res.wide else ''}"
+                             f"STRV({out}), {self.strv(f, a)});")
+                out = nxt
+            return out
+        vals = []
+        for a, pt in zip(args, pts):
+            if isinstance(concrete(pt), StringT):
+                vals.append(self.strv(f, a))
+            else:
+                vals.append(self.emit(f, a, ELEMENTARY["LINT"]))
+        f.pre.append(f"iec_{fam.lower()}_{w}({buf}, {', '.join(vals)});")
+        return out
+
+    def string_select(self, f, fam, args, res):
+        out = f.temp(res)
+        w = "wstring" if res.wide else "string"
+        buf = self.strbuf(out, res)
+        if fam == "SEL":
+            g = self.emit(f, args[0], BOOL)
+            a, b = self.strv(f, args[1]), self.strv(f, args[2])
+            f.pre.append(f"iec_assign_{w}({buf}, {g} ? {b} : {a});")
+            return out
+        if fam == "MUX":
+            k = self.emit(f, args[0], ELEMENTARY["LINT"])
+            sel = f.temp(ELEMENTARY["UDINT"], "mux")
+            f.pre.append(f"{sel} = iec_mux_index(ctx, {k}, {len(args) - 1});")
+            f.may_fault = True
+            vs = [self.strv(f, a) for a in args[1:]]
+            pick = vs[-1]
+            for i in range(len(vs) - 2, -1, -1):
+                pick = f"({sel} == {i} ? {vs[i]} : {pick})"
+            f.pre.append(f"iec_assign_{w}({buf}, {pick});")
+            return out
+        vs = [self.strv(f, a) for a in args]
+        cmp = f"iec_cmp_{w}"
+        if fam in ("MAX", "MIN"):
+            best = vs[0]
+            sym = ">" if fam == "MAX" else "<"
+            for v in vs[1:]:
+                best = f"({cmp}({v}, {best}) {sym} 0 ? {v} : {best})"
+            f.pre.append(f"iec_assign_{w}({buf}, {best});")
+            return out
+        mn, x, mx = vs
+        f.pre.append(f"iec_assign_{w}({buf}, {cmp}({x}, {mn}) < 0 ? {mn} : "
+                     f"({cmp}({x}, {mx}) > 0 ? {mx} : {x}));")
+        return out
+
+
+def tag_of(t):
+    return N.type_tag(t)
+
+
+def _cop(op):
+    return {"=": "==", "<>": "!="}.get(op, op)
+
+
+def _const_int(e):
+    if isinstance(e, ast.Lit) and e.kind == "int":
+        return e.value
+    if isinstance(e, ast.UnOp) and e.op == "-":
+        v = _const_int(e.operand)
+        return None if v is None else -v
+    return None

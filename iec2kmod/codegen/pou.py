@@ -1,0 +1,279 @@
+"""POUs to C: the project header (types, instance structs, init functions)
+and one body file per POU.  See iec2kmod/codegen/__init__.py for how the
+pieces are put together."""
+
+from __future__ import annotations
+
+from .. import ast
+from ..checks.types import (ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT,
+                            concrete)
+from . import cnames as N
+from .body import BodyEmitter
+from .expr import Frame, c_int
+
+SECTION_ORDER = ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_EXTERNAL", "VAR_GLOBAL", "VAR")
+
+
+def member_decl(v) -> str:
+    name = N.var(v.name)
+    if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT"):
+        if isinstance(v.type, ArrayT):
+            elem, _ = N.array_flat(v.type)
+            return f"{N.ctype(elem)} *{name};"
+        return f"{N.ctype(v.type)} *{name};"
+    return N.declare(v.type, name) + ";"
+
+
+class InitEmitter:
+    """Initial values: C statements that bring storage to its declared state
+    (after it was zeroed)."""
+
+    def __init__(self, project, pou=None):
+        self.project = project
+        self.type_inits = project.types.get("__init__", {})
+        self.body = BodyEmitter(pou) if pou is not None else None
+
+    def lines(self, code, t, init, f) -> list[str]:
+        if init is None:
+            return self.default(code, t, f)
+        if isinstance(init, ast.ArrayInit):
+            elem = t.elem
+            out = []
+            k = 0
+            per = elem.count if isinstance(elem, ArrayT) else 1
+            for count, value in init.items:
+                for _ in range(count or 1):
+                    if k >= t.count:
+                        break
+                    out += self.element(code, elem, k, per, value, f)
+                    k += 1
+            for rest in range(k, t.count):
+                out += self.element(code, elem, rest, per, None, f)
+            return out
+        if isinstance(init, ast.StructInit):
+            out = []
+            if isinstance(t, FBType):
+                given = {n.upper(): val for n, val, _ in init.fields}
+                out += self.default(code, t, f)
+                for key, val in given.items():
+                    v = t.pou.var(key)
+                    out += self.lines(f"{code}.{N.member(t.pou, v.name)}", v.type, val, f)
+                return out
+            given = {n.upper(): val for n, val, _ in init.fields}
+            for key, (name, ft, finit) in t.fields.items():
+                out += self.lines(f"{code}.{N.var(name)}", ft,
+                                  given.get(key, finit), f)
+            return out
+        return self.scalar(code, t, init, f)
+
+    def element(self, code, elem, k, per, value, f):
+        if isinstance(elem, ArrayT):
+            # a nested array: its elements are a slice of the flat C array
+            out = []
+            sub = [(value.items if isinstance(value, ast.ArrayInit) else [])]
+            flat_items = []
+            for count, v in sub[0]:
+                flat_items += [v] * (count or 1)
+            for j in range(elem.count):
+                inner = flat_items[j] if j < len(flat_items) else None
+                out += self.element(code, elem.elem, k * per + j,
+                                    elem.elem.count if isinstance(elem.elem, ArrayT) else 1,
+                                    inner, f) if isinstance(elem.elem, ArrayT) else \
+                    self.lines(f"{code}[{k * per + j}]", elem.elem, inner, f)
+            return out
+        return self.lines(f"{code}[{k}]", elem, value, f)
+
+    def scalar(self, code, t, init, f):
+        if isinstance(concrete(t), StringT):
+            return self.body_emitter().assign_code(f, code, t, init)
+        be = self.body_emitter()
+        if isinstance(init, ast.Ref) and isinstance(t, EnumT) and t.has(init.name):
+            return [f"{code} = {N.enum_const(t, init.name)};"]
+        init.type = init.type or _lit_type(init, t)
+        return be.assign_code(f, code, t, init)
+
+    def body_emitter(self):
+        if self.body is None:
+            from ..checks.symbols import POUInfo
+            self.body = BodyEmitter(POUInfo("FUNCTION_BLOCK", "<init>"))
+        return self.body
+
+    def default(self, code, t, f) -> list[str]:
+        name = getattr(t, "name", "").upper()
+        if name in self.type_inits and not isinstance(t, (Elementary, StringT)):
+            return self.lines(code, t, self.type_inits[name], f)
+        if isinstance(t, SubrangeT) and t.low > 0 or isinstance(t, SubrangeT) and t.high < 0:
+            return [f"{code} = {c_int(t.low, t.elem)};"]
+        if isinstance(t, EnumT):
+            first_name, first_val = next(iter(t.values.values()))
+            if first_val != 0:
+                return [f"{code} = {N.enum_const(t, first_name)};"]
+            return []
+        if isinstance(t, StructT):
+            out = []
+            for key, (name, ft, finit) in t.fields.items():
+                out += self.lines(f"{code}.{N.var(name)}", ft, finit, f)
+            return out
+        if isinstance(t, ArrayT):
+            out = []
+            elem, count = N.array_flat(t)
+            probe = self.default(f"{code}[i]", elem, f)
+            if probe:
+                out.append(f"for (i = 0; i < {count}; i++) {{")
+                out += ["\t" + ln for ln in probe]
+                out.append("}")
+            return out
+        if isinstance(t, FBType):
+            return [f"{N.pou_prefix(t.pou)}_init(&{code});"]
+        return []
+
+
+def _lit_type(init, t):
+    return t
+
+
+def pou_struct(pou) -> list[str]:
+    """The C struct of a FUNCTION_BLOCK or PROGRAM instance."""
+    lines = [f"{N.pou_struct(pou)} {{"]
+    for section in SECTION_ORDER:
+        vs = [v for v in pou.vars.values() if v.section == section]
+        if not vs:
+            continue
+        lines.append(f"\t/* {section} */")
+        lines += ["\t" + member_decl(v) for v in vs]
+    edges = [v for v in pou.inputs if v.edge]
+    if edges:
+        lines.append("\t/* edge detection of R_EDGE / F_EDGE inputs */")
+        for v in edges:
+            lines.append(f"\tiec_bool h_{v.name.lower()};")
+            lines.append(f"\tiec_bool h_{v.name.lower()}_prev;")
+    if len(lines) == 1:
+        lines.append("\tiec_u8 h_empty;")
+    lines.append("};")
+    return lines
+
+
+def pou_init(project, pou) -> list[str]:
+    """``<prefix>_init(self)``: zero, then declared initial values."""
+    ie = InitEmitter(project, pou)
+    f = Frame(ie.body_emitter())
+    body = []
+    for v in pou.vars.values():
+        if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
+            continue
+        body += ie.lines(f"self->{N.var(v.name)}", v.type, v.init, f)
+    needs_i = any("for (i = 0;" in ln for ln in body)
+    out = [f"static inline void {N.pou_prefix(pou)}_init({N.pou_struct(pou)} *self)", "{"]
+    decls = (["\tiec_u32 i;"] if needs_i else []) + ["\t" + d for d in f.decls]
+    if f.decls or f.pre:
+        decls.append("\tstruct iec_ctx ctx_init = { 0 };")
+        decls.append("\tstruct iec_ctx *ctx = &ctx_init;")
+    out += decls
+    out.append("\tiec_memset(self, 0, sizeof(*self));")
+    out += ["\t" + ln for ln in f.pre + body]
+    out.append("}")
+    if f.decls or f.pre:
+        out.insert(out.index("\tiec_memset(self, 0, sizeof(*self));"),
+                   "\t(void)ctx;")
+    return out
+
+
+def function_signature(pou) -> str:
+    result = pou.vars[pou.key]
+    params = ["struct iec_ctx *ctx"]
+    if N.is_scalar(result.type):
+        ret = N.ctype(result.type)
+    else:
+        ret = "void"
+        if isinstance(result.type, ArrayT):
+            elem, _ = N.array_flat(result.type)
+            params.append(f"{N.ctype(elem)} *ret")
+        else:
+            params.append(f"{N.ctype(result.type)} *ret")
+    for v in pou.vars.values():
+        name = N.var(v.name)
+        if v.section == "VAR_INPUT":
+            if N.is_scalar(v.type):
+                params.append(f"{N.ctype(v.type)} {name}")
+            elif isinstance(v.type, ArrayT):
+                elem, _ = N.array_flat(v.type)
+                params.append(f"const {N.ctype(elem)} *{name}")
+            else:
+                params.append(f"const {N.ctype(v.type)} *{name}")
+        elif v.section in ("VAR_IN_OUT", "VAR_OUTPUT"):
+            if isinstance(v.type, ArrayT):
+                elem, _ = N.array_flat(v.type)
+                params.append(f"{N.ctype(elem)} *{name}")
+            else:
+                params.append(f"{N.ctype(v.type)} *{name}")
+    return f"IEC_POU_SCOPE {ret} {N.fn(pou.name)}({', '.join(params)})"
+
+
+def pou_body(project, pou) -> list[str]:
+    """The body function of a POU."""
+    be = BodyEmitter(pou)
+    stmts = be.body(pou.node.body)
+    out = []
+    if pou.kind == "FUNCTION":
+        out.append(function_signature(pou))
+        out.append("{")
+        locals_ = []
+        ie = InitEmitter(project, pou)
+        ie.body = be
+        f = Frame(be)
+        init = []
+        for v in pou.vars.values():
+            if v.section in ("VAR", "VAR_TEMP") or (v.section == "RESULT" and
+                                                    N.is_scalar(v.type)):
+                locals_.append(N.declare(v.type, N.var(v.name)) + ";")
+                init.append(f"iec_memset(&{N.var(v.name)}, 0, sizeof({N.var(v.name)}));")
+                init += ie.lines(N.var(v.name), v.type, v.init if v.section != "RESULT" else None,
+                                 f)
+            elif v.section == "RESULT":
+                init.append(f"iec_memset(ret, 0, sizeof(*ret));" if not isinstance(
+                    v.type, ArrayT) else "")
+            elif v.section == "VAR_OUTPUT":
+                init += ie.lines(f"(*{N.var(v.name)})", v.type, v.init, f) \
+                    if not isinstance(v.type, ArrayT) else []
+        if any("for (i = 0;" in ln for ln in init):
+            locals_.append("iec_u32 i;")
+        locals_ += f.decls
+        locals_ += [f"{ct} {name};" for name, ct in sorted(be.cr_vars.items())]
+        out += ["\t" + ln for ln in locals_ + ["(void)ctx;"] + [x for x in f.pre + init if x]]
+        out += ["\t" + ln for ln in stmts]
+        rv = be.ret_value()
+        out.append(f"\treturn {rv};" if rv else "\treturn;")
+        out.append("}")
+        return out
+    out.append(f"IEC_POU_SCOPE void {N.pou_prefix(pou)}_body({N.pou_struct(pou)} *self, "
+               "struct iec_ctx *ctx)")
+    out.append("{")
+    locals_ = []
+    ie = InitEmitter(project, pou)
+    ie.body = be
+    f = Frame(be)
+    init = []
+    for v in pou.vars.values():
+        if v.section == "VAR_TEMP":
+            locals_.append(N.declare(v.type, N.var(v.name)) + ";")
+            init.append(f"iec_memset(&{N.var(v.name)}, 0, sizeof({N.var(v.name)}));")
+            init += ie.lines(N.var(v.name), v.type, v.init, f)
+    if any("for (i = 0;" in ln for ln in init):
+        locals_.append("iec_u32 i;")
+    locals_ += f.decls
+    locals_ += [f"{ct} {name};" for name, ct in sorted(be.cr_vars.items())]
+    edge = []
+    for v in pou.inputs:
+        if v.edge:
+            n = v.name.lower()
+            cur = f"self->v_{n}"
+            prev = f"self->h_{n}_prev"
+            expr = f"{cur} && !{prev}" if v.edge == "R_EDGE" else f"!{cur} && {prev}"
+            edge += [f"self->h_{n} = {expr};", f"{prev} = {cur};"]
+    out += ["\t" + ln for ln in locals_ + ["(void)ctx;"] + f.pre + init + edge]
+    out += ["\t" + ln for ln in stmts]
+    if be.uses_ret_label:
+        out.append("out:")
+        out.append("\treturn;")
+    out.append("}")
+    return out
