@@ -1,0 +1,109 @@
+"""The fast model builder (parser.FastBuilder) against textX's own
+model_from_str: on every file of examples/ and tests/errors/, on the
+benchmark project and on small and broken inputs, both paths must give the
+same iec2kmod.ast unit and the same diagnostics, so the fast path can never
+silently diverge from the reference."""
+
+import random
+import sys
+from pathlib import Path
+
+import pytest
+
+from iec2kmod import ast
+from iec2kmod.diagnostics import Diagnostics, SourceFile
+from iec2kmod.parser import parse_source
+
+pytestmark = pytest.mark.unit
+ROOT = Path(__file__).resolve().parents[2]
+FILES = sorted(p for d in ("examples", "tests/errors") for p in (ROOT / d).rglob("*")
+               if p.suffix.lower() in (".st", ".il", ".iec"))
+
+
+def dump(x):
+    """A canonical, comparable form of an AST: every slot of every node."""
+    if isinstance(x, (ast.Node, ast.Expr, ast.Arg)):
+        slots = []
+        for k in type(x).__mro__:
+            slots += [s for s in getattr(k, "__slots__", ()) if s not in slots]
+        return (type(x).__name__,) + tuple((s, dump(getattr(x, s, "<unset>"))) for s in slots)
+    if isinstance(x, (list, tuple)):
+        return (type(x).__name__,) + tuple(dump(i) for i in x)
+    if isinstance(x, dict):
+        return ("dict",) + tuple((dump(k), dump(v)) for k, v in x.items())
+    if isinstance(x, SourceFile):
+        return ("SourceFile", x.path, x.text)
+    assert x is None or isinstance(x, (str, int, float, bool)), type(x)
+    return (type(x).__name__, x)
+
+
+def both(text, path="t.st"):
+    out = []
+    for reference in (True, False):
+        diags = Diagnostics()
+        unit = parse_source(SourceFile(path, text), diags, reference=reference)
+        out.append((dump(unit), [(d.path, d.line, d.col, d.severity, d.message, d.source_line)
+                                 for d in diags.items]))
+    return out
+
+
+@pytest.mark.parametrize("path", FILES, ids=[str(p.relative_to(ROOT)) for p in FILES])
+def test_same_model_on_project_files(path):
+    reference, fast = both(path.read_text(), str(path))
+    assert fast == reference
+
+
+def test_same_model_on_the_benchmark_project():
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from gen_project import project
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    reference, fast = both(project(10000), "bench.st")
+    assert reference[0][0] == "SourceUnit" and not reference[1]
+    assert fast == reference
+
+
+SNIPPETS = [
+    "",
+    "(* only a comment *)\n",
+    "PROGRAM p\nEND_PROGRAM\n",
+    "PROGRAM p\n x := 1 +;\nEND_PROGRAM\n",
+    "PROGRAM p\n IF x THEN y := 1; END_WHILE\nEND_PROGRAM\n",
+    "PROGRAM p\n x := 1\nEND_PROGRAM\n",
+    "PROGRAM IF\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 16#FFFFFFFFFFFFFFFFFF; a := T#1x;\nEND_PROGRAM\n",
+    "PROGRAM p\n a.b[1](x := 1);\n y := s.c[2](3) + f(a, IN2 := 2, Q => y, NOT Q2 => z);\nEND_PROGRAM\n",
+    "PROGRAM p\n x := -a ** 2 ** b + NOT c AND d OR e XOR f & g MOD 3;\nEND_PROGRAM\n",
+    "PROGRAM p\n x := arr[i, j + 1].x.3; {pragma} y := %IX0.1;\nEND_PROGRAM\n",
+    "TYPE\n E : (a, b := 3, c);\n R : INT (0..10) := 5;\n S : STRUCT m AT %QX0.0 : BOOL; n : ARRAY[1..2, 0..1] OF"
+    " INT := [2(1), 3, 4]; END_STRUCT;\n W : WSTRING[20]; P : S := (n := [1, 2]);\nEND_TYPE\n",
+    "FUNCTION_BLOCK fb\nVAR_INPUT CONSTANT x : BOOL R_EDGE; END_VAR\nVAR_OUTPUT q AT %QW3 : WORD; END_VAR\n"
+    "  LD x\n  AND( y\n  OR z\n  )\n  ST q\nl1: CAL t(IN := x,\n    PT := T#1s)\n  JMPC l1\n"
+    "  LIMIT 0, 10\n  )\n  ADD(\nEND_FUNCTION_BLOCK\n",
+    "CONFIGURATION c\n VAR_GLOBAL g : INT; END_VAR\n RESOURCE r ON cpu\n  TASK t (INTERVAL := T#1ms,"
+    " PRIORITY := 1);\n  PROGRAM RETAIN i WITH t : p (a := g, b => g);\n END_RESOURCE\n"
+    " VAR_ACCESS v : r.i.x : INT READ_ONLY; END_VAR\n VAR_CONFIG r.i.y AT %IX1.0 : BOOL := TRUE; END_VAR\n"
+    "END_CONFIGURATION\n",
+    "PROGRAM p\n CASE x OF 1, 2..3: y := 1; ELSE y := 2; END_CASE\n FOR i := 1 TO 10 BY 2 DO EXIT; END_FOR"
+    "\n WHILE a DO RETURN; END_WHILE\n REPEAT ; UNTIL b END_REPEAT\nEND_PROGRAM\n",
+    "PROGRAM p\n x := " + "(" * 400 + "1" + ")" * 400 + ";\nEND_PROGRAM\n",
+]
+
+
+@pytest.mark.parametrize("text", SNIPPETS, ids=range(len(SNIPPETS)))
+def test_same_model_on_snippets(text, tmp_path):
+    path = tmp_path / "t.st"  # textX's model_from_str reads the file when text is empty
+    path.write_text(text)
+    reference, fast = both(text, str(path))
+    assert fast == reference
+
+
+def test_same_result_on_fuzzed_input():
+    rng = random.Random(4321)
+    words = ("PROGRAM END_PROGRAM VAR END_VAR := ; ( ) [ ] 'x' T#5s 16#F IF THEN ELSE END_IF x y "
+             "1 2 . , : FUNCTION_BLOCK END_FUNCTION_BLOCK LD ST ADD( \n").split(" ")
+    for _ in range(60):
+        text = "PROGRAM p\n" + " ".join(rng.choice(words) for _ in range(40)) + "\nEND_PROGRAM\n"
+        reference, fast = both(text)
+        assert fast == reference, text
