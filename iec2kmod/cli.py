@@ -29,6 +29,18 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--no-cache", action="store_true", help="ignore the result cache")
     c.add_argument("--timings", action="store_true", help="print the time of each pass")
     c.add_argument("-j", "--jobs", type=int, default=None, help="parallel parser processes")
+    s = sub.add_parser("sim", help="run a configuration on the host with a simulated clock")
+    s.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
+    g = s.add_mutually_exclusive_group(required=True)
+    g.add_argument("--cycles", type=int, help="cycles of the fastest periodic task")
+    g.add_argument("--duration", help="simulated time, e.g. 10s or T#500ms")
+    s.add_argument("--inputs", metavar="TRACE.csv", help="input events: time,variable,value")
+    s.add_argument("--csv", metavar="OUT.csv", help="write watched values as CSV")
+    s.add_argument("--vcd", metavar="OUT.vcd", help="write watched values as VCD (GTKWave)")
+    s.add_argument("--watch", metavar="A,B,C", help="variables to record (default: globals)")
+    s.add_argument("--list", action="store_true", help="list the variables and exit")
+    s.add_argument("--sanitize", action="store_true",
+                   help="build with -fsanitize=undefined,address")
     return p
 
 
@@ -51,7 +63,70 @@ def cmd_check(args) -> int:
     return EXIT_SOURCE if n_err else EXIT_OK
 
 
-COMMANDS = {"check": cmd_check}
+def front_end(files):
+    """Checked project or None (diagnostics printed)."""
+    from .frontend import run
+    result = run(files, use_cache=False)
+    print_diagnostics(result.diags)
+    if not result.ok:
+        n = len(result.diags.errors)
+        print(f"{n} error(s), {len(result.diags.warnings)} warning(s)", file=sys.stderr)
+        return None
+    if not result.project.configurations:
+        print("iec2kmod: error: the project has no CONFIGURATION to run", file=sys.stderr)
+        return None
+    return result.project
+
+
+def cmd_sim(args) -> int:
+    from . import sim
+    project = front_end(args.files)
+    if project is None:
+        return EXIT_SOURCE
+    try:
+        if args.list:
+            from .codegen.plan import build_plan
+            for e in build_plan(project).table:
+                access = "rw" if e.writable else "ro"
+                print(f"{e.path:40} {getattr(e.type, 'name', '?'):16} {access}")
+            return EXIT_OK
+        if args.cycles is not None:
+            periods = [t.interval_ns for c in project.configurations for r in c.resources
+                       for t in r.tasks.values() if t.interval_ns]
+            if not periods:
+                raise sim.SimError("--cycles needs a periodic task; use --duration")
+            if args.cycles < 1:
+                raise sim.SimError("--cycles must be at least 1")
+            end = min(periods) * (args.cycles - 1)
+        else:
+            end = sim.parse_time(args.duration)
+        watch = [w for w in args.watch.split(",") if w.strip()] if args.watch else None
+        res = sim.run(project, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize)
+    except sim.SimError as exc:
+        print(f"iec2kmod: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except sim.InternalError as exc:
+        print(f"iec2kmod: internal error: {exc}", file=sys.stderr)
+        return EXIT_INTERNAL
+    for t, task, fault, pou, file, line in res.faults:
+        print(f"{file}:{line}: runtime error: {fault} in {pou} (task {task}, "
+              f"t={t / 1e9:.6f} s); the task is stopped", file=sys.stderr)
+    if args.csv:
+        sim.write_csv(res, args.csv)
+    if args.vcd:
+        from .codegen.plan import build_plan
+        sim.write_vcd(res, args.vcd, build_plan(project))
+    final = res.values_at()
+    width = max((len(n) for n in res.names), default=10)
+    print(f"simulated {res.end_ns / 1e9:g} s; cycles: " +
+          ", ".join(f"{k} {v}" for k, v in res.cycles.items()))
+    for n in res.names:
+        v = final.get(n, "")
+        print(f"  {n:<{width}}  {sim.format_value(None, v)}")
+    return EXIT_SOURCE if res.faults else EXIT_OK
+
+
+COMMANDS = {"check": cmd_check, "sim": cmd_sim}
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,270 @@
+"""The configuration plan: where every global, program instance and task
+lives in C, and the variable table that the simulator and the manager use
+to read and write variables by IEC name.  Shared by `iec2kmod sim` and the
+kernel module generator."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .. import ast
+from ..checks.symbols import POUInfo, Var
+from ..checks.types import (ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT,
+                            concrete)
+from . import cnames as N
+from .body import BodyEmitter
+from .expr import Frame
+from .pou import InitEmitter
+
+MAX_TABLE_ELEMENTS = 256   # array/struct elements listed per variable
+
+
+@dataclass
+class GlobalPlan:
+    path: str            # IEC name as the user writes it: 'level' or 'r1.local'
+    c_name: str          # C object: g_level, g_r1_local
+    var: Var
+    resource: str | None
+
+
+@dataclass
+class InstancePlan:
+    path: str            # r1.p1
+    c_name: str          # inst_r1_p1
+    pou: POUInfo
+    resource: str
+    task: str | None
+    inputs: list = field(default_factory=list)    # (member C lvalue, IEC type, value AST)
+    outputs: list = field(default_factory=list)   # (global C lvalue, member, IEC type)
+    externals: list = field(default_factory=list) # (member, global C name, is array)
+
+
+@dataclass
+class TaskPlan:
+    name: str
+    resource: str
+    index: int
+    interval_ns: int | None
+    priority: int
+    single: GlobalPlan | None
+    instances: list = field(default_factory=list)
+
+
+@dataclass
+class TableEntry:
+    path: str            # IEC path: level, r1.p1.count, r1.p1.arr[2], r1.p1.t.ET
+    c_lvalue: str
+    type: object
+    kind: str            # b (BOOL) i (signed) u (unsigned, bit strings) f (real) t (time-like)
+                         # e (enumeration) s (STRING) w (WSTRING)
+    size: int
+    writable: bool
+    owner: str           # 'global' or the instance path
+
+
+@dataclass
+class Plan:
+    config: str
+    globals: list
+    instances: list
+    tasks: list
+    table: list
+    located: list        # (address, GlobalPlan)
+    directs: dict        # address used in a connection -> (C name, IEC type)
+
+
+def _qual(r, name):
+    """IEC path of a name in resource r (a configuration without RESOURCE
+    has one implicit resource whose name is not written)."""
+    return f"{r.name}.{name}" if r.node.name else name
+
+
+def _c_ident(*parts):
+    return "_".join(p.lower() for p in parts if p)
+
+
+def build_plan(project) -> Plan:
+    cfg = project.configurations[0]
+    globals_: list[GlobalPlan] = []
+    by_var: dict[int, GlobalPlan] = {}
+    for v in cfg.globals.values():
+        g = GlobalPlan(v.name, "g_" + _c_ident(v.name), v, None)
+        globals_.append(g)
+        by_var[id(v)] = g
+    for r in cfg.resources:
+        for v in r.globals.values():
+            g = GlobalPlan(_qual(r, v.name), "g_" + _c_ident(r.name, v.name), v, r.name)
+            globals_.append(g)
+            by_var[id(v)] = g
+    instances, tasks = [], []
+    directs: dict = {}
+    for r in cfg.resources:
+        rtasks = {}
+        for t in r.tasks.values():
+            tp = TaskPlan(t.name, r.name, len(tasks), t.interval_ns, t.priority,
+                          by_var.get(id(t.single)) if t.single else None)
+            tasks.append(tp)
+            rtasks[t.name.upper()] = tp
+        for inst in r.programs:
+            ip = InstancePlan(_qual(r, inst.name), "inst_" + _c_ident(r.name, inst.name),
+                              inst.pou, r.name, inst.task.name if inst.task else None)
+            for key, g in inst.externals.items():
+                ext = inst.pou.vars[key]
+                ip.externals.append((N.var(ext.name), by_var[id(g)].c_name,
+                                     isinstance(ext.type, ArrayT)))
+            for param, value in inst.inputs:
+                ip.inputs.append((N.var(param.name), param.type, value))
+                if isinstance(value, ast.Direct):
+                    directs[value.address] = (_direct_c_name(value.address), param.type)
+            for param, target in inst.outputs:
+                if isinstance(target, ast.Ref):
+                    ip.outputs.append((by_var[id(target.symbol)].c_name, N.var(param.name),
+                                       param.type))
+                else:
+                    directs[target.address] = (_direct_c_name(target.address), param.type)
+                    ip.outputs.append((_direct_c_name(target.address), N.var(param.name),
+                                       param.type))
+            instances.append(ip)
+            if inst.task is not None:
+                rtasks[inst.task.name.upper()].instances.append(ip)
+    located = [(g.var.location, g) for g in globals_ if g.var.location]
+    table = variable_table(globals_, instances)
+    for address, (c_name, t) in sorted(directs.items()):
+        table.append(TableEntry(address, c_name, t, kind_of(t), _size(t),
+                                address[1] != "Q", "direct"))
+    return Plan(cfg.name, globals_, instances, tasks, table, located, directs)
+
+
+def _direct_c_name(address: str) -> str:
+    return "d_" + address[1:].replace(".", "_").replace("*", "x").lower()
+
+
+def kind_of(t) -> str | None:
+    t = concrete(t)
+    if isinstance(t, EnumT):
+        return "e"
+    if isinstance(t, SubrangeT):
+        t = t.elem
+    if isinstance(t, StringT):
+        return "w" if t.wide else "s"
+    if not isinstance(t, Elementary):
+        return None
+    return {"bool": "b", "sint": "i", "uint": "u", "bit": "u", "real": "f", "time": "t",
+            "date": "t", "tod": "t", "dt": "t"}[t.cat]
+
+
+def _size(t) -> int:
+    t = concrete(t)
+    if isinstance(t, SubrangeT):
+        t = t.elem
+    if isinstance(t, EnumT):
+        return N.enum_base(t).bits // 8
+    if isinstance(t, StringT):
+        return 0
+    return max(1, t.bits // 8)
+
+
+def _expand(path, lvalue, t, writable, owner, out, budget):
+    """Table entries of a variable and, for arrays/structs/FBs, its parts."""
+    if len(out) >= budget:
+        return
+    k = kind_of(t)
+    if k is not None:
+        out.append(TableEntry(path, lvalue, t, k, _size(t), writable, owner))
+        return
+    t = concrete(t)
+    if isinstance(t, ArrayT):
+        elem, count = N.array_flat(t)
+        # list the flat elements with their IEC indexes
+        idx = [[]]
+        cur = t
+        dims = []
+        while isinstance(cur, ArrayT):
+            dims += cur.dims
+            cur = cur.elem
+        for n in range(min(count, MAX_TABLE_ELEMENTS)):
+            rem = n
+            parts = []
+            for lo, hi in reversed(dims):
+                size = hi - lo + 1
+                parts.append(lo + rem % size)
+                rem //= size
+            parts.reverse()
+            _expand(f"{path}[{','.join(map(str, parts))}]", f"{lvalue}[{n}]", elem, writable,
+                    owner, out, budget)
+        return
+    if isinstance(t, StructT):
+        for fname, ft, _ in t.fields.values():
+            _expand(f"{path}.{fname}", f"{lvalue}.{N.var(fname)}", ft, writable, owner, out,
+                    budget)
+        return
+    if isinstance(t, FBType):
+        pou = t.pou
+        for v in pou.vars.values():
+            if v.section in ("VAR_INPUT", "VAR_OUTPUT") or (not pou.standard and
+                                                             v.section == "VAR"):
+                _expand(f"{path}.{v.name}", f"{lvalue}.{N.member(pou, v.name)}", v.type,
+                        writable and v.section != "VAR_OUTPUT", owner, out, budget)
+
+
+def variable_table(globals_, instances) -> list[TableEntry]:
+    out: list[TableEntry] = []
+    for g in globals_:
+        _expand(g.path, g.c_name, g.var.type, not g.var.constant, "global", out,
+                len(out) + 4096)
+    for ip in instances:
+        for v in ip.pou.vars.values():
+            if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
+                continue
+            _expand(f"{ip.path}.{v.name}", f"{ip.c_name}.{N.var(v.name)}", v.type,
+                    not v.constant, ip.path, out, len(out) + 4096)
+    return out
+
+
+class PlanEmitter:
+    """C statements for globals' initial values and program connections."""
+
+    def __init__(self, project, plan):
+        self.project = project
+        self.plan = plan
+        self.ie = InitEmitter(project, POUInfo("PROGRAM", "<configuration>"))
+        self.by_var = {id(g.var): g for g in plan.globals}
+
+    def global_inits(self):
+        f = Frame(self.ie.body_emitter())
+        lines = []
+        for g in self.plan.globals:
+            lines += self.ie.lines(g.c_name, g.var.type, g.var.init, f)
+        return f, lines
+
+    def connection_inputs(self, ip: InstancePlan):
+        """Statements copying connected values into a program instance."""
+        be = BodyEmitter(POUInfo("PROGRAM", ip.pou.name, src=ip.pou.src))
+        f = Frame(be)
+        lines = []
+        for member, t, value in ip.inputs:
+            dst = f"{ip.c_name}.{member}"
+            if isinstance(value, ast.Ref) and id(value.symbol) in self.by_var:
+                src = self.by_var[id(value.symbol)].c_name
+                from .expr import Raw
+                lines += be.assign_code(f, dst, t, Raw(src, value.symbol.type))
+            elif isinstance(value, ast.Direct):
+                from .expr import Raw
+                lines += be.assign_code(f, dst, t, Raw(_direct_c_name(value.address), t))
+            else:
+                lines += be.assign_code(f, dst, t, value)
+        return f, lines
+
+    @staticmethod
+    def connection_outputs(ip: InstancePlan):
+        lines = []
+        for gname, member, t in ip.outputs:
+            src = f"{ip.c_name}.{member}"
+            t0 = concrete(t)
+            if isinstance(t0, StringT):
+                w = "W" if t0.wide else ""
+                lines.append(f"iec_assign_{w.lower()}string(IEC_{w}STRBUF({gname}), "
+                             f"IEC_{w}STRV({src}));")
+            else:
+                lines.append(f"{gname} = {src};")
+        return lines
