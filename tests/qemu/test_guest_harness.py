@@ -59,19 +59,41 @@ def test_kernel_is_preempt_rt(guest):
 
 
 def test_host_python_with_pyroute2_in_chroot(guest):
-    rc, out = guest.python("import pyroute2, sys; print(sys.version)")
+    # a fresh interpreter (sys.executable of the host) inside the guest, with
+    # pyroute2 and this project (editable install, seen through 9p) importable
+    rc, out = guest.python("import pyroute2, sys; print(sys.version)\n"
+                           "import iec2kmod, os; print(os.path.dirname(iec2kmod.__file__))")
     assert rc == 0, out
-    assert out.strip() == sys.version
-    # the project itself is importable there (editable install seen via 9p)
-    rc, out = guest.python("import iec2kmod, os; print(os.path.dirname(iec2kmod.__file__))")
-    assert rc == 0, out
-    assert out.strip() == os.path.dirname(__import__("iec2kmod").__file__)
-    # and netlink works from it inside the guest: list the guest's links
-    rc, out = guest.python(
+    assert out.splitlines() == [sys.version,
+                                os.path.dirname(__import__("iec2kmod").__file__)]
+
+
+def test_pyrun_forks_a_warm_interpreter(guest, guest_tmp_path):
+    info = guest.start_pyserver()
+    assert "pyroute2" in info["preloaded"], info
+    t0 = time.monotonic()
+    rc, out = guest.pyrun(
+        "import sys, os\n"
         "from pyroute2 import IPRoute\n"
-        "with IPRoute() as ip: print(sorted(l.get_attr('IFLA_IFNAME') for l in ip.get_links()))")
+        "with IPRoute() as ip: names = [l.get_attr('IFLA_IFNAME') for l in ip.get_links()]\n"
+        "print(sys.argv[1:], os.getcwd(), os.environ['X'], names)",
+        argv=["a", "b"], env={"X": "y"}, cwd=str(guest_tmp_path))
     assert rc == 0, out
-    assert "'lo'" in out
+    assert out == f"['a', 'b'] {guest_tmp_path} y ['lo']\n"
+    assert time.monotonic() - t0 < 10            # a fork, not a 5-15 s interpreter start
+    assert guest.pyrun("raise SystemExit(4)") == (4, "")
+    rc, out = guest.pyrun("print('partial'); 1/0")
+    assert rc == 1 and out.startswith("partial\n") and "ZeroDivisionError" in out
+    assert "pyserver" not in out                 # the server's own frame is hidden
+    rc, out = guest.pyrun(module="json.tool", argv=["--help"])
+    assert rc == 0 and "usage:" in out
+    rc, out = guest.pyrun(script="pyroute2-decoder", argv=["--help"])
+    assert rc == 0 and "usage: pyroute2-decoder" in out
+    assert guest.pyrun(script="no-such-script")[0] == 127
+    with pytest.raises(GuestCommandTimeout) as ei:
+        guest.pyrun("import time; print('x', flush=True); time.sleep(60)", timeout=2)
+    assert ei.value.output == "x\n"
+    assert guest.pyrun("print('next')") == (0, "next\n")
 
 
 def test_workdir_is_shared_both_ways_at_the_same_path(guest, guest_tmp_path):
