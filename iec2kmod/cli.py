@@ -29,6 +29,16 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--no-cache", action="store_true", help="ignore the result cache")
     c.add_argument("--timings", action="store_true", help="print the time of each pass")
     c.add_argument("-j", "--jobs", type=int, default=None, help="parallel parser processes")
+    gp = sub.add_parser("gen", help="write the kbuild tree of a project's kernel modules")
+    gp.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
+    gp.add_argument("-o", "--output", required=True, metavar="OUT", help="output directory")
+    bp = sub.add_parser("build", help="build the kernel modules of a generated tree")
+    bp.add_argument("tree", metavar="OUT", help="directory written by `iec2kmod gen`")
+    bp.add_argument("--kdir", help="kernel build tree (default: the running kernel's, "
+                                   "else Debian's linux-headers-rt-amd64)")
+    bp.add_argument("--container", action="store_true",
+                    help="build inside the project's container image (docker)")
+    bp.add_argument("-j", "--jobs", type=int, default=0, help="make -j (default: cores)")
     s = sub.add_parser("sim", help="run a configuration on the host with a simulated clock")
     s.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
     g = s.add_mutually_exclusive_group(required=True)
@@ -126,7 +136,36 @@ def cmd_sim(args) -> int:
     return EXIT_SOURCE if res.faults else EXIT_OK
 
 
-COMMANDS = {"check": cmd_check, "sim": cmd_sim}
+def cmd_gen(args) -> int:
+    from pathlib import Path
+    from .kmod import generate_tree
+    project = front_end(args.files)
+    if project is None:
+        return EXIT_SOURCE
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        print(f"iec2kmod: error: {out} exists and is not a directory", file=sys.stderr)
+        return EXIT_USAGE
+    manifest = generate_tree(project, out)
+    print(f"wrote {out}: {len(manifest['modules'])} modules "
+          f"({', '.join(m['name'] for m in manifest['modules'])})")
+    return EXIT_OK
+
+
+def cmd_build(args) -> int:
+    from .kmod.build import BuildError, build_tree
+    try:
+        result = build_tree(args.tree, kdir=args.kdir, container=args.container,
+                            jobs=args.jobs)
+    except BuildError as exc:
+        print(f"iec2kmod: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    for line in result.messages:
+        print(line)
+    return EXIT_OK
+
+
+COMMANDS = {"check": cmd_check, "sim": cmd_sim, "gen": cmd_gen, "build": cmd_build}
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,470 @@
+"""Pass 'plan modules' + 'write tree': `iec2kmod gen PROJECT -o OUT`.
+
+Writes a kbuild tree:
+
+    OUT/Makefile               builds every module (config first, then the
+                               others with its Module.symvers)
+    OUT/manifest.json          what the manager needs: modules, load order,
+                               resources, tasks, GFT slots, variables
+    OUT/runtime/               the runtime C and headers, copied
+    OUT/include/               the project header and the image header
+    OUT/<module>/Kbuild        one directory per module
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+from jinja2 import Environment, FileSystemLoader, StrictUndefined
+
+from .. import __version__
+from ..checks.types import ArrayT, FBType, StringT, StructT, EnumT, concrete
+from ..codegen import generate, pou_order, uses_real
+from ..codegen import cnames as N
+from ..codegen.expr import Frame, Raw
+from ..codegen.body import BodyEmitter
+from ..codegen.plan import PlanEmitter, build_plan, kind_of
+from ..codegen.pou import InitEmitter, pou_struct
+
+RUNTIME_HEADERS = ("iec_platform.h", "iec_types.h", "iec_fault.h", "iec_int.h", "iec_conv.h",
+                   "iec_time.h", "iec_string.h", "iec_std_fb.h", "iec_real.h", "iec_gen.h")
+FP_FLAGS = "-mhard-float -msse -msse2 -fno-math-errno"
+DEFAULT_LOOP_BUDGET = 1_000_000
+
+
+def _env():
+    from kmod_templates import ROOT
+    return Environment(loader=FileSystemLoader([str(ROOT / "kernel"), str(ROOT / "c")]),
+                       undefined=StrictUndefined, keep_trailing_newline=True,
+                       trim_blocks=True, lstrip_blocks=True)
+
+
+def _ident(s: str) -> str:
+    return "".join(c if c.isalnum() else "_" for c in s.lower())
+
+
+def _sha(*texts) -> str:
+    h = hashlib.sha256()
+    for t in texts:
+        h.update(t.encode() if isinstance(t, str) else t)
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def _type_defs(t, out, seen, project):
+    """Struct text of every type an instance's layout depends on."""
+    t = concrete(t)
+    if isinstance(t, ArrayT):
+        out.append(f"array {t.name}")
+        _type_defs(t.elem, out, seen, project)
+    elif isinstance(t, StringT):
+        out.append(f"string {t.name}")
+    elif isinstance(t, EnumT):
+        out.append(f"enum {t.name} {sorted(t.values.values(), key=lambda x: x[1])} "
+                   f"{N.enum_base(t).name}")
+    elif isinstance(t, StructT):
+        if id(t) in seen:
+            return
+        seen.add(id(t))
+        for fname, ft, _ in t.fields.values():
+            out.append(f"field {t.name}.{fname}")
+            _type_defs(ft, out, seen, project)
+    elif isinstance(t, FBType):
+        pou = t.pou
+        if id(pou) in seen:
+            return
+        seen.add(id(pou))
+        if pou.standard:
+            out.append(f"standard {pou.name}")
+            return
+        out.append("\n".join(pou_struct(pou)))
+        for v in pou.vars.values():
+            _type_defs(v.type, out, seen, project)
+    else:
+        out.append(f"elementary {t.name}")
+
+
+def interface_hash(pou, project) -> str:
+    """Hash of a program type's interface: the layout of its instance state
+    (every variable, nested FB instance and type).  Algorithms may change
+    across a hot swap; this may not."""
+    parts = [f"abi 1", "\n".join(pou_struct(pou))]
+    seen = set()
+    for v in pou.vars.values():
+        parts.append(f"{v.section} {v.name} {getattr(v.type, 'name', '?')}")
+        _type_defs(v.type, parts, seen, project)
+    return _sha(*parts)[:16]
+
+
+def interface_description(pou):
+    return [{"name": v.name, "section": v.section, "type": getattr(v.type, "name", "?")}
+            for v in pou.vars.values()]
+
+
+def _deps(pou, project):
+    """The POUs a program type's module must contain, dependencies first."""
+    order = pou_order(project)
+    need = set()
+
+    def visit(p):
+        if p.key in need:
+            return
+        need.add(p.key)
+        for d in p.calls:
+            if d in project.pous:
+                visit(project.pous[d])
+        for v in p.vars.values():
+            if isinstance(v.type, FBType) and not v.type.pou.standard:
+                visit(v.type.pou)
+
+    visit(pou)
+    return [p for p in order if p.key in need]
+
+
+def generate_tree(project, out: Path) -> dict:
+    """Writes the kbuild tree; returns the manifest."""
+    from kmod_templates import ROOT
+    env = _env()
+    gen = generate(project)
+    plan = build_plan(project)
+    cfg = project.configurations[0]
+    cname = _ident(cfg.name)
+    sources = sorted((u.src.path, u.src.text) for u in project.units)
+    source_hash = _sha(*[p + "\0" + t for p, t in sources])[:16]
+
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "runtime").mkdir(exist_ok=True)
+    (out / "include").mkdir(exist_ok=True)
+    for f in list((ROOT / "runtime").glob("*.[ch]")) + list((ROOT / "kernel").glob("*.[ch]")):
+        shutil.copyfile(f, out / "runtime" / f.name)
+    (out / "include" / gen.header_name).write_text(gen.header)
+    for key in gen.order:
+        name, text = gen.bodies[key]
+        (out / "include" / name).write_text(text)
+
+    # ------------------------------------------------- program types
+    used_types = []
+    for r in cfg.resources:
+        for inst in r.programs:
+            if inst.pou.key not in [p.key for p in used_types]:
+                used_types.append(inst.pou)
+    slots = []
+    prog_modules = []
+    for i, pou in enumerate(used_types):
+        ihash = interface_hash(pou, project)
+        deps = _deps(pou, project)
+        fpu = uses_real(pou, project)
+        prefix = N.pou_prefix(pou)
+        body = env.get_template("program_body.c.j2").render(
+            type=pou.name, header=gen.header_name, bodies=[gen.bodies[p.key][0] for p in deps],
+            prefix=prefix, uses_fpu=fpu, version=__version__)
+        build_id = _sha(body, *[gen.bodies[p.key][1] for p in deps], gen.header)[:8]
+        mod = f"iec_{cname}_p_{_ident(pou.name)}_{build_id}"
+        main = env.get_template("program_main.c.j2").render(
+            type=pou.name, type_upper=pou.name.upper(), build_id=build_id, config=cfg.name,
+            header=gen.header_name, prefix=prefix, iface_hash=ihash, uses_fpu=fpu,
+            version=__version__, source_hash=source_hash)
+        objs = ["main.o", "body.o", "iec_string.o", "iec_std_fb.o"]
+        fp_objs = ["body.o"]
+        if fpu:
+            objs.append("iec_math.o")
+            fp_objs.append("iec_math.o")
+        _write_module(out, mod, {"main.c": main, "body.c": body}, objs, fp_objs,
+                      runtime=["iec_string.c", "iec_std_fb.c"] + (["iec_math.c"] if fpu else []))
+        slots.append({"name": pou.name.upper(), "hash": ihash})
+        prog_modules.append({"name": mod, "kind": "program", "program_type": pou.name,
+                             "slot": i, "build_id": build_id, "interface_hash": ihash,
+                             "uses_fpu": fpu, "dir": mod,
+                             "interface": interface_description(pou)})
+
+    # ------------------------------------------------- configuration module
+    pe = PlanEmitter(project, plan)
+    image_members = []
+    single_events = {}
+    for tp in plan.tasks:
+        if tp.single is not None and id(tp.single.var) not in single_events:
+            single_events[id(tp.single.var)] = len(single_events)
+    cfg_globals = [g for g in plan.globals if g.resource is None]
+    for g in cfg_globals:
+        image_members.append(N.declare(g.var.type, g.c_name))
+    for c_name, t in plan.directs.values():
+        image_members.append(N.declare(t, c_name))
+    image_h = env.get_template("image.h.j2").render(config=cfg.name, version=__version__,
+                                                    members=image_members)
+    (out / "include" / "iec_image.h").write_text(image_h)
+    ie = InitEmitter(project)
+    f = Frame(ie.body_emitter())
+    init = []
+    for g in cfg_globals:
+        init += ie.lines(f"iec2kmod_image.{g.c_name}", g.var.type, g.var.init, f)
+    cfg_vars = []
+    res_vars: dict[str, list] = {r.name: [] for r in cfg.resources}
+    for e in plan.table:
+        event = 0
+        if e.owner in ("global", "direct"):
+            g = next((g for g in plan.globals if g.c_name == e.c_lvalue.split("[")[0]
+                      .split(".")[0]), None)
+            if g is not None and g.resource is not None:
+                res_vars[g.resource].append((e, f"res_image.{e.c_lvalue}", 0))
+                continue
+            if g is not None and id(g.var) in single_events and e.c_lvalue == g.c_name:
+                event = single_events[id(g.var)] + 1
+            cfg_vars.append({"path": N.c_string(e.path.encode()), "member": e.c_lvalue,
+                             "kind": e.kind, "writable": int(e.writable), "event": event})
+        else:
+            res = next(ip.resource for ip in plan.instances if ip.path == e.owner)
+            res_vars[res].append((e, e.c_lvalue, 0))
+    iface_hash = _sha(*[f"{s['name']}={s['hash']}" for s in slots],
+                      *[f"{g.path}:{getattr(g.var.type, 'name', '?')}"
+                        for g in plan.globals])[:16]
+    config_mod = f"iec_{cname}_config"
+    main = env.get_template("config_main.c.j2").render(
+        config=cfg.name, config_lower=cfg.name.lower(), version=__version__,
+        source_hash=source_hash, iface_hash=iface_hash, header=gen.header_name,
+        image_header="iec_image.h", slots=slots, vars=cfg_vars, nevents=len(single_events),
+        init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init)
+    _write_module(out, config_mod, {"main.c": main},
+                  ["main.o", "iec_config_rt.o", "iec_ctl.o", "iec_string.o"], [],
+                  runtime=["iec_config_rt.c", "iec_ctl.c", "iec_string.c"])
+
+    # ------------------------------------------------- resource modules
+    res_modules = []
+    slot_of = {p.key: i for i, p in enumerate(used_types)}
+    for r in cfg.resources:
+        mod = f"iec_{cname}_r_{_ident(r.name)}"
+        text = _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events,
+                                res_vars[r.name], source_hash, iface_hash)
+        _write_module(out, mod, {"main.c": text}, ["main.o", "iec_string.o", "iec_std_fb.o"],
+                      [], runtime=["iec_string.c", "iec_std_fb.c"])
+        res_modules.append({"name": mod, "kind": "resource", "resource": r.name, "dir": mod,
+                            "cpu": _cpu_of(r.processor)})
+
+    manifest = _manifest(cfg, plan, config_mod, prog_modules, res_modules, source_hash,
+                         iface_hash, single_events)
+    (out / "manifest.json").write_text(json.dumps(manifest, indent=2, sort_keys=False) + "\n")
+    modules = [config_mod] + [m["name"] for m in prog_modules] + [m["name"] for m in res_modules]
+    (out / "Makefile").write_text(_top_makefile(config_mod, modules[1:]))
+    return manifest
+
+
+def _cpu_of(processor):
+    """RESOURCE r ON CPU1 pins the resource's tasks to CPU 1; other
+    processor names leave them unpinned."""
+    if processor and processor.upper().startswith("CPU") and processor[3:].isdigit():
+        return int(processor[3:])
+    return -1
+
+
+def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, vars_,
+                     source_hash, iface_hash):
+    res_globals = [g for g in plan.globals if g.resource == r.name]
+    instances = [ip for ip in plan.instances if ip.resource == r.name]
+    ie = InitEmitter(project)
+    f = Frame(ie.body_emitter())
+    init = []
+    for g in res_globals:
+        init += ie.lines(f"res_image.{g.c_name}", g.var.type, g.var.init, f)
+    for ip in instances:
+        init.append(f"{N.pou_prefix(ip.pou)}_init(&{ip.c_name});")
+    tasks = []
+    pe = PlanEmitter(project, plan)
+    by_c = {g.c_name: g for g in plan.globals}
+    for tp in [t for t in plan.tasks if t.resource == r.name]:
+        used: dict[str, tuple] = {}   # global C name -> (read, write)
+
+        def use(name, read, write):
+            a, b = used.get(name, (False, False))
+            used[name] = (a or read, b or write)
+
+        for ip in tp.instances:
+            inst = _instance(cfg, ip)
+            for key, g in inst.externals.items():
+                ext = ip.pou.vars[key]
+                use(_global_c(plan, g), True, ext.assigned and not g.constant)
+            for param, value in inst.inputs:
+                if hasattr(value, "symbol") and value.symbol is not None and \
+                        id(value.symbol) in {id(x.var) for x in plan.globals}:
+                    use(_global_c(plan, value.symbol), True, False)
+                elif getattr(value, "address", None):
+                    use(plan.directs[value.address][0], True, False)
+            for param, target in inst.outputs:
+                if getattr(target, "address", None):
+                    use(plan.directs[target.address][0], False, True)
+                else:
+                    use(_global_c(plan, target.symbol), False, True)
+        image, copy_in, copy_out, events = [], [], [], []
+        for name, (rd, wr) in used.items():
+            g = by_c.get(name)
+            t = g.var.type if g is not None else next(
+                t for c, t in plan.directs.values() if c == name)
+            src = f"res_image.{name}" if g is not None and g.resource else \
+                f"iec2kmod_image.{name}"
+            image.append(N.declare(t, name))
+            copy_in.append(_copy(f"task{tp.index}_image.{name}", src, t))
+            if wr:
+                if g is not None and id(g.var) in single_events:
+                    ev = single_events[id(g.var)]
+                    copy_out.append(f"if (!{src} && task{tp.index}_image.{name})")
+                    copy_out.append(f"\tevents[nevents++] = {ev};")
+                    events.append(ev)
+                copy_out.append(_copy(src, f"task{tp.index}_image.{name}", t))
+        run = []
+        for ip in tp.instances:
+            cf, lines = _connection_inputs(pe, ip, tp)
+            run.append(f"/* {ip.path} : {ip.pou.name} */")
+            block = cf.pre + lines
+            block.append(f"if (iec2kmod_run_program({slot_of[ip.pou.key]}, &{ip.c_name}, ctx))")
+            block.append("\treturn;")
+            for gname, member, t in ip.outputs:
+                block.append(_copy(f"task{tp.index}_image.{gname}", f"{ip.c_name}.{member}", t))
+            run += (["{"] + ["\t" + d for d in cf.decls + block] + ["}"]) if cf.decls else block
+        if not run:
+            run = ["(void)ctx;"]
+        tasks.append({"index": tp.index, "name": tp.name, "interval": tp.interval_ns or 0,
+                      "priority": tp.priority,
+                      "single_event": single_events[id(tp.single.var)] if tp.single else -1,
+                      "loop_budget": DEFAULT_LOOP_BUDGET, "image": image,
+                      "copy_in": copy_in, "copy_out": copy_out, "events": events, "run": run})
+        for ip in tp.instances:
+            for member, gname, is_array in ip.externals:
+                init.append(f"{ip.c_name}.{member} = {'' if is_array else '&'}"
+                            f"task{tp.index}_image.{gname};")
+    vars_out = [{"path": N.c_string(e.path.encode()), "lvalue": lv, "kind": e.kind,
+                 "writable": int(e.writable), "event": ev} for e, lv, ev in vars_]
+    return env.get_template("resource_main.c.j2").render(
+        resource=r.name, resource_lower=r.name.lower(), config=cfg.name, version=__version__,
+        header=gen.header_name, image_header="iec_image.h",
+        res_globals=[N.declare(g.var.type, g.c_name) for g in res_globals],
+        instances=[f"{N.pou_struct(ip.pou)} {ip.c_name}" for ip in instances], tasks=tasks,
+        vars=vars_out, cpu=_cpu_of(r.processor), init_decls=f.decls,
+        needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init,
+        source_hash=source_hash, iface_hash=iface_hash)
+
+
+def _instance(cfg, ip):
+    for r in cfg.resources:
+        for inst in r.programs:
+            if r.name == ip.resource and inst.name == ip.path.split(".")[-1]:
+                return inst
+    raise KeyError(ip.path)
+
+
+def _global_c(plan, var):
+    for g in plan.globals:
+        if g.var is var:
+            return g.c_name
+    raise KeyError(var.name)
+
+
+def _copy(dst, src, t):
+    t = concrete(t)
+    if isinstance(t, StringT):
+        w = "W" if t.wide else ""
+        return f"iec_assign_{w.lower()}string(IEC_{w}STRBUF({dst}), IEC_{w}STRV({src}));"
+    if isinstance(t, ArrayT):
+        return f"iec_memcpy({dst}, {src}, sizeof({dst}));"
+    return f"{dst} = {src};"
+
+
+def _connection_inputs(pe, ip, tp):
+    """Program inputs from the task image (globals, process image) or constants."""
+    from .. import ast
+    be = BodyEmitter(pe.ie.body_emitter().pou)
+    f = Frame(be)
+    lines = []
+    for member, t, value in ip.inputs:
+        dst = f"{ip.c_name}.{member}"
+        if isinstance(value, ast.Ref) and id(value.symbol) in pe.by_var:
+            src = f"task{tp.index}_image.{pe.by_var[id(value.symbol)].c_name}"
+            lines += be.assign_code(f, dst, t, Raw(src, value.symbol.type))
+        elif isinstance(value, ast.Direct):
+            from ..codegen.plan import _direct_c_name
+            lines += be.assign_code(f, dst, t, Raw(f"task{tp.index}_image."
+                                                   f"{_direct_c_name(value.address)}", t))
+        else:
+            lines += be.assign_code(f, dst, t, value)
+    return f, lines
+
+
+def _write_module(out, mod, files, objs, fp_objs, runtime):
+    d = out / mod
+    d.mkdir(exist_ok=True)
+    for name, text in files.items():
+        (d / name).write_text(text)
+    for r in runtime:
+        # kbuild compiles sources inside the module directory: a small
+        # wrapper includes the shared runtime file
+        (d / r).write_text(f'// SPDX-License-Identifier: GPL-2.0-only OR MIT\n'
+                           f'#include "../runtime/{r}"\n')
+    lines = [
+        "# SPDX-License-Identifier: GPL-2.0-only OR MIT",
+        f"# Module {mod}: generated by iec2kmod {__version__}.  Do not edit.",
+        f"obj-m := {mod}.o",
+        f"{mod}-y := {' '.join(objs)}",
+        "ccflags-y := -I$(src)/../runtime -I$(src)/../include -std=gnu11",
+    ]
+    for o in fp_objs:
+        lines.append(f"CFLAGS_{o} += {FP_FLAGS}")
+    (d / "Kbuild").write_text("\n".join(lines) + "\n")
+
+
+def _top_makefile(config_mod, others):
+    return f"""# SPDX-License-Identifier: GPL-2.0-only OR MIT
+# Generated by iec2kmod {__version__}.  Builds every module against KDIR:
+#   make KDIR=/lib/modules/$(uname -r)/build
+# The configuration module first: the others import its symbols.
+KDIR ?= /lib/modules/$(shell uname -r)/build
+PWD := $(shell pwd)
+CONFIG := {config_mod}
+OTHERS := {' '.join(others)}
+
+all:
+\t$(MAKE) -C $(KDIR) M=$(PWD)/$(CONFIG) modules
+\tfor m in $(OTHERS); do \\
+\t\t$(MAKE) -C $(KDIR) M=$(PWD)/$$m KBUILD_EXTRA_SYMBOLS=$(PWD)/$(CONFIG)/Module.symvers modules || exit 1; \\
+\tdone
+
+clean:
+\tfor m in $(CONFIG) $(OTHERS); do $(MAKE) -C $(KDIR) M=$(PWD)/$$m clean; done
+
+.PHONY: all clean
+"""
+
+
+def _manifest(cfg, plan, config_mod, prog_modules, res_modules, source_hash, iface_hash,
+              single_events):
+    tasks_by_res = {}
+    for tp in plan.tasks:
+        tasks_by_res.setdefault(tp.resource, []).append({
+            "name": tp.name, "interval_ns": tp.interval_ns, "priority": tp.priority,
+            "single": tp.single.path if tp.single else None,
+            "programs": [ip.path for ip in tp.instances]})
+    variables = []
+    for e in plan.table:
+        variables.append({"path": e.path, "type": getattr(e.type, "name", "?"),
+                          "kind": e.kind, "size": e.size, "writable": e.writable,
+                          "owner": e.owner})
+    return {
+        "format": 1,
+        "generator": f"iec2kmod {__version__}",
+        "configuration": cfg.name,
+        "source_hash": source_hash,
+        "interface_hash": iface_hash,
+        "modules": ([{"name": config_mod, "kind": "configuration", "dir": config_mod,
+                      "depends": []}] +
+                    [dict(m, depends=[config_mod]) for m in prog_modules] +
+                    [dict(m, depends=[config_mod] + [p["name"] for p in prog_modules])
+                     for m in res_modules]),
+        "load_order": [config_mod] + [m["name"] for m in prog_modules] +
+                      [m["name"] for m in res_modules],
+        "resources": [{"name": m["resource"], "module": m["name"], "cpu": m["cpu"],
+                       "tasks": tasks_by_res.get(m["resource"], [])} for m in res_modules],
+        "program_types": [{"name": m["program_type"], "slot": m["slot"], "module": m["name"],
+                           "build_id": m["build_id"], "interface_hash": m["interface_hash"],
+                           "uses_fpu": m["uses_fpu"], "interface": m["interface"]}
+                          for m in prog_modules],
+        "variables": variables,
+    }

@@ -1,0 +1,108 @@
+"""`iec2kmod build OUT [--kdir DIR] [--container]`: kbuild of a generated
+tree, module by module in load order (the configuration module first, the
+others with its Module.symvers), W=1.  Compiler messages about generated
+files are mapped back to the IEC source where the generated line says
+where it came from."""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .. import kbuild
+
+
+class BuildError(Exception):
+    def __init__(self, message, exit_code=1):
+        super().__init__(message)
+        self.exit_code = exit_code
+
+
+@dataclass
+class TreeBuild:
+    kdir: str
+    release: str
+    modules: list = field(default_factory=list)      # .ko paths in load order
+    warnings: list = field(default_factory=list)
+    messages: list = field(default_factory=list)
+
+
+def load_manifest(tree: Path) -> dict:
+    path = tree / "manifest.json"
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise BuildError(f"{tree}: no manifest.json (write the tree with `iec2kmod gen`)",
+                         2) from None
+    except (OSError, ValueError) as exc:
+        raise BuildError(f"{path}: {exc}", 2) from None
+
+
+def build_tree(tree, kdir=None, container=False, jobs=0) -> TreeBuild:
+    tree = Path(tree).resolve()
+    manifest = load_manifest(tree)
+    if container:
+        return _build_in_container(tree, manifest, kdir, jobs)
+    try:
+        kdir = kdir or kbuild.find_kdir()
+        release = kbuild.kernel_release(kdir)
+    except kbuild.KbuildError as exc:
+        raise BuildError(str(exc), 2) from None
+    result = TreeBuild(kdir, release)
+    config = manifest["load_order"][0]
+    for name in manifest["load_order"]:
+        extra = []
+        if name != config:
+            extra.append(f"KBUILD_EXTRA_SYMBOLS={tree / config / 'Module.symvers'}")
+        try:
+            res = kbuild.build_modules(str(tree / name), kdir=kdir, extra_args=extra,
+                                       jobs=jobs or None)
+        except kbuild.KbuildError as exc:
+            raise BuildError(str(exc), 2) from None
+        warnings = res.warnings()
+        if not res.ok:
+            raise BuildError(f"kbuild of {name} failed:\n{_explain(res.output, tree)}", 70)
+        result.warnings += warnings
+        result.modules.append(str(tree / name / f"{name}.ko"))
+        result.messages.append(f"built {name}.ko ({res.duration:.1f} s"
+                               f"{', %d warnings' % len(warnings) if warnings else ''})")
+    manifest["kernel_release"] = release
+    (tree / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
+    if result.warnings:
+        raise BuildError("the generated modules built with warnings (a bug of iec2kmod):\n" +
+                         "\n".join(result.warnings[:20]), 70)
+    result.messages.append(f"{len(result.modules)} modules for kernel {release}")
+    return result
+
+
+_GEN_LINE = re.compile(r"^(?P<file>[^:\s]+\.[ch]):(?P<line>\d+):(?P<col>\d+): (?P<rest>.*)$")
+
+
+def _explain(output: str, tree: Path) -> str:
+    """The compiler's first errors; a failure to build generated C is an
+    internal error of iec2kmod, reported with where the C came from."""
+    lines = [ln for ln in output.splitlines() if "error" in ln or "warning" in ln]
+    return "\n".join(lines[:20]) or output[-3000:]
+
+
+def _build_in_container(tree: Path, manifest, kdir, jobs) -> TreeBuild:
+    try:
+        from .. import container
+    except ImportError as exc:
+        raise BuildError(f"the container build needs the docker SDK: {exc}", 2) from None
+    try:
+        res = container.build_tree_in_container(str(tree), manifest["load_order"], kdir=kdir,
+                                                jobs=jobs)
+    except container.ContainerError as exc:
+        raise BuildError(str(exc), 2) from None
+    out = TreeBuild(res.kdir, res.release, res.modules, res.warnings, res.messages)
+    if res.returncode != 0:
+        raise BuildError(f"container build failed:\n{res.output[-3000:]}", 70)
+    if res.warnings:
+        raise BuildError("the generated modules built with warnings:\n" +
+                         "\n".join(res.warnings[:20]), 70)
+    manifest["kernel_release"] = res.release
+    (tree / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
+    return out

@@ -1,0 +1,164 @@
+/* SPDX-License-Identifier: GPL-2.0-only OR MIT */
+/*
+ * iec_kmod.h - the interface between the modules of one IEC configuration.
+ *
+ *   configuration module  the global image, the process image, the GFT,
+ *                         the lock that makes copy-in/copy-out atomic,
+ *                         sysfs and generic netlink (iec_config_rt.c,
+ *                         iec_ctl.c); exports the iec2kmod_* functions
+ *   resource module       program instances (their state), the resource's
+ *                         globals, one kthread per TASK (iec_resource_rt.c)
+ *   program-type module   the body of one program type and everything it
+ *                         calls; publishes it into its GFT slot on insert
+ *
+ * The exported names are fixed, so a second configuration module cannot be
+ * loaded next to the first: one configuration at a time.
+ */
+#ifndef IEC_KMOD_H
+#define IEC_KMOD_H
+
+#include <linux/types.h>
+#include <linux/ktime.h>
+#include <linux/list.h>
+#include <linux/module.h>
+#include <linux/rcupdate.h>
+
+#include "iec_fault.h"
+
+#define IEC_KMOD_ABI		1
+#define IEC_HIST_BUCKETS	32	/* release latency histogram, 1 us wide */
+
+/* One variable the manager can read and write by its IEC path. */
+struct iec_var_desc {
+	const char *path;
+	void *addr;
+	u32 size;		/* bytes of the C object */
+	char kind;		/* b i u f t e s w (see codegen/plan.py) */
+	u8 writable;
+	u16 single_event;	/* 1 + event number if it is a SINGLE variable */
+};
+
+/* A program type's body, published into its GFT slot. */
+struct iec_program_type {
+	const char *type_name;
+	const char *build_id;	/* identifies this build of the module */
+	u64 iface_hash;		/* layout of the instance state */
+	void (*body)(void *self, struct iec_ctx *ctx);
+	bool uses_fpu;
+	struct module *owner;
+};
+
+struct iec_gft_slot {
+	const char *type_name;
+	u64 iface_hash;
+	struct iec_program_type __rcu *cur;
+	ktime_t since;		/* CLOCK_REALTIME of the last publication */
+	u64 publications;
+};
+
+enum iec_task_state {
+	IEC_TASK_STOPPED = 0,
+	IEC_TASK_RUNNING,
+	IEC_TASK_FAULT,
+};
+
+struct iec_task_stats {
+	u64 cycles;
+	u64 overruns;		/* releases missed because a cycle ran late */
+	u64 faults;
+	s64 exec_min_ns;
+	s64 exec_max_ns;
+	s64 exec_sum_ns;
+	s64 latency_max_ns;	/* release jitter: wake-up minus deadline */
+	s64 latency_sum_ns;
+	u64 hist[IEC_HIST_BUCKETS];	/* latency, 1 us buckets, last: more */
+	/* the first fault since the last start */
+	int fault_code;
+	const char *fault_pou;
+	int fault_line;
+};
+
+struct iec_resource;
+
+/* One TASK: static description from the generator, runtime state. */
+struct iec_task {
+	const char *name;
+	s64 interval_ns;	/* 0: event task */
+	int priority;		/* IEC priority, 0 most urgent */
+	int single_event;	/* event number of its SINGLE variable, -1 none */
+	u32 loop_budget;	/* iterations per cycle before "endless loop" */
+	/* generated: copy in, run the programs, copy out */
+	void (*copy_in)(void);
+	void (*run)(struct iec_ctx *ctx);
+	void (*copy_out)(void);
+
+	/* runtime */
+	struct iec_resource *res;
+	struct task_struct *thread;
+	struct iec_ctx ctx;
+	int state;			/* enum iec_task_state */
+	bool event_pending;
+	bool start_request;
+	ktime_t next;
+	struct iec_task_stats stats;
+};
+
+struct iec_resource {
+	const char *name;
+	int cpu;			/* -1: not pinned */
+	struct iec_task *tasks;
+	u32 ntasks;
+	const struct iec_var_desc *vars;
+	u32 nvars;
+	struct module *owner;
+	/* control, implemented by the resource runtime (static there) */
+	int (*start)(struct iec_resource *res);
+	void (*stop)(struct iec_resource *res);
+	/* runtime, owned by the configuration module */
+	struct list_head node;
+	struct kobject *kobj;
+};
+
+/* The configuration, described by the generated configuration module. */
+struct iec_config {
+	const char *name;
+	const char *source_hash;	/* sha256 of the IEC sources */
+	const char *iface_hash;		/* hash of the configuration's interface */
+	struct iec_gft_slot *slots;
+	u32 nslots;
+	const struct iec_var_desc *vars;	/* globals and process image */
+	u32 nvars;
+	u32 nevents;			/* SINGLE variables */
+};
+
+/* --- exported by the configuration module ----------------------------- */
+
+/* The lock of copy-in/copy-out: a raw spinlock, short bounded sections. */
+void iec2kmod_image_lock(void);
+void iec2kmod_image_unlock(void);
+
+/* Runs the body in GFT slot @slot on @self (SRCU read side inside);
+ * -ENOENT when the slot is empty, -ENODATA after a fault. */
+int iec2kmod_run_program(u32 slot, void *self, struct iec_ctx *ctx);
+
+/* Program-type module init: fills its slot if the interface hash matches. */
+int iec2kmod_gft_publish(struct iec_program_type *type);
+
+/* Resource module init/exit. */
+int iec2kmod_register_resource(struct iec_resource *res);
+void iec2kmod_unregister_resource(struct iec_resource *res);
+
+/* A SINGLE variable rose: wake the event tasks waiting for it. */
+void iec2kmod_event(u32 event);
+
+/* --- inside the configuration module (iec_config_rt.c, iec_ctl.c) ----- */
+int iec_config_init(struct iec_config *cfg);
+void iec_config_exit(struct iec_config *cfg);
+extern struct iec_config *iec_cfg;
+extern struct list_head iec_resources;
+extern struct mutex iec_resources_lock;
+int iec_ctl_init(void);
+void iec_ctl_exit(void);
+int iec_gft_clear(u32 slot);
+
+#endif /* IEC_KMOD_H */

@@ -1,0 +1,262 @@
+// SPDX-License-Identifier: GPL-2.0-only OR MIT
+/*
+ * iec_resource_rt.c - the task loop of a resource module.  Included by the
+ * generated resource module (its functions are static: every resource
+ * module has its own copy).
+ *
+ * One kthread per TASK, created stopped.  A periodic task sleeps until an
+ * absolute deadline (hrtimer, hard mode: the timerlat pattern); a deadline
+ * already in the past when the cycle ends is an overrun: the missed
+ * releases are skipped and counted.  An event task sleeps until its SINGLE
+ * variable rises (iec2kmod_event()).  Each cycle: copy the globals in under
+ * the image lock, run the programs, copy the written globals out, account.
+ * IEC priority 0..48 maps to SCHED_FIFO 49..1: below the threaded
+ * interrupt handlers (50), as on OpenPLC and LinuxCNC.
+ */
+#include <linux/cpumask.h>
+#include <linux/delay.h>
+#include <linux/hrtimer.h>
+#include <linux/kthread.h>
+#include <linux/sched.h>
+#include <linux/sched/types.h>
+#include <uapi/linux/sched/types.h>
+
+#include "iec_kmod.h"
+
+#define IEC_FIFO_TOP	49
+
+static void iec_task_account(struct iec_task *t, s64 latency, s64 exec)
+{
+	struct iec_task_stats *s = &t->stats;
+	u64 bucket;
+
+	s->cycles++;
+	if (latency < 0)
+		latency = 0;
+	bucket = (u64)latency / NSEC_PER_USEC;
+	s->hist[min_t(u64, bucket, IEC_HIST_BUCKETS - 1)]++;
+	if (latency > s->latency_max_ns)
+		s->latency_max_ns = latency;
+	s->latency_sum_ns += latency;
+	if (s->cycles == 1 || exec < s->exec_min_ns)
+		s->exec_min_ns = exec;
+	if (exec > s->exec_max_ns)
+		s->exec_max_ns = exec;
+	s->exec_sum_ns += exec;
+}
+
+static void iec_task_cycle(struct iec_task *t, ktime_t release)
+{
+	ktime_t start = ktime_get();
+
+	iec_ctx_cycle_begin(&t->ctx, ktime_to_ns(start));
+	t->copy_in();
+	t->run(&t->ctx);
+	if (t->ctx.fault != IEC_FAULT_NONE) {
+		/* the task stops; its results of this cycle are not written */
+		t->stats.faults++;
+		t->stats.fault_code = t->ctx.fault;
+		t->stats.fault_pou = t->ctx.fault_pou;
+		t->stats.fault_line = t->ctx.fault_line;
+		smp_store_release(&t->state, IEC_TASK_FAULT);
+		pr_warn("iec2kmod: task %s.%s stopped: %s in %s line %d\n",
+			t->res->name, t->name, iec_fault_name(t->ctx.fault),
+			t->ctx.fault_pou ? t->ctx.fault_pou : "?",
+			t->ctx.fault_line);
+	} else {
+		t->copy_out();
+	}
+	iec_task_account(t, ktime_to_ns(ktime_sub(start, release)),
+			 ktime_to_ns(ktime_sub(ktime_get(), start)));
+}
+
+/* Sleeps until the absolute monotonic deadline; false if told to stop. */
+static bool iec_sleep_until(struct iec_task *t, ktime_t deadline)
+{
+	while (!kthread_should_stop() &&
+	       smp_load_acquire(&t->state) == IEC_TASK_RUNNING) {
+		ktime_t d = deadline;
+
+		set_current_state(TASK_INTERRUPTIBLE);
+		if (schedule_hrtimeout_range(&d, 0, HRTIMER_MODE_ABS_HARD) == 0)
+			return true;
+	}
+	__set_current_state(TASK_RUNNING);
+	return false;
+}
+
+static bool iec_wait_event(struct iec_task *t)
+{
+	for (;;) {
+		set_current_state(TASK_INTERRUPTIBLE);
+		if (kthread_should_stop() ||
+		    smp_load_acquire(&t->state) != IEC_TASK_RUNNING) {
+			__set_current_state(TASK_RUNNING);
+			return false;
+		}
+		if (READ_ONCE(t->event_pending)) {
+			__set_current_state(TASK_RUNNING);
+			WRITE_ONCE(t->event_pending, false);
+			return true;
+		}
+		schedule();
+	}
+}
+
+static void iec_wait_started(struct iec_task *t)
+{
+	for (;;) {
+		set_current_state(TASK_INTERRUPTIBLE);
+		if (kthread_should_stop() ||
+		    smp_load_acquire(&t->state) == IEC_TASK_RUNNING)
+			break;
+		schedule();
+	}
+	__set_current_state(TASK_RUNNING);
+}
+
+static int iec_task_thread(void *arg)
+{
+	struct iec_task *t = arg;
+
+	while (!kthread_should_stop()) {
+		iec_wait_started(t);
+		if (kthread_should_stop())
+			break;
+		if (!t->interval_ns) {
+			while (iec_wait_event(t))
+				iec_task_cycle(t, ktime_get());
+			continue;
+		}
+		t->next = ktime_get();
+		for (;;) {
+			s64 late;
+
+			iec_task_cycle(t, t->next);
+			if (smp_load_acquire(&t->state) != IEC_TASK_RUNNING)
+				break;
+			t->next = ktime_add_ns(t->next, t->interval_ns);
+			late = ktime_to_ns(ktime_sub(ktime_get(), t->next));
+			if (late > 0) {
+				/* skip the releases that already passed */
+				u64 missed = div64_u64((u64)late, t->interval_ns) + 1;
+
+				t->stats.overruns += missed;
+				t->next = ktime_add_ns(t->next, missed * t->interval_ns);
+			}
+			if (!iec_sleep_until(t, t->next))
+				break;
+		}
+	}
+	return 0;
+}
+
+static int iec_task_create(struct iec_resource *res, struct iec_task *t)
+{
+	struct sched_attr attr = {
+		.size = sizeof(attr),
+		.sched_policy = SCHED_FIFO,
+		.sched_priority = IEC_FIFO_TOP - t->priority,
+	};
+	struct task_struct *p;
+	int ret;
+
+	t->res = res;
+	iec_ctx_init(&t->ctx, t->loop_budget);
+	p = kthread_create(iec_task_thread, t, "iec/%s/%s", res->name, t->name);
+	if (IS_ERR(p))
+		return PTR_ERR(p);
+	if (res->cpu >= 0) {
+		if (!cpu_online(res->cpu)) {
+			kthread_stop(p);
+			pr_err("iec2kmod: resource %s: CPU %d is not online\n",
+			       res->name, res->cpu);
+			return -ENODEV;
+		}
+		kthread_bind(p, res->cpu);
+	}
+	ret = sched_setattr_nocheck(p, &attr);
+	if (ret) {
+		kthread_stop(p);
+		return ret;
+	}
+	t->thread = p;
+	wake_up_process(p);	/* it waits for start */
+	return 0;
+}
+
+static int iec_resource_start(struct iec_resource *res)
+{
+	u32 i;
+
+	for (i = 0; i < res->ntasks; i++) {
+		struct iec_task *t = &res->tasks[i];
+
+		if (smp_load_acquire(&t->state) == IEC_TASK_RUNNING)
+			continue;
+		iec_fault_clear(&t->ctx);
+		t->stats.fault_code = 0;
+		t->stats.fault_pou = NULL;
+		t->stats.fault_line = 0;
+		WRITE_ONCE(t->event_pending, false);
+		smp_store_release(&t->state, IEC_TASK_RUNNING);
+		wake_up_process(t->thread);
+	}
+	return 0;
+}
+
+static void iec_resource_stop(struct iec_resource *res)
+{
+	u32 i;
+
+	for (i = 0; i < res->ntasks; i++) {
+		struct iec_task *t = &res->tasks[i];
+
+		if (smp_load_acquire(&t->state) == IEC_TASK_RUNNING)
+			smp_store_release(&t->state, IEC_TASK_STOPPED);
+		wake_up_process(t->thread);
+	}
+}
+
+static void iec_resource_destroy(struct iec_resource *res)
+{
+	u32 i;
+
+	for (i = 0; i < res->ntasks; i++) {
+		struct iec_task *t = &res->tasks[i];
+
+		if (!t->thread)
+			continue;
+		smp_store_release(&t->state, IEC_TASK_STOPPED);
+		kthread_stop(t->thread);	/* waits for the cycle to end */
+		t->thread = NULL;
+	}
+}
+
+static int iec_resource_init(struct iec_resource *res)
+{
+	u32 i;
+	int ret;
+
+	res->start = iec_resource_start;
+	res->stop = iec_resource_stop;
+	for (i = 0; i < res->ntasks; i++) {
+		ret = iec_task_create(res, &res->tasks[i]);
+		if (ret)
+			goto err_threads;
+	}
+	ret = iec2kmod_register_resource(res);
+	if (ret)
+		goto err_threads;
+	return 0;
+
+err_threads:
+	iec_resource_destroy(res);
+	return ret;
+}
+
+static void iec_resource_exit(struct iec_resource *res)
+{
+	iec2kmod_unregister_resource(res);
+	iec_resource_destroy(res);
+}
