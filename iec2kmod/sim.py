@@ -42,6 +42,7 @@ class SimResult:
     faults: list = field(default_factory=list)   # (t_ns, task, fault, pou, file, line)
     cycles: dict = field(default_factory=dict)   # task -> cycles run
     end_ns: int = 0
+    stderr: str = ""                             # the simulator's stderr (sanitizer reports)
 
     def values_at(self, t_ns=None):
         """Last value of every watched variable at time t (default: the end)."""
@@ -121,15 +122,58 @@ CFLAGS = ["-std=gnu11", "-O1", "-Wall", "-Wextra", "-Werror", "-Wno-unused-funct
           "-Wno-unused-variable", "-Wno-unused-but-set-variable"]
 
 
+def _compiler():
+    cc = os.environ.get("CC", "gcc")
+    if shutil.which(cc) is None:
+        raise SimError(f"no C compiler '{cc}' found: install gcc (apt-get install gcc)")
+    return cc
+
+
+def _flags(sanitize):
+    flags = list(CFLAGS)
+    if sanitize:
+        flags += ["-fsanitize=undefined,address", "-fno-sanitize-recover=all", "-g"]
+    return flags
+
+
+def runtime_objects(build_dir: Path, sanitize: bool = False) -> list:
+    """The runtime library and the scheduler compiled once per content and
+    flags (most of a simulator's compile time); cached beside the builds."""
+    cc = _compiler()
+    flags = _flags(sanitize)
+    h = hashlib.sha256(" ".join([cc, *flags]).encode())
+    for src in sorted(list(runtime_dir().glob("*")) + list(sim_dir().glob("*"))):
+        if src.is_file():
+            h.update(src.name.encode() + src.read_bytes())
+    out = build_dir / ("rt-" + h.hexdigest()[:20])
+    srcs = [sim_dir() / "sim_main.c"]
+    srcs += [runtime_dir() / s for s in RUNTIME_SOURCES if (runtime_dir() / s).exists()]
+    objs = [out / (s.stem + ".o") for s in srcs]
+    if all(o.exists() for o in objs):
+        return objs
+    out.mkdir(parents=True, exist_ok=True)
+    for src, obj in zip(srcs, objs):
+        if obj.exists():
+            continue
+        tmp = obj.with_suffix(f".{os.getpid()}.tmp")
+        cmd = [cc, *flags, "-I", str(runtime_dir()), "-I", str(sim_dir()), "-c", str(src),
+               "-o", str(tmp)]
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        if p.returncode != 0:
+            raise InternalError(f"the runtime did not compile ({src.name}): {p.stderr[:2000]}")
+        os.replace(tmp, obj)
+    return objs
+
+
 def build(project, build_dir: Path, sanitize: bool = False) -> Path:
     """Compiles the simulator; returns the executable (cached by content)."""
     files, plan = render_sim(project)
+    objs = runtime_objects(build_dir, sanitize)
     h = hashlib.sha256(__version__.encode() + (b"san" if sanitize else b""))
     for name in sorted(files):
         h.update(name.encode() + files[name].encode())
-    for src in list(runtime_dir().glob("*")) + list(sim_dir().glob("*")):
-        if src.is_file():
-            h.update(src.read_bytes())
+    for obj in objs:
+        h.update(str(obj).encode())
     key = h.hexdigest()[:20]
     out = build_dir / key
     exe = out / "sim"
@@ -138,21 +182,15 @@ def build(project, build_dir: Path, sanitize: bool = False) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     for name, text in files.items():
         (out / name).write_text(text)
-    srcs = [str(out / "sim_project.c"), str(sim_dir() / "sim_main.c")]
-    srcs += [str(runtime_dir() / s) for s in RUNTIME_SOURCES if (runtime_dir() / s).exists()]
-    flags = list(CFLAGS)
-    if sanitize:
-        flags += ["-fsanitize=undefined,address", "-fno-sanitize-recover=all", "-g"]
-    cc = os.environ.get("CC", "gcc")
-    if shutil.which(cc) is None:
-        raise SimError(f"no C compiler '{cc}' found: install gcc (apt-get install gcc)")
-    cmd = [cc, *flags, "-I", str(out), "-I", str(runtime_dir()), "-I", str(sim_dir()),
-           *srcs, "-o", str(exe) + ".tmp", "-lm"]
+    cc = _compiler()
+    tmp = f"{exe}.{os.getpid()}.tmp"
+    cmd = [cc, *_flags(sanitize), "-I", str(out), "-I", str(runtime_dir()), "-I", str(sim_dir()),
+           str(out / "sim_project.c"), *map(str, objs), "-o", tmp, "-lm"]
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         first = next((ln for ln in p.stderr.splitlines() if "error" in ln), p.stderr[:200])
         raise InternalError(f"the generated C did not compile ({out}): {first}")
-    os.replace(str(exe) + ".tmp", exe)
+    os.replace(tmp, exe)
     return exe, plan
 
 
@@ -261,7 +299,7 @@ def run(project, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=
         raise InternalError(f"the simulator failed ({p.returncode}): {p.stderr.strip()[:2000]}")
     names = [plan.table[i].path for i in idx]
     pos = {i: k for k, i in enumerate(idx)}
-    res = SimResult(names, [], end_ns=end_ns)
+    res = SimResult(names, [], end_ns=end_ns, stderr=p.stderr)
     for line in p.stdout.splitlines():
         tag, _, rest = line.partition(" ")
         if tag == "v":
@@ -283,6 +321,9 @@ def _decode(entry, text):
         return float(text)
     if entry.kind == "s":
         return bytes.fromhex(text[1:]).decode("latin-1")
+    if entry.kind == "w":
+        h = text[1:]
+        return "".join(chr(int(h[k:k + 4], 16)) for k in range(0, len(h), 4))
     if entry.kind == "b":
         return bool(int(text))
     if entry.kind == "e":

@@ -173,34 +173,34 @@ static void print_value(long long t, int idx, int force)
 			return;
 		last_f[idx] = x;
 		printf("v %lld %d %.17g\n", t, idx, x);
-	} else if (v->kind == 's') {
-		const struct iec_string *s = v->addr;
-		unsigned int i;
+	} else if (v->kind == 's' || v->kind == 'w') {
+		/* STRING: 2 hex digits per character, WSTRING: 4 */
+		unsigned int len, i, digits = v->kind == 's' ? 2 : 4;
+		char *hex;
 
-		if (!force && seen[idx] && last_s[idx] &&
-		    strlen(last_s[idx]) == (size_t)s->len * 2) {
-			char buf[3];
-			int same = 1;
-
-			for (i = 0; i < s->len && same; i++) {
-				snprintf(buf, sizeof(buf), "%02x",
-					 (unsigned char)s->data[i]);
-				same = memcmp(buf, last_s[idx] + 2 * i, 2) == 0;
-			}
-			if (same)
-				return;
+		if (v->kind == 's')
+			len = ((const struct iec_string *)v->addr)->len;
+		else
+			len = ((const struct iec_wstring *)v->addr)->len;
+		hex = malloc((size_t)len * digits + 1);
+		if (!hex)
+			die("out of memory");
+		for (i = 0; i < len; i++) {
+			if (v->kind == 's')
+				snprintf(hex + 2 * i, 3, "%02x", (unsigned char)
+					 ((const struct iec_string *)v->addr)->data[i]);
+			else
+				snprintf(hex + 4 * i, 5, "%04x", (unsigned int)
+					 ((const struct iec_wstring *)v->addr)->data[i]);
+		}
+		hex[(size_t)len * digits] = 0;
+		if (!force && seen[idx] && last_s[idx] && strcmp(hex, last_s[idx]) == 0) {
+			free(hex);
+			return;
 		}
 		free(last_s[idx]);
-		last_s[idx] = malloc((size_t)s->len * 2 + 1);
-		if (!last_s[idx])
-			die("out of memory");
-		for (i = 0; i < s->len; i++)
-			snprintf(last_s[idx] + 2 * i, 3, "%02x",
-				 (unsigned char)s->data[i]);
-		last_s[idx][2 * s->len] = 0;
-		printf("v %lld %d s%s\n", t, idx, last_s[idx]);
-	} else if (v->kind == 'w') {
-		return;
+		last_s[idx] = hex;
+		printf("v %lld %d %c%s\n", t, idx, v->kind, hex);
 	} else {
 		long long x = get_int(v);
 
