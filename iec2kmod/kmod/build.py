@@ -51,23 +51,20 @@ def build_tree(tree, kdir=None, container=False, jobs=0) -> TreeBuild:
     except kbuild.KbuildError as exc:
         raise BuildError(str(exc), 2) from None
     result = TreeBuild(kdir, release)
-    config = manifest["load_order"][0]
+    try:
+        res = kbuild.build_modules(str(tree), kdir=kdir, jobs=jobs or None)
+    except kbuild.KbuildError as exc:
+        raise BuildError(str(exc), 2) from None
+    if not res.ok:
+        raise BuildError(f"kbuild failed:\n{_explain(res.output, tree)}", 70)
+    result.warnings = res.warnings()
     for name in manifest["load_order"]:
-        extra = []
-        if name != config:
-            extra.append(f"KBUILD_EXTRA_SYMBOLS={tree / config / 'Module.symvers'}")
-        try:
-            res = kbuild.build_modules(str(tree / name), kdir=kdir, extra_args=extra,
-                                       jobs=jobs or None)
-        except kbuild.KbuildError as exc:
-            raise BuildError(str(exc), 2) from None
-        warnings = res.warnings()
-        if not res.ok:
-            raise BuildError(f"kbuild of {name} failed:\n{_explain(res.output, tree)}", 70)
-        result.warnings += warnings
-        result.modules.append(str(tree / name / f"{name}.ko"))
-        result.messages.append(f"built {name}.ko ({res.duration:.1f} s"
-                               f"{', %d warnings' % len(warnings) if warnings else ''})")
+        ko = tree / name / f"{name}.ko"
+        if not ko.exists():
+            raise BuildError(f"kbuild did not produce {ko}", 70)
+        result.modules.append(str(ko))
+    result.messages.append(f"built {len(result.modules)} modules in {res.duration:.1f} s: " +
+                           ", ".join(manifest["load_order"]))
     manifest["kernel_release"] = release
     (tree / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
     if result.warnings:
@@ -92,17 +89,29 @@ def _build_in_container(tree: Path, manifest, kdir, jobs) -> TreeBuild:
         from .. import container
     except ImportError as exc:
         raise BuildError(f"the container build needs the docker SDK: {exc}", 2) from None
+    if kdir:
+        raise BuildError("--kdir and --container exclude each other: the container has its "
+                         "own PREEMPT_RT headers", 2)
     try:
-        res = container.build_tree_in_container(str(tree), manifest["load_order"], kdir=kdir,
-                                                jobs=jobs)
+        res = container.build_modules(str(tree), jobs=jobs or None)
+        _, release, _ = container._headers()
     except container.ContainerError as exc:
         raise BuildError(str(exc), 2) from None
-    out = TreeBuild(res.kdir, res.release, res.modules, res.warnings, res.messages)
-    if res.returncode != 0:
-        raise BuildError(f"container build failed:\n{res.output[-3000:]}", 70)
-    if res.warnings:
-        raise BuildError("the generated modules built with warnings:\n" +
-                         "\n".join(res.warnings[:20]), 70)
-    manifest["kernel_release"] = res.release
+    if not res.ok:
+        raise BuildError(f"container build failed:\n{_explain(res.output, tree)}", 70)
+    out = TreeBuild(f"container {res.image}", release)
+    out.warnings = [ln for ln in res.output.splitlines()
+                    if re.search(r"\bwarning:|^WARNING:", ln, re.IGNORECASE)]
+    for name in manifest["load_order"]:
+        ko = tree / name / f"{name}.ko"
+        if not ko.exists():
+            raise BuildError(f"the container build did not produce {ko}", 70)
+        out.modules.append(str(ko))
+    if out.warnings:
+        raise BuildError("the generated modules built with warnings (a bug of iec2kmod):\n" +
+                         "\n".join(out.warnings[:20]), 70)
+    out.messages.append(f"built {len(out.modules)} modules in container {res.image} "
+                        f"({res.duration:.1f} s) for kernel {release}")
+    manifest["kernel_release"] = release
     (tree / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
     return out
