@@ -28,68 +28,7 @@
  * EXPT(0, -1) = +Inf, ATAN2(0, -0) = pi).
  */
 #include "iec_real.h"
-
-typedef union {
-	double d;
-	iec_u64 u;
-} iec__dbits;
-
-static inline iec_u64 asu64(double x)
-{
-	iec__dbits b = { .d = x };
-
-	return b.u;
-}
-
-static inline double asdouble(iec_u64 u)
-{
-	iec__dbits b = { .u = u };
-
-	return b.d;
-}
-
-#define NAN_D	(__builtin_nan(""))
-#define INF_D	(__builtin_inf())
-
-static inline int isnan_d(double x)
-{
-	return x != x;
-}
-
-static inline double fabs_d(double x)
-{
-	return asdouble(asu64(x) & ~(1ULL << 63));
-}
-
-static inline double copysign_d(double x, double s)
-{
-	return asdouble((asu64(x) & ~(1ULL << 63)) | (asu64(s) & (1ULL << 63)));
-}
-
-/* x * 2^n, with gradual underflow and overflow to Inf. */
-static double scalbn_d(double x, int n)
-{
-	if (n > 1023) {
-		x *= 0x1p1023;
-		n -= 1023;
-		if (n > 1023) {
-			x *= 0x1p1023;
-			n -= 1023;
-			if (n > 1023)
-				n = 1023;
-		}
-	} else if (n < -1022) {
-		x *= 0x1p-1022 * 0x1p53;
-		n += 1022 - 53;
-		if (n < -1022) {
-			x *= 0x1p-1022 * 0x1p53;
-			n += 1022 - 53;
-			if (n < -1022)
-				n = -1022;
-		}
-	}
-	return x * asdouble((iec_u64)(0x3ff + n) << 52);
-}
+#include "iec_dd.h"
 
 double iec__sqrt(double x)
 {
@@ -102,84 +41,6 @@ double iec__sqrt(double x)
 #else
 	return __builtin_sqrt(x);
 #endif
-}
-
-/* ---------------------------------------------------------------------
- * Double-double helpers (value = hi + lo, |lo| <= ulp(hi) / 2).
- */
-struct dd {
-	double hi, lo;
-};
-
-static inline struct dd two_sum(double a, double b)
-{
-	double s = a + b, bb = s - a;
-	struct dd r = { s, (a - (s - bb)) + (b - bb) };
-
-	return r;
-}
-
-static inline struct dd fast_two_sum(double a, double b)
-{
-	double s = a + b;
-	struct dd r = { s, b - (s - a) };
-
-	return r;
-}
-
-/* Veltkamp split and Dekker's exact product (no FMA needed). */
-static inline void split(double a, double *hi, double *lo)
-{
-	double c = 134217729.0 * a;	/* 2^27 + 1 */
-
-	*hi = c - (c - a);
-	*lo = a - *hi;
-}
-
-static inline struct dd two_prod(double a, double b)
-{
-	double ah, al, bh, bl, p = a * b;
-	struct dd r;
-
-	split(a, &ah, &al);
-	split(b, &bh, &bl);
-	r.hi = p;
-	r.lo = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
-	return r;
-}
-
-static inline struct dd dd_add(struct dd a, struct dd b)
-{
-	struct dd s = two_sum(a.hi, b.hi);
-
-	s.lo += a.lo + b.lo;
-	return fast_two_sum(s.hi, s.lo);
-}
-
-static inline struct dd dd_mul(struct dd a, struct dd b)
-{
-	struct dd p = two_prod(a.hi, b.hi);
-
-	p.lo += a.hi * b.lo + a.lo * b.hi;
-	return fast_two_sum(p.hi, p.lo);
-}
-
-static inline struct dd dd_mul_d(struct dd a, double b)
-{
-	struct dd p = two_prod(a.hi, b);
-
-	p.lo += a.lo * b;
-	return fast_two_sum(p.hi, p.lo);
-}
-
-static inline struct dd dd_div(struct dd a, struct dd b)
-{
-	double q1 = a.hi / b.hi, q2;
-	struct dd r = dd_add(a, dd_mul_d(b, -q1));
-
-	q2 = r.hi / b.hi;
-	r = dd_add(r, dd_mul_d(b, -q2));
-	return dd_add(fast_two_sum(q1, q2), (struct dd){ r.hi / b.hi, 0 });
 }
 
 /* ---------------------------------------------------------------------
@@ -212,13 +73,13 @@ static inline double expm1_poly(double r)
 static double exp_dd(double hi, double lo)
 {
 	double kd, rh, rl, p, y;
-	struct dd r;
+	struct iec__dd r;
 	int k;
 
-	if (isnan_d(hi))
+	if (iec__isnan_d(hi))
 		return hi;
 	if (hi > 709.782712893384)
-		return INF_D;
+		return IEC__INF_D;
 	if (hi < -745.1332191019412)
 		return 0.0;
 	kd = hi * INV_LN2;
@@ -226,12 +87,12 @@ static double exp_dd(double hi, double lo)
 	kd = k;
 	/* r = hi + lo - k ln2 as rh + rl with |rl| <= ulp(rh) / 2:
 	 * exp(r) = exp(rh) (1 + rl) */
-	r = two_sum(hi - kd * LN2_HI, lo - kd * LN2_LO);
+	r = iec__two_sum(hi - kd * LN2_HI, lo - kd * LN2_LO);
 	rh = r.hi;
 	rl = r.lo;
 	p = expm1_poly(rh);
 	y = 1.0 + (p + rl * (1.0 + p));
-	return scalbn_d(y, k);
+	return iec__scalbn_d(y, k);
 }
 
 double iec_exp_lreal(double x)
@@ -402,48 +263,48 @@ static inline double log1p_tail(double f)
 }
 
 /* ln(x) as a double-double, for finite x > 0. */
-static struct dd ln_dd(double x)
+static struct iec__dd ln_dd(double x)
 {
-	iec_u64 u = asu64(x);
+	iec_u64 u = iec__asu64(x);
 	int k = 0, j;
 	double m, kd, lo;
-	struct dd p, f, sq, a, b, c;
+	struct iec__dd p, f, sq, a, b, c;
 
 	if (u < (1ULL << 52)) {		/* subnormal */
 		x *= 0x1p54;
-		u = asu64(x);
+		u = iec__asu64(x);
 		k = -54;
 	}
 	k += (int)(u >> 52) - 1023;
 	j = (int)((u >> 45) & 127);
-	m = asdouble((u & ((1ULL << 52) - 1)) | 0x3ff0000000000000ULL);
+	m = iec__asdouble((u & ((1ULL << 52) - 1)) | 0x3ff0000000000000ULL);
 	if (j >= 64) {
 		m *= 0.5;
 		k++;
 	}
 	kd = k;
-	p = two_prod(m, LOG_TAB[j].inv_c);
-	f = two_sum(p.hi - 1.0, p.lo);		/* p.hi - 1 is exact */
-	sq = two_prod(f.hi, f.hi);
-	a = two_sum(kd * LN2_HI, LOG_TAB[j].lnc_hi);
-	b = two_sum(a.hi, f.hi);
-	c = two_sum(b.hi, -0.5 * sq.hi);
+	p = iec__two_prod(m, LOG_TAB[j].inv_c);
+	f = iec__two_sum(p.hi - 1.0, p.lo);		/* p.hi - 1 is exact */
+	sq = iec__two_prod(f.hi, f.hi);
+	a = iec__two_sum(kd * LN2_HI, LOG_TAB[j].lnc_hi);
+	b = iec__two_sum(a.hi, f.hi);
+	c = iec__two_sum(b.hi, -0.5 * sq.hi);
 	lo = a.lo + b.lo + c.lo + LOG_TAB[j].lnc_lo + kd * LN2_LO + f.lo -
 	     0.5 * sq.lo - f.hi * f.lo + log1p_tail(f.hi);
-	return fast_two_sum(c.hi, lo);
+	return iec__fast_two_sum(c.hi, lo);
 }
 
 double iec_ln_lreal(double x)
 {
-	struct dd r;
+	struct iec__dd r;
 
-	if (isnan_d(x))
+	if (iec__isnan_d(x))
 		return x;
 	if (x < 0)
-		return NAN_D;
+		return IEC__NAN_D;
 	if (x == 0)
-		return -INF_D;
-	if (x == INF_D)
+		return -IEC__INF_D;
+	if (x == IEC__INF_D)
 		return x;
 	r = ln_dd(x);
 	return r.hi + r.lo;
@@ -451,20 +312,20 @@ double iec_ln_lreal(double x)
 
 double iec_log_lreal(double x)
 {
-	static const struct dd ivln10 = {
+	static const struct iec__dd ivln10 = {
 		0x1.bcb7b1526e50ep-2, 0x1.95355baaafad3p-57
 	};
-	struct dd r;
+	struct iec__dd r;
 
-	if (isnan_d(x))
+	if (iec__isnan_d(x))
 		return x;
 	if (x < 0)
-		return NAN_D;
+		return IEC__NAN_D;
 	if (x == 0)
-		return -INF_D;
-	if (x == INF_D)
+		return -IEC__INF_D;
+	if (x == IEC__INF_D)
 		return x;
-	r = dd_mul(ln_dd(x), ivln10);
+	r = iec__dd_mul(ln_dd(x), ivln10);
 	return r.hi + r.lo;
 }
 
@@ -473,49 +334,49 @@ double iec_log_lreal(double x)
  */
 static int is_integer(double y)
 {
-	if (fabs_d(y) >= 0x1p52)
+	if (iec__fabs_d(y) >= 0x1p52)
 		return 1;
 	return y == (double)(iec_s64)y;
 }
 
 static int is_odd_integer(double y)
 {
-	if (fabs_d(y) >= 0x1p53 || !is_integer(y))
+	if (iec__fabs_d(y) >= 0x1p53 || !is_integer(y))
 		return 0;
 	return (int)((iec_s64)y & 1);
 }
 
 double iec_expt_lreal(double x, double y)
 {
-	struct dd l;
-	double ax = fabs_d(x), r;
+	struct iec__dd l;
+	double ax = iec__fabs_d(x), r;
 	int neg = 0;
 
 	if (y == 0 || x == 1)
 		return 1.0;
-	if (isnan_d(x) || isnan_d(y))
-		return NAN_D;
-	if (asu64(x) >> 63) {			/* x < 0, -0 or -Inf */
+	if (iec__isnan_d(x) || iec__isnan_d(y))
+		return IEC__NAN_D;
+	if (iec__asu64(x) >> 63) {			/* x < 0, -0 or -Inf */
 		if (!is_integer(y)) {
-			if (ax == 0 || ax == INF_D || y == INF_D ||
-			    y == -INF_D)
+			if (ax == 0 || ax == IEC__INF_D || y == IEC__INF_D ||
+			    y == -IEC__INF_D)
 				neg = 0;	/* C99: as for |x| */
 			else
-				return NAN_D;
+				return IEC__NAN_D;
 		} else {
 			neg = is_odd_integer(y);
 		}
 	}
 	if (ax == 1)				/* (-1) ** y, y integer or Inf */
 		return neg ? -1.0 : 1.0;
-	if (ax == 0 || ax == INF_D) {
-		r = (ax == 0) == (y < 0) ? INF_D : 0.0;
+	if (ax == 0 || ax == IEC__INF_D) {
+		r = (ax == 0) == (y < 0) ? IEC__INF_D : 0.0;
 		return neg ? -r : r;
 	}
 	/* |y| > 2^64 and |x| != 1: |y ln x| > 2^11, so Inf or 0 */
-	if (fabs_d(y) > 0x1p64)
-		return (ax < 1) == (y > 0) ? 0.0 : INF_D;
-	l = dd_mul_d(ln_dd(ax), y);
+	if (iec__fabs_d(y) > 0x1p64)
+		return (ax < 1) == (y > 0) ? 0.0 : IEC__INF_D;
+	l = iec__dd_mul_d(ln_dd(ax), y);
 	r = exp_dd(l.hi, l.lo);
 	return neg ? -r : r;
 }
@@ -528,7 +389,7 @@ static const double PIO2_1 = 0x1.921fb54400000p+0;	/* 33 bits */
 static const double PIO2_2 = 0x1.0b4611a600000p-34;	/* 33 bits */
 static const double PIO2_3 = 0x1.3198a2e000000p-69;	/* 33 bits */
 static const double PIO2_4 = 0x1.b839a252049c1p-104;
-static const struct dd PIO2 = { 0x1.921fb54442d18p+0, 0x1.1a62633145c07p-54 };
+static const struct iec__dd PIO2 = { 0x1.921fb54442d18p+0, 0x1.1a62633145c07p-54 };
 static const double INV_PIO2 = 0x1.45f306dc9c883p-1;
 
 /* 2/pi: word j holds bits 64j+1 .. 64j+64 after the binary point. */
@@ -564,15 +425,15 @@ static iec_u64 two_over_pi_bits(int pos)
 }
 
 /* Payne-Hanek reduction for |x| >= 2^20 (finite). */
-static int rem_pio2_large(double x, struct dd *r)
+static int rem_pio2_large(double x, struct iec__dd *r)
 {
 	typedef unsigned __int128 u128;
-	iec_u64 u = asu64(x), m, w0, w1, w2, p1, p2, p3, fhi, flo, c;
+	iec_u64 u = iec__asu64(x), m, w0, w1, w2, p1, p2, p3, fhi, flo, c;
 	int e = (int)((u >> 52) & 0x7ff) - 1075;	/* x = m * 2^e */
 	int n, neg = 0, lz;
 	u128 t;
 	double a, b;
-	struct dd f;
+	struct iec__dd f;
 
 	m = (u & ((1ULL << 52) - 1)) | (1ULL << 52);
 	/* bits e-1 .. e+190 of 2/pi: the product's binary point is 190 bits
@@ -615,10 +476,10 @@ static int rem_pio2_large(double x, struct dd *r)
 	/* fraction = (fhi * 2^-64 + flo * 2^-128) * 2^-lz */
 	a = (double)(fhi >> 11) * 0x1p-53;
 	b = ((double)(fhi & 0x7ff) * 0x1p-64 + (double)(flo >> 11) * 0x1p-117);
-	f = fast_two_sum(a, b);
-	f.hi = scalbn_d(f.hi, -lz);
-	f.lo = scalbn_d(f.lo, -lz);
-	f = dd_mul(f, PIO2);
+	f = iec__fast_two_sum(a, b);
+	f.hi = iec__scalbn_d(f.hi, -lz);
+	f.lo = iec__scalbn_d(f.lo, -lz);
+	f = iec__dd_mul(f, PIO2);
 	if (x < 0) {
 		neg = !neg;
 		n = -n;
@@ -631,25 +492,25 @@ static int rem_pio2_large(double x, struct dd *r)
 	return n & 3;
 }
 
-static int rem_pio2(double x, struct dd *r)
+static int rem_pio2(double x, struct iec__dd *r)
 {
 	double kd, t;
-	struct dd s;
+	struct iec__dd s;
 	int n;
 
-	if (fabs_d(x) <= 0x1.921fb54442d18p-1) {	/* pi/4 */
+	if (iec__fabs_d(x) <= 0x1.921fb54442d18p-1) {	/* pi/4 */
 		r->hi = x;
 		r->lo = 0;
 		return 0;
 	}
-	if (fabs_d(x) >= 0x1p20)
+	if (iec__fabs_d(x) >= 0x1p20)
 		return rem_pio2_large(x, r);
 	kd = x * INV_PIO2;
 	n = (int)(kd < 0 ? kd - 0.5 : kd + 0.5);
 	kd = n;
 	t = x - kd * PIO2_1;			/* exact */
-	s = two_sum(t, -kd * PIO2_2);		/* kd * PIO2_2 exact */
-	s = dd_add(s, (struct dd){ -kd * PIO2_3, -kd * PIO2_4 });
+	s = iec__two_sum(t, -kd * PIO2_2);		/* kd * PIO2_2 exact */
+	s = iec__dd_add(s, (struct iec__dd){ -kd * PIO2_3, -kd * PIO2_4 });
 	*r = s;
 	return n & 3;
 }
@@ -691,10 +552,10 @@ static double cos_k(double x, double xl)
 
 double iec_sin_lreal(double x)
 {
-	struct dd r;
+	struct iec__dd r;
 
-	if (isnan_d(x) || x == INF_D || x == -INF_D)
-		return NAN_D;
+	if (iec__isnan_d(x) || x == IEC__INF_D || x == -IEC__INF_D)
+		return IEC__NAN_D;
 	switch (rem_pio2(x, &r)) {
 	case 0:
 		return sin_k(r.hi, r.lo);
@@ -709,10 +570,10 @@ double iec_sin_lreal(double x)
 
 double iec_cos_lreal(double x)
 {
-	struct dd r;
+	struct iec__dd r;
 
-	if (isnan_d(x) || x == INF_D || x == -INF_D)
-		return NAN_D;
+	if (iec__isnan_d(x) || x == IEC__INF_D || x == -IEC__INF_D)
+		return IEC__NAN_D;
 	switch (rem_pio2(x, &r)) {
 	case 0:
 		return cos_k(r.hi, r.lo);
@@ -727,14 +588,14 @@ double iec_cos_lreal(double x)
 
 double iec_tan_lreal(double x)
 {
-	struct dd r, s, c;
+	struct iec__dd r, s, c;
 	int n;
 
-	if (isnan_d(x) || x == INF_D || x == -INF_D)
-		return NAN_D;
+	if (iec__isnan_d(x) || x == IEC__INF_D || x == -IEC__INF_D)
+		return IEC__NAN_D;
 	n = rem_pio2(x, &r);
 	if (r.hi == 0 && r.lo == 0)
-		return (n & 1) ? -INF_D : copysign_d(0.0, x);
+		return (n & 1) ? -IEC__INF_D : iec__copysign_d(0.0, x);
 	/* sin and cos as double-doubles would cost more than this is worth:
 	 * the quotient of the two correctly rounded kernels */
 	s.hi = sin_k(r.hi, r.lo);
@@ -742,17 +603,17 @@ double iec_tan_lreal(double x)
 	c.hi = cos_k(r.hi, r.lo);
 	c.lo = 0;
 	if (n & 1) {
-		s = dd_div(c, s);
+		s = iec__dd_div(c, s);
 		return -(s.hi + s.lo);
 	}
-	s = dd_div(s, c);
+	s = iec__dd_div(s, c);
 	return s.hi + s.lo;
 }
 
 /* ---------------------------------------------------------------------
  * ATAN, ATAN2, ASIN, ACOS
  */
-static const struct dd ATAN_TAB[17] = {
+static const struct iec__dd ATAN_TAB[17] = {
 	{ 0x0.0p+0, 0x0.0p+0 },
 	{ 0x1.ff55bb72cfdeap-5, -0x1.c934d86d23f1dp-60 },
 	{ 0x1.fd5ba9aac2f6ep-4, -0x1.cd37686760c17p-59 },
@@ -787,11 +648,11 @@ static double atan_poly(double t, double tl)
 }
 
 /* atan(a) for 0 <= a <= 1 as a double-double. */
-static struct dd atan01(double a, double al)
+static struct iec__dd atan01(double a, double al)
 {
 	int k = (int)(a * 16 + 0.5);
 	double c = k * 0.0625, num;
-	struct dd q, r;
+	struct iec__dd q, r;
 
 	if (k == 0) {
 		r.hi = atan_poly(a, al);
@@ -800,65 +661,65 @@ static struct dd atan01(double a, double al)
 	}
 	/* atan(a) = atan(c) + atan((a - c) / (1 + a c)), a - c exact */
 	num = a - c;
-	q = dd_div((struct dd){ num, al },
-		   dd_add((struct dd){ 1.0, 0 }, two_prod(a, c)));
-	r = two_sum(ATAN_TAB[k].hi, atan_poly(q.hi, q.lo));
+	q = iec__dd_div((struct iec__dd){ num, al },
+		   iec__dd_add((struct iec__dd){ 1.0, 0 }, iec__two_prod(a, c)));
+	r = iec__two_sum(ATAN_TAB[k].hi, atan_poly(q.hi, q.lo));
 	r.lo += ATAN_TAB[k].lo;
-	return fast_two_sum(r.hi, r.lo);
+	return iec__fast_two_sum(r.hi, r.lo);
 }
 
 /* atan(y / x) for x > 0, y >= 0, finite, as a double-double. */
-static struct dd atan_pos(double y, double x)
+static struct iec__dd atan_pos(double y, double x)
 {
-	struct dd q, r;
+	struct iec__dd q, r;
 
 	if (y <= x) {
-		q = dd_div((struct dd){ y, 0 }, (struct dd){ x, 0 });
+		q = iec__dd_div((struct iec__dd){ y, 0 }, (struct iec__dd){ x, 0 });
 		return atan01(q.hi, q.lo);
 	}
-	q = dd_div((struct dd){ x, 0 }, (struct dd){ y, 0 });
+	q = iec__dd_div((struct iec__dd){ x, 0 }, (struct iec__dd){ y, 0 });
 	r = atan01(q.hi, q.lo);
-	return dd_add(PIO2, (struct dd){ -r.hi, -r.lo });
+	return iec__dd_add(PIO2, (struct iec__dd){ -r.hi, -r.lo });
 }
 
 double iec_atan_lreal(double x)
 {
-	struct dd r;
-	double a = fabs_d(x);
+	struct iec__dd r;
+	double a = iec__fabs_d(x);
 
-	if (isnan_d(x))
+	if (iec__isnan_d(x))
 		return x;
 	if (a > 0x1p66)
-		return copysign_d(PIO2.hi, x);
+		return iec__copysign_d(PIO2.hi, x);
 	if (a < 0x1p-30)
 		return x;
 	r = a <= 1 ? atan01(a, 0) : atan_pos(a, 1.0);
-	return copysign_d(r.hi + r.lo, x);
+	return iec__copysign_d(r.hi + r.lo, x);
 }
 
 double iec_atan2_lreal(double y, double x)
 {
-	static const struct dd pi = { 0x1.921fb54442d18p+1,
+	static const struct iec__dd pi = { 0x1.921fb54442d18p+1,
 				      0x1.1a62633145c07p-53 };
-	double ay = fabs_d(y), ax = fabs_d(x), v;
-	int xneg = (asu64(x) >> 63) != 0;
-	struct dd r;
+	double ay = iec__fabs_d(y), ax = iec__fabs_d(x), v;
+	int xneg = (iec__asu64(x) >> 63) != 0;
+	struct iec__dd r;
 
-	if (isnan_d(x) || isnan_d(y))
-		return NAN_D;
+	if (iec__isnan_d(x) || iec__isnan_d(y))
+		return IEC__NAN_D;
 	if (y == 0)
-		return xneg ? copysign_d(pi.hi, y) : y;
+		return xneg ? iec__copysign_d(pi.hi, y) : y;
 	if (x == 0)
-		return copysign_d(PIO2.hi, y);
-	if (ax == INF_D) {
-		if (ay == INF_D)
+		return iec__copysign_d(PIO2.hi, y);
+	if (ax == IEC__INF_D) {
+		if (ay == IEC__INF_D)
 			v = xneg ? 3 * 0x1.921fb54442d18p-1 : 0x1.921fb54442d18p-1;
 		else
 			v = xneg ? pi.hi : 0.0;
-		return copysign_d(v, y);
+		return iec__copysign_d(v, y);
 	}
-	if (ay == INF_D)
-		return copysign_d(PIO2.hi, y);
+	if (ay == IEC__INF_D)
+		return iec__copysign_d(PIO2.hi, y);
 	/* scale so that neither the quotient nor the products overflow */
 	if (ax > 0x1p1000 || ay > 0x1p1000) {
 		ax *= 0x1p-60;
@@ -869,54 +730,54 @@ double iec_atan2_lreal(double y, double x)
 	}
 	if (ay < ax * 0x1p-60 && !xneg) {
 		v = ay / ax;
-		return copysign_d(v, y);
+		return iec__copysign_d(v, y);
 	}
 	r = atan_pos(ay, ax);
 	if (xneg)
-		r = dd_add(pi, (struct dd){ -r.hi, -r.lo });
-	return copysign_d(r.hi + r.lo, y);
+		r = iec__dd_add(pi, (struct iec__dd){ -r.hi, -r.lo });
+	return iec__copysign_d(r.hi + r.lo, y);
 }
 
 double iec_asin_lreal(double x)
 {
-	double a = fabs_d(x);
-	struct dd c, r;
+	double a = iec__fabs_d(x);
+	struct iec__dd c, r;
 
-	if (isnan_d(x))
+	if (iec__isnan_d(x))
 		return x;
 	if (a > 1)
-		return NAN_D;
+		return IEC__NAN_D;
 	if (a < 0x1p-30)
 		return x;
 	/* sqrt((1 - a)(1 + a)) with (1 - a) exact */
-	c = two_prod(1.0 - a, 1.0 + a);
+	c = iec__two_prod(1.0 - a, 1.0 + a);
 	c.hi = iec__sqrt(c.hi + c.lo);
 	if (c.hi == 0)
-		return copysign_d(PIO2.hi, x);
+		return iec__copysign_d(PIO2.hi, x);
 	r = atan_pos(a, c.hi);
-	return copysign_d(r.hi + r.lo, x);
+	return iec__copysign_d(r.hi + r.lo, x);
 }
 
 double iec_acos_lreal(double x)
 {
-	static const struct dd pi = { 0x1.921fb54442d18p+1,
+	static const struct iec__dd pi = { 0x1.921fb54442d18p+1,
 				      0x1.1a62633145c07p-53 };
-	double a = fabs_d(x), s;
-	struct dd c, r;
+	double a = iec__fabs_d(x), s;
+	struct iec__dd c, r;
 
-	if (isnan_d(x))
+	if (iec__isnan_d(x))
 		return x;
 	if (a > 1)
-		return NAN_D;
+		return IEC__NAN_D;
 	if (x == 1)
 		return 0.0;
 	if (x == -1)
 		return pi.hi;
-	c = two_prod(1.0 - a, 1.0 + a);
+	c = iec__two_prod(1.0 - a, 1.0 + a);
 	s = iec__sqrt(c.hi + c.lo);
 	r = atan_pos(s, a);			/* acos(|x|) */
 	if (x < 0)
-		r = dd_add(pi, (struct dd){ -r.hi, -r.lo });
+		r = iec__dd_add(pi, (struct iec__dd){ -r.hi, -r.lo });
 	return r.hi + r.lo;
 }
 
@@ -925,10 +786,10 @@ double iec_acos_lreal(double x)
  */
 double iec_sqrt_lreal(double x)
 {
-	if (isnan_d(x))
+	if (iec__isnan_d(x))
 		return x;
 	if (x < 0)
-		return NAN_D;
+		return IEC__NAN_D;
 	return iec__sqrt(x);
 }
 

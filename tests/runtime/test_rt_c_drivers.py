@@ -12,6 +12,7 @@ DRIVERS = {
     "test_int.c": [],
     "test_string.c": ["iec_string.c"],
     "test_fb.c": ["iec_std_fb.c"],
+    "test_real.c": ["iec_math.c", "iec_real.c", "iec_string.c"],
 }
 
 pytestmark = pytest.mark.execution
