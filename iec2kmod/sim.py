@@ -117,8 +117,9 @@ def render_sim(project):
     return files, plan
 
 
-RUNTIME_SOURCES = ("iec_string.c", "iec_std_fb.c", "iec_math.c")
-CFLAGS = ["-std=gnu11", "-O1", "-Wall", "-Wextra", "-Werror", "-Wno-unused-function",
+RUNTIME_SOURCES = ("iec_string.c", "iec_std_fb.c", "iec_math.c", "iec_real.c")
+CFLAGS = ["-std=gnu11", "-O1", "-Wall", "-Wextra", "-Werror", "-Wdeclaration-after-statement",
+          "-Wno-unused-function",
           "-Wno-unused-variable", "-Wno-unused-but-set-variable"]
 
 

@@ -69,6 +69,16 @@ def c_int(value: int, t) -> str:
     ct = t.c_type if isinstance(t, Elementary) else "iec_lint"
     if isinstance(t, Elementary) and t.cat == "real":
         return f"(({ct}){float(value)!r})"
+    if isinstance(t, Elementary) and t.cat in ("sint", "uint", "bit", "bool", "time", "date",
+                                               "tod", "dt"):
+        # a constant outside the type (a folded -9223372036854775808, a bit
+        # pattern) is taken modulo 2^bits, two's complement: never a C
+        # constant too large for its type
+        bits = t.bits if t.cat != "bool" else 8
+        signed = t.cat not in ("uint", "bit", "bool")
+        value &= (1 << bits) - 1
+        if signed and value >= 1 << (bits - 1):
+            value -= 1 << bits
     if value == INT64_MIN:
         return f"(({ct})(-9223372036854775807LL - 1))"
     if isinstance(t, Elementary) and t.cat in ("uint", "bit") and t.bits == 64:
@@ -162,16 +172,14 @@ class ExprEmitter:
         raise CodegenError(k)
 
     def string_literal(self, f, e):
+        """A view of a string literal: no copy, a static array for WSTRING."""
         if e.kind == "string":
             data = e.value.encode("latin-1", errors="replace")
             return f"iec_strv_make({N.c_string(data)}, {len(data)}, {len(data)})"
-        name = f.temp(e.type)
         data = ", ".join(str(ord(c) & 0xFFFF) for c in e.value) or "0"
         arr = f"wlit{self.body.next_temp()}"
-        f.pre.append(f"static const iec_u16 {arr}[] = {{ {data} }};")
-        f.pre.append(f"iec_assign_wstring(IEC_WSTRBUF({name}), "
-                     f"iec_wstrv_make({arr}, {len(e.value)}, {len(e.value)}));")
-        return name
+        f.decls.append(f"static const iec_u16 {arr}[] = {{ {data} }};")
+        return f"iec_wstrv_make({arr}, {len(e.value)}, {len(e.value)})"
 
     # -------------------------------------------------------- variables
     def ref_value(self, f, r: ast.Ref) -> str:
@@ -248,6 +256,10 @@ class ExprEmitter:
 
     def unop(self, f, e, t):
         rtype = concrete(t)
+        if e.op == "-" and scalar_kind(rtype) in ("sint", "uint", "time"):
+            v = _const_int(e)
+            if v is not None:
+                return c_int(v, rtype)      # -128, -9223372036854775808: one constant
         a = self.emit(f, e.operand, rtype)
         if e.op == "+":
             return a
@@ -394,9 +406,11 @@ class ExprEmitter:
             return self.string_function(f, fam, args, pts, res)
         if fam == "CONVERT":
             return self.conversion(f, fres, args[0])
-        if fam in ("TRUNC",):
-            a = self.emit(f, args[0], ELEMENTARY["LREAL"])
-            return f"iec_lreal_trunc_dint({a})"
+        if fam == "TRUNC":
+            # TRUNC (LREAL -> DINT) and the typed REAL_TRUNC_INT ... forms
+            src = concrete(pts[0])
+            a = self.emit(f, args[0], src)
+            return f"iec_{tag(src)}_trunc_{tag(concrete(fres.result))}({a})"
         if fam in ("BCD_TO", "TO_BCD"):
             src, dst = concrete(pts[0]), res
             a = self.emit(f, args[0], src)
@@ -429,14 +443,27 @@ class ExprEmitter:
         if isinstance(src, StringT):
             return f"iec_{tag_of(src)}_to_{tag_of(dst)}({self.strv(f, arg)})"
         a = self.emit(f, arg, src)
-        return f"iec_{tag_of(src)}_to_{tag_of(dst)}({a})"
+        st, dt = tag_of(src), tag_of(dst)
+        if st in _TIMEISH and dt in _TIMEISH and (st, dt) not in _TIME_CONV:
+            # not a standard conversion (DATE_TO_DT, TOD_TO_TIME ...), but
+            # accepted: every time type counts nanoseconds, so the value is
+            # kept, then made a valid DATE (whole days) or TOD (< 24 h)
+            if dt == "date":
+                return f"iec_dt_to_date({a})"
+            if dt == "tod":
+                return f"iec_dt_to_tod({a})"
+            return f"(({N.ctype(dst)}){a})"
+        if st == "bool" and dt in _TIMEISH:
+            # BOOL_TO_TIME: 0 or 1 of the integer unit of the time type
+            return f"iec_lint_to_{dt}((iec_lint){a})"
+        return f"iec_{st}_to_{dt}({a})"
 
     # ---------------------------------------------------------- strings
     def strv(self, f, e) -> str:
         """A read-only view (iec_strv / iec_wstrv) of a string expression."""
-        t = concrete(e.type)
-        if isinstance(e, ast.Lit) and e.kind == "string":
+        if isinstance(e, ast.Lit) and e.kind in ("string", "wstring"):
             return self.string_literal(f, e)
+        t = concrete(e.type)
         code = self.emit(f, e)
         return f"IEC_{'W' if t.wide else ''}STRV({code})"
 
@@ -501,6 +528,11 @@ class ExprEmitter:
         f.pre.append(f"iec_assign_{w}({buf}, {cmp}({x}, {mn}) < 0 ? {mn} : "
                      f"({cmp}({x}, {mx}) > 0 ? {mx} : {x}));")
         return out
+
+
+_TIMEISH = {"time", "ltime", "date", "tod", "dt"}
+# time-to-time conversions of the standard (the runtime's iec_<a>_to_<b>)
+_TIME_CONV = {("time", "ltime"), ("ltime", "time"), ("dt", "date"), ("dt", "tod")}
 
 
 def tag_of(t):

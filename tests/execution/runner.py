@@ -105,11 +105,15 @@ class Case:
 
 def split_items(text: str) -> list[str]:
     """Splits 'a = 1; s = 'x;y'' at semicolons outside quotes."""
-    out, cur, quote = [], [], None
+    out, cur, quote, escape = [], [], None, False
     for ch in text:
         if quote:
             cur.append(ch)
-            if ch == quote:
+            if escape:
+                escape = False
+            elif ch == "$":
+                escape = True
+            elif ch == quote:
                 quote = None
         elif ch in "'\"":
             quote = ch
