@@ -152,12 +152,27 @@ def cache_dir() -> Path:
 def parse_all(sources: list[SourceFile], jobs: int | None = None):
     """Parses every file, using every core: big files are cut at top-level
     declarations so that one large file also spreads over the cores."""
-    from .parser import metamodel
+    import gc
+    from .parser import fast_builder, metamodel
     metamodel()  # build once, before forking, so workers inherit it
+    fast_builder()
     jobs = jobs or os.cpu_count() or 1
     total = sum(len(s.text) for s in sources)
-    if jobs <= 1 or total < 40000:
-        return [_parse_one(s) for s in sources]
+    # The parse and the unpickling of its results allocate millions of
+    # objects that stay alive; the cyclic GC would only rescan them (forked
+    # workers inherit the disabled GC).
+    gc_was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        if jobs <= 1 or total < 40000:
+            return [_parse_one(s) for s in sources]
+        return _parse_parallel(sources, jobs, total)
+    finally:
+        if gc_was_enabled:
+            gc.enable()
+
+
+def _parse_parallel(sources, jobs, total):
     parts = []  # (file index, part)
     for i, s in enumerate(sources):
         share = max(1, round(2 * jobs * len(s.text) / total))
