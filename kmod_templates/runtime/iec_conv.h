@@ -157,7 +157,11 @@ static inline iec_tod iec_dt_to_tod(iec_dt v)
 	return iec__floormod(v, IEC_NS_PER_DAY);
 }
 
-static inline iec_ldate iec_ldt_to_ldate(iec_ldt v) { return iec_dt_to_date(v); }
+static inline iec_ldate iec_ldt_to_ldate(iec_ldt v)
+{
+	return iec_dt_to_date(v);
+}
+
 static inline iec_ltod iec_ldt_to_ltod(iec_ldt v) { return iec_dt_to_tod(v); }
 static inline iec_date iec_ldt_to_date(iec_ldt v) { return iec_dt_to_date(v); }
 static inline iec_tod iec_ldt_to_tod(iec_ldt v) { return iec_dt_to_tod(v); }

@@ -44,7 +44,8 @@ static inline double iec__fabs_d(double x)
 
 static inline double iec__copysign_d(double x, double s)
 {
-	return iec__asdouble((iec__asu64(x) & ~(1ULL << 63)) | (iec__asu64(s) & (1ULL << 63)));
+	return iec__asdouble((iec__asu64(x) & ~(1ULL << 63)) |
+			     (iec__asu64(s) & (1ULL << 63)));
 }
 
 /* x * 2^n, with gradual underflow and overflow to Inf. */
@@ -147,7 +148,8 @@ static inline struct iec__dd iec__dd_div(struct iec__dd a, struct iec__dd b)
 
 	q2 = r.hi / b.hi;
 	r = iec__dd_add(r, iec__dd_mul_d(b, -q2));
-	return iec__dd_add(iec__fast_two_sum(q1, q2), (struct iec__dd){ r.hi / b.hi, 0 });
+	return iec__dd_add(iec__fast_two_sum(q1, q2),
+			   (struct iec__dd){ r.hi / b.hi, 0 });
 }
 
 #endif /* IEC_DD_H */

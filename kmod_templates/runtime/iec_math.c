@@ -17,9 +17,21 @@
  * rounded.
  *
  * Accuracy, measured by benchmarks/math_accuracy.py against glibc 2.36
- * (max error in ULP of the result, over 200000 random and edge inputs per
- * function and range; asserted by tests/runtime/test_rt_math.py):
- *   see the table in kmod_templates/runtime/README.md (section "Math").
+ * (100000 random inputs per range plus an edge list; max error in ULP of
+ * the reference; "exact" is mpmath at the worst input found):
+ *
+ *   LREAL        vs glibc  vs exact     REAL (vs glibc's double)
+ *   SQRT         0         0            0.5
+ *   EXP LN       1         0.67, 0.50   0.5
+ *   LOG          2         0.50         0.5   (glibc's LOG10 is 1.5 off)
+ *   EXPT         1         0.52         0.5
+ *   SIN COS      1         0.59         0.5   (|x| up to 1e300)
+ *   TAN          2         1.84         0.5
+ *   ASIN ACOS    1         0.52         0.5
+ *   ATAN ATAN2   1         0.53         0.5
+ *
+ * i.e. the REAL functions were correctly rounded on every sample.  Bounds
+ * asserted by tests/runtime/test_rt_math.py.
  *
  * Domain errors give NaN (SQRT(-1), LN(-1), ASIN(2), EXPT(-8, 1/3));
  * LN(0) = -Inf; results out of range are +-Inf or 0 as IEEE 754 says.
@@ -389,7 +401,9 @@ static const double PIO2_1 = 0x1.921fb54400000p+0;	/* 33 bits */
 static const double PIO2_2 = 0x1.0b4611a600000p-34;	/* 33 bits */
 static const double PIO2_3 = 0x1.3198a2e000000p-69;	/* 33 bits */
 static const double PIO2_4 = 0x1.b839a252049c1p-104;
-static const struct iec__dd PIO2 = { 0x1.921fb54442d18p+0, 0x1.1a62633145c07p-54 };
+static const struct iec__dd PIO2 = {
+	0x1.921fb54442d18p+0, 0x1.1a62633145c07p-54
+};
 static const double INV_PIO2 = 0x1.45f306dc9c883p-1;
 
 /* 2/pi: word j holds bits 64j+1 .. 64j+64 after the binary point. */

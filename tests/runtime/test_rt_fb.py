@@ -137,7 +137,7 @@ def run_timer(lib, name, t0, steps, fn=None):
 
 
 @pytest.mark.parametrize("name", ["ton", "tof", "tp"])
-@settings(max_examples=400, deadline=None,
+@settings(max_examples=250, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(trace=traces())
 def test_timer_matches_reference(lib, name, trace):
@@ -211,7 +211,7 @@ def test_bistables_and_triggers(lib, seq):
 # --------------------------------------------------------------- counters
 
 @pytest.mark.parametrize("suffix", sorted(COUNTER_TYPES))
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=120, deadline=None)
 @given(data=st.data())
 def test_counters_match_reference(lib, suffix, data):
     T, lo, hi = COUNTER_TYPES[suffix]

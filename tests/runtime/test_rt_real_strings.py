@@ -43,7 +43,7 @@ def shortest_digits(v):
     return digits(repr(abs(v)).upper().replace("E", "E"))
 
 
-@settings(max_examples=3000, deadline=None,
+@settings(max_examples=1000, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(v=st.floats(allow_nan=False, allow_infinity=False))
 def test_lreal_to_string_roundtrips(calc, v):
@@ -58,7 +58,7 @@ def test_lreal_to_string_roundtrips(calc, v):
     assert got == bits, (repr(v), hex(got))
 
 
-@settings(max_examples=3000, deadline=None,
+@settings(max_examples=1000, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(v=st.floats(width=32, allow_nan=False, allow_infinity=False))
 def test_real_to_string_roundtrips(calc, v):

@@ -87,7 +87,7 @@ def case(draw, wide=False):
     return op, mode, cap, a, b, draw(big), draw(big)
 
 
-@settings(max_examples=1500, deadline=None,
+@settings(max_examples=600, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(c=case())
 def test_string_functions_match_reference(calc, c):
@@ -96,7 +96,7 @@ def test_string_functions_match_reference(calc, c):
     assert got == ref.truncate(OPS[op](a, b, n, p), cap)
 
 
-@settings(max_examples=800, deadline=None,
+@settings(max_examples=300, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(c=case(wide=True))
 def test_wstring_functions_match_reference(calc, c):
@@ -105,7 +105,7 @@ def test_wstring_functions_match_reference(calc, c):
     assert got == ref.truncate(OPS[op](a, b, n, p), cap)
 
 
-@settings(max_examples=800, deadline=None)
+@settings(max_examples=300, deadline=None)
 @given(a=st.binary(max_size=12).map(lambda b: bytes(x % 3 + 97 for x in b)),
        b=st.binary(max_size=4).map(lambda b: bytes(x % 3 + 97 for x in b)))
 def test_find_and_compare(calc, a, b):
@@ -140,7 +140,7 @@ INT_TYPES = {
 }
 
 
-@settings(max_examples=1000, deadline=None)
+@settings(max_examples=400, deadline=None)
 @given(t=st.sampled_from(sorted(INT_TYPES)), data=st.data())
 def test_int_string_roundtrip_and_saturation(calc, t, data):
     lo, hi = INT_TYPES[t]
@@ -169,7 +169,7 @@ def test_bool_strings(calc):
     assert unhx(calc.ask("i2s bool 0")) == b"FALSE"
 
 
-@settings(max_examples=1000, deadline=None)
+@settings(max_examples=400, deadline=None)
 @given(v=st.integers(*S64))
 def test_time_string_roundtrip(calc, v):
     s = unhx(calc.ask(f"i2s time {v}")).decode()
@@ -185,7 +185,7 @@ DAY = 86400 * 10**9
 DT_RANGE = (-(2**63 // DAY) * DAY, 2**63 - 1)
 
 
-@settings(max_examples=1000, deadline=None)
+@settings(max_examples=400, deadline=None)
 @given(v=st.integers(*DT_RANGE))
 def test_date_time_string_roundtrip(calc, v):
     for t, fmt, val in [("dt", ref.dt_to_string, v),
