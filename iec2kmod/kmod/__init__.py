@@ -169,11 +169,12 @@ def generate_tree(project, out: Path) -> dict:
             version=__version__, source_hash=source_hash)
         objs = ["main.o", "body.o", "iec_string.o", "iec_std_fb.o"]
         fp_objs = ["body.o"]
+        fp_runtime = [f for f in ("iec_math.c", "iec_real.c") if (ROOT / "runtime" / f).exists()]
         if fpu:
-            objs.append("iec_math.o")
-            fp_objs.append("iec_math.o")
+            objs += [f[:-2] + ".o" for f in fp_runtime]
+            fp_objs += [f[:-2] + ".o" for f in fp_runtime]
         _write_module(out, mod, {"main.c": main, "body.c": body}, objs, fp_objs,
-                      runtime=["iec_string.c", "iec_std_fb.c"] + (["iec_math.c"] if fpu else []))
+                      runtime=["iec_string.c", "iec_std_fb.c"] + (fp_runtime if fpu else []))
         slots.append({"name": pou.name.upper(), "hash": ihash})
         prog_modules.append({"name": mod, "kind": "program", "program_type": pou.name,
                              "slot": i, "build_id": build_id, "interface_hash": ihash,

@@ -22,11 +22,13 @@
 #include <linux/list.h>
 #include <linux/module.h>
 #include <linux/rcupdate.h>
+#include <linux/spinlock.h>
 
 #include "iec_fault.h"
 
 #define IEC_KMOD_ABI		1
 #define IEC_HIST_BUCKETS	32	/* release latency histogram, 1 us wide */
+#define IEC_POU_NAME_LEN	64
 
 /* One variable the manager can read and write by its IEC path. */
 struct iec_var_desc {
@@ -36,6 +38,9 @@ struct iec_var_desc {
 	char kind;		/* b i u f t e s w (see codegen/plan.py) */
 	u8 writable;
 	u16 single_event;	/* 1 + event number if it is a SINGLE variable */
+	/* 1 + index in its resource's tasks[] of the task that runs the
+	 * program instance owning it; 0: a global (image lock) */
+	u16 task;
 };
 
 /* A program type's body, published into its GFT slot. */
@@ -74,11 +79,21 @@ struct iec_task_stats {
 	u64 hist[IEC_HIST_BUCKETS];	/* latency, 1 us buckets, last: more */
 	/* the first fault since the last start */
 	int fault_code;
-	const char *fault_pou;
+	const char *fault_pou;	/* points into a program module: use the copy */
 	int fault_line;
+	char fault_pou_name[IEC_POU_NAME_LEN];	/* copy of *fault_pou */
 };
 
 struct iec_resource;
+
+/* A forced variable: its value is written at every cycle boundary. */
+struct iec_force {
+	struct iec_force *next;
+	const struct iec_var_desc *desc;
+	struct iec_resource *res;	/* NULL: the configuration's table */
+	u32 size;
+	u8 value[];
+};
 
 /* One TASK: static description from the generator, runtime state. */
 struct iec_task {
@@ -101,6 +116,17 @@ struct iec_task {
 	bool start_request;
 	ktime_t next;
 	struct iec_task_stats stats;
+
+	/*
+	 * Manager access to the task's program instances (iec_ctl.c).  The
+	 * task holds var_lock briefly at both ends of a cycle
+	 * (iec2kmod_cycle_begin/end): forced values are written there, and
+	 * in_cycle tells the manager whether it may read or write the
+	 * instance state now (a cycle boundary) or must wait.
+	 */
+	raw_spinlock_t var_lock;
+	bool in_cycle;			/* under var_lock */
+	struct iec_force *forces;	/* forced instance variables, under var_lock */
 };
 
 struct iec_resource {
@@ -150,6 +176,20 @@ void iec2kmod_unregister_resource(struct iec_resource *res);
 
 /* A SINGLE variable rose: wake the event tasks waiting for it. */
 void iec2kmod_event(u32 event);
+
+/*
+ * Manager access (iec_ctl.c), called by the resource runtime:
+ *  - iec2kmod_cycle_begin/end at both ends of every task cycle (they take
+ *    the task's var_lock and write its forced instance variables);
+ *  - iec2kmod_force_globals from a task's copy-out, under the image lock,
+ *    after the written globals were stored (forced globals win);
+ *  - iec2kmod_resource_gone from resource exit, after unregistering:
+ *    drops the forces that point into the resource module.
+ */
+void iec2kmod_cycle_begin(struct iec_task *t);
+void iec2kmod_cycle_end(struct iec_task *t);
+void iec2kmod_force_globals(void);
+void iec2kmod_resource_gone(struct iec_resource *res);
 
 /* --- inside the configuration module (iec_config_rt.c, iec_ctl.c) ----- */
 int iec_config_init(struct iec_config *cfg);
