@@ -496,6 +496,11 @@ class ExprEmitter:
         return out
 
     def string_select(self, f, fam, args, res):
+        # the result holds any of the inputs: as long as the longest one
+        lens = [concrete(a.type).length for a in args[1 if fam in ("SEL", "MUX") else 0:]
+                if isinstance(concrete(a.type), StringT)]
+        if lens and max(lens) > res.length:
+            res = StringT(max(lens), res.wide)
         out = f.temp(res)
         w = "wstring" if res.wide else "string"
         buf = self.strbuf(out, res)
