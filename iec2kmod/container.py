@@ -5,7 +5,7 @@ The image is made locally, never pulled: ``containers/build-rootfs.sh``
 debootstraps Debian bookworm with the toolchain and exactly the host's
 PREEMPT_RT kbuild headers, the root file system is tarred and ``docker
 import``-ed.  The tag is ``iec2kmod-build:<hash>``, the hash covering every file
-of ``containers/`` and the headers' release and version, so an image is rebuilt
+of ``containers/`` (but ``*.md``) and the headers' release and version, so an image is rebuilt
 only when the recipe changes.
 
     from iec2kmod import container
@@ -89,6 +89,8 @@ def recipe_hash(release: Optional[str] = None, version: Optional[str] = None) ->
     for root, dirs, files in os.walk(d):
         dirs[:] = sorted(x for x in dirs if x != "__pycache__")
         for fn in sorted(files):
+            if fn.endswith(".md"):        # documentation does not change the image
+                continue
             p = os.path.join(root, fn)
             h.update(os.path.relpath(p, d).encode() + b"\0")
             with open(p, "rb") as f:

@@ -27,6 +27,7 @@ when the guest stops answering.
 from __future__ import annotations
 
 import base64
+import atexit
 import collections
 import contextlib
 import math
@@ -43,6 +44,7 @@ import sys
 import tempfile
 import threading
 import time
+import weakref
 from typing import Iterable, List, NamedTuple, Optional, Sequence
 
 from .initramfs import CpioWriter, ModuleIndex
@@ -205,6 +207,28 @@ def _qemu_path_arg(p: str) -> str:
     return p.replace(",", ",,")
 
 
+_LIVE: "weakref.WeakSet[Guest]" = weakref.WeakSet()
+
+
+@atexit.register
+def _kill_all_guests() -> None:
+    for g in list(_LIVE):
+        with contextlib.suppress(Exception):
+            g.kill()
+
+
+def _qemu_preexec() -> None:
+    """In the QEMU child: own session (no terminal signals), and die with the
+    thread that started it (PR_SET_PDEATHSIG), so no QEMU outlives its user."""
+    os.setsid()
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)     # PR_SET_PDEATHSIG
+    except Exception:
+        pass
+
+
 class Guest:
     """One running PREEMPT_RT guest.  See the module docstring.
 
@@ -218,7 +242,8 @@ class Guest:
     from the image to insert at boot (dependencies resolved);
     *console_log* — path of the kernel console log file; *pvh* — boot the
     uncompressed kernel through its PVH entry (faster; falls back to the
-    bzImage when the kernel has no PVH note).
+    bzImage when the kernel has no PVH note); *preload* — modules the guest's
+    Python fork server (:meth:`pyrun`) imports once at its start.
     """
 
     def __init__(self, workdir: str, *, memory: int = 1024, smp: int = 2,
@@ -226,7 +251,7 @@ class Guest:
                  extra_modules: Sequence[str] = (), console_log: Optional[str] = None,
                  boot_timeout: float = 180.0, kernel: Optional[KernelImage] = None,
                  python: Optional[str] = None, qemu_args: Sequence[str] = (),
-                 pvh: bool = True) -> None:
+                 pvh: bool = True, preload: Sequence[str] = ("pyroute2",)) -> None:
         self.workdir = os.path.realpath(workdir)
         if any(c.isspace() for c in self.workdir):
             raise GuestError(f"work directory path must not contain whitespace: {self.workdir!r}")
@@ -244,6 +269,7 @@ class Guest:
         self.qemu_args = list(qemu_args)
         self.kernel = kernel
         self.pvh = pvh
+        self.preload = tuple(preload)
         self._rundir = tempfile.mkdtemp(prefix="iec2kmod-vm-")
         self.console_log = console_log or os.path.join(self._rundir, "console.log")
         self._proc: Optional[subprocess.Popen] = None
@@ -337,7 +363,8 @@ class Guest:
         t0 = time.monotonic()
         logf = open(self.console_log, "wb")
         self._proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                      stderr=subprocess.STDOUT, start_new_session=True)
+                                      stderr=subprocess.STDOUT, preexec_fn=_qemu_preexec)
+        _LIVE.add(self)
         self._console_thread = threading.Thread(target=self._pump_console, args=(logf,),
                                                 name="qemu-console", daemon=True)
         self._console_thread.start()
@@ -582,11 +609,13 @@ class Guest:
         return self.run(cmd, timeout, chroot=True, **kw)
 
     # -------------------------------------------------- warm Python server ----
-    def start_pyserver(self, preload: Sequence[str] = ("pyroute2",),
+    def start_pyserver(self, preload: Optional[Sequence[str]] = None,
                        timeout: float = 300.0) -> dict:
         """Start the guest's Python fork server (see :mod:`iec2kmod.vm.pyserver`)
-        with *preload* modules imported once; :meth:`pyrun` starts it on first
-        use.  Returns its ready message (``preloaded``, ``failed`` modules)."""
+        with *preload* (default: the constructor's) imported once; :meth:`pyrun`
+        starts it on first use.  Returns its ready message (``preloaded``,
+        ``failed`` modules)."""
+        preload = self.preload if preload is None else tuple(preload)
         with self._pylock:
             if self._pyserver is not None:
                 return self._pyserver
@@ -641,10 +670,11 @@ class Guest:
     def pyrun(self, code: Optional[str] = None, *, module: Optional[str] = None,
               script: Optional[str] = None, argv: Sequence[str] = (),
               cwd: Optional[str] = None, env: Optional[dict] = None,
-              timeout: float = 120.0, grace: float = 30.0, check: bool = False,
-              preload: Sequence[str] = ("pyroute2",)) -> CommandResult:
+              timeout: float = 120.0, grace: float = 30.0,
+              check: bool = False) -> CommandResult:
         """Run Python in the guest's chroot, forked from a warm interpreter
-        (the fork server; started on first use with *preload* imported).
+        (the fork server; started on first use with the *preload* modules
+        imported).
         Exactly one of *code* (like ``python -c``), *module* (``python -m``) or
         *script* (a console script such as ``"plc-manager"``) with *argv*.
         Much faster than :meth:`python` (a fork instead of a fresh interpreter
@@ -654,7 +684,7 @@ class Guest:
                  if v is not None]
         if len(kinds) != 1:
             raise ValueError("pyrun: give exactly one of code, module, script")
-        self.start_pyserver(preload)
+        self.start_pyserver()
         import json, struct
         with self._pylock:
             self._ensure_alive()

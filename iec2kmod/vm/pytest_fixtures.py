@@ -26,7 +26,8 @@ image) FAILS the test with what to install or run; nothing is skipped.
 
 Environment: ``IEC2KMOD_VM_ICOUNT=1`` boots the session guest in icount mode;
 ``IEC2KMOD_VM_MEMORY`` (MiB), ``IEC2KMOD_VM_SMP``; ``IEC2KMOD_VM_HOST_CACHE``
-(``loose``/``none``).
+(``loose``/``none``); ``IEC2KMOD_VM_PRELOAD`` (comma-separated modules the
+guest's Python fork server imports once, default ``pyroute2``).
 """
 
 from __future__ import annotations
@@ -57,6 +58,8 @@ def _env_options() -> Dict[str, Any]:
         opts["memory"] = int(os.environ["IEC2KMOD_VM_MEMORY"])
     if os.environ.get("IEC2KMOD_VM_SMP"):
         opts["smp"] = int(os.environ["IEC2KMOD_VM_SMP"])
+    if os.environ.get("IEC2KMOD_VM_PRELOAD"):
+        opts["preload"] = tuple(m for m in os.environ["IEC2KMOD_VM_PRELOAD"].split(",") if m)
     if os.environ.get("IEC2KMOD_VM_HOST_CACHE"):
         opts["host_cache"] = os.environ["IEC2KMOD_VM_HOST_CACHE"]
     return opts
