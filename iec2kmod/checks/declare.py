@@ -143,7 +143,18 @@ class Declarer:
         if td.init is not None and t is not ERROR:
             self.check_initializer(td.init, t, td.src)
             self.p.types.setdefault("__init__", {})[key] = td.init
+        elif t is not ERROR and self.named_init(td.spec) is not None:
+            # TYPE b : a; END_TYPE -- b starts where a starts
+            self.p.types.setdefault("__init__", {})[key] = self.named_init(td.spec)
         return t
+
+    def named_init(self, spec):
+        """The declared initial value of the user type a spec names, if any
+        (an alias of an elementary, string or array type is the aliased type
+        itself, so its initial value has to travel with the variable)."""
+        if isinstance(spec, ast.NamedSpec) and spec.name:
+            return self.p.types.get("__init__", {}).get(spec.name.upper())
+        return None
 
     def lookup_type(self, name, src, pos, report=True):
         if name is None:
@@ -267,7 +278,8 @@ class Declarer:
                     mt = ERROR
                 if m.init is not None and mt is not ERROR:
                     self.check_initializer(m.init, mt, src)
-                t.fields[mname.upper()] = (mname, mt, m.init)
+                t.fields[mname.upper()] = (mname, mt, m.init if m.init is not None
+                                           else self.named_init(m.spec))
             return t
         raise AssertionError(f"unknown spec {spec!r}")
 
@@ -469,8 +481,11 @@ class Declarer:
                     continue
                 if isinstance(owner, POUInfo) and key == owner.key and owner.kind != "FUNCTION":
                     pass
+                init = decl.init
+                if init is None and block.kind not in ("VAR_EXTERNAL", "VAR_IN_OUT"):
+                    init = self.named_init(decl.spec)
                 v = Var(name, t, block.kind, pos, src, constant=constant, retain=retain,
-                        edge=decl.edge, location=decl.location, init=decl.init, owner=owner)
+                        edge=decl.edge, location=decl.location, init=init, owner=owner)
                 table[key] = v
                 out.append(v)
         return out

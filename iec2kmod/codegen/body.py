@@ -78,6 +78,9 @@ class BodyEmitter:
             return name
         if v.section == "VAR_TEMP":
             return name
+        if v.section == "VAR_INPUT" and v.edge:
+            # inside the block an R_EDGE/F_EDGE input reads as its edge
+            return f"self->h_{v.name.lower()}"
         if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT"):
             # arrays are passed as a pointer to their first element
             return f"self->{name}" if isinstance(v.type, ArrayT) else f"(*self->{name})"
@@ -296,8 +299,6 @@ class BodyEmitter:
             lines = self.fb_call(f, c, target)
             return self.wrap(f, lines, pos, check=not target.type.pou.standard or f.may_fault)
         code = self.expr.emit(f, c)
-        if c.type is None or isinstance(c.type, ErrorT):
-            return self.wrap(f, [f"{code};"], pos)
         return self.wrap(f, [f"(void){code};"], pos)
 
     def fb_call(self, f, c, inst: Var) -> list[str]:

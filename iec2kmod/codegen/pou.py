@@ -233,8 +233,16 @@ def pou_body(project, pou) -> list[str]:
                 init.append(f"iec_memset(ret, 0, sizeof(*ret));" if not isinstance(
                     v.type, ArrayT) else "")
             elif v.section == "VAR_OUTPUT":
-                init += ie.lines(f"(*{N.var(v.name)})", v.type, v.init, f) \
-                    if not isinstance(v.type, ArrayT) else []
+                # outputs start from their initial values at every call, even
+                # when the function returns before writing them
+                name = N.var(v.name)
+                if isinstance(v.type, ArrayT):
+                    elem, count = N.array_flat(v.type)
+                    init.append(f"iec_memset({name}, 0, {count} * sizeof(*{name}));")
+                    init += ie.lines(name, v.type, v.init, f)
+                else:
+                    init.append(f"iec_memset({name}, 0, sizeof(*{name}));")
+                    init += ie.lines(f"(*{name})", v.type, v.init, f)
         if any("for (i = 0;" in ln for ln in init):
             locals_.append("iec_u32 i;")
         locals_ += f.decls
@@ -270,7 +278,7 @@ def pou_body(project, pou) -> list[str]:
             prev = f"self->h_{n}_prev"
             expr = f"{cur} && !{prev}" if v.edge == "R_EDGE" else f"!{cur} && {prev}"
             edge += [f"self->h_{n} = {expr};", f"{prev} = {cur};"]
-    out += ["\t" + ln for ln in locals_ + ["(void)ctx;"] + f.pre + init + edge]
+    out += ["\t" + ln for ln in locals_ + ["(void)self;", "(void)ctx;"] + f.pre + init + edge]
     out += ["\t" + ln for ln in stmts]
     if be.uses_ret_label:
         out.append("out:")

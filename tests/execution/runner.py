@@ -130,7 +130,7 @@ def split_items(text: str) -> list[str]:
 def _assignments(text, where):
     out = []
     for item in split_items(text):
-        m = re.match(r"^([A-Za-z_%][\w.,\[\]%]*)\s*(==|=)\s*(.+)$", item, re.S)
+        m = re.match(r"^([A-Za-z_%][\w.,\[\]%+-]*)\s*(==|=)\s*(.+)$", item, re.S)
         if not m:
             raise CaseError(f"{where}: cannot read '{item}' (write path = value)")
         out.append(Check(m.group(1), m.group(3).strip(), m.group(2) == "=="))
