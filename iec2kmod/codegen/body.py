@@ -47,13 +47,13 @@ class BodyEmitter:
 
     def fault_check(self, pos):
         name = N.c_string(self.pou.name.encode())
-        if self.is_function:
+        if self.is_function and self.ret_value():
             return f"IEC_FAULT_CHECK_RET(ctx, {name}, {self.line(pos)}, {self.ret_value()});"
         return f"IEC_FAULT_CHECK(ctx, {name}, {self.line(pos)});"
 
     def loop_tick(self, pos):
         name = N.c_string(self.pou.name.encode())
-        if self.is_function:
+        if self.is_function and self.ret_value():
             return f"IEC_LOOP_TICK_RET(ctx, {name}, {self.line(pos)}, {self.ret_value()});"
         return f"IEC_LOOP_TICK(ctx, {name}, {self.line(pos)});"
 
@@ -74,7 +74,7 @@ class BodyEmitter:
             if v.section in ("VAR_OUTPUT", "VAR_IN_OUT"):
                 return name if isinstance(v.type, ArrayT) else f"(*{name})"
             if v.section == "RESULT" and not N.is_scalar(v.type):
-                return "(*ret)"
+                return "ret" if isinstance(v.type, ArrayT) else "(*ret)"
             return name
         if v.section == "VAR_TEMP":
             return name

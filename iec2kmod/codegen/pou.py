@@ -230,8 +230,14 @@ def pou_body(project, pou) -> list[str]:
                 init += ie.lines(N.var(v.name), v.type, v.init if v.section != "RESULT" else None,
                                  f)
             elif v.section == "RESULT":
-                init.append(f"iec_memset(ret, 0, sizeof(*ret));" if not isinstance(
-                    v.type, ArrayT) else "")
+                # the result starts from its type's initial value
+                if isinstance(v.type, ArrayT):
+                    _, count = N.array_flat(v.type)
+                    init.append(f"iec_memset(ret, 0, {count} * sizeof(*ret));")
+                    init += ie.lines("ret", v.type, None, f)
+                else:
+                    init.append("iec_memset(ret, 0, sizeof(*ret));")
+                    init += ie.lines("(*ret)", v.type, None, f)
             elif v.section == "VAR_OUTPUT":
                 # outputs start from their initial values at every call, even
                 # when the function returns before writing them
