@@ -86,7 +86,7 @@ def test_empty_directory_is_a_usage_error(tmp_path):
     assert rc == 2 and "no .st, .il or .iec files" in err
 
 
-def test_no_traceback_on_any_input(tmp_path):
+def test_no_traceback_on_any_input(tmp_path, capsys):
     rng = random.Random(1234)
     alphabet = "PROGRAM END_PROGRAM VAR END_VAR := ; ( ) [ ] 'x' T#5s 16#F IF THEN x y 1 2 . , : \n"
     words = alphabet.split(" ")
@@ -97,10 +97,16 @@ def test_no_traceback_on_any_input(tmp_path):
     for i, data in enumerate(inputs):
         f = tmp_path / f"fuzz{i}.st"
         f.write_bytes(data)
+    # in-process (the same main() the console script runs), then two of them
+    # in a fresh interpreter as the user would
     for i in range(len(inputs)):
-        rc, out, err = run("check", "--no-cache", str(tmp_path / f"fuzz{i}.st"))
+        rc = cli.main(["check", "--no-cache", str(tmp_path / f"fuzz{i}.st")])
+        err = capsys.readouterr().err
         assert rc in (0, 1), (i, err)
         assert "Traceback" not in err and "internal error" not in err, (i, err)
+    for i in (0, len(inputs) - 1):
+        rc, out, err = run("check", "--no-cache", str(tmp_path / f"fuzz{i}.st"))
+        assert rc in (0, 1) and "Traceback" not in err, (i, err)
 
 
 def test_internal_errors_are_one_line_and_exit_70(monkeypatch, capsys):
