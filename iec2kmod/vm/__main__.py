@@ -26,8 +26,8 @@ def _guest(a) -> Guest:
     g = Guest(workdir, icount=a.icount, smp=a.smp, memory=a.memory)
     t0 = time.monotonic()
     g.start()
-    print(f"[vm] guest up in {time.monotonic() - t0:.1f} s (work dir {g.workdir}, "
-          f"console log {g.console_log})", file=sys.stderr, flush=True)
+    print(f"[vm] guest up in {time.monotonic() - t0:.1f} s (work dir {g.workdir})",
+          file=sys.stderr, flush=True)
     return g
 
 

@@ -51,6 +51,17 @@ def test_hello_module_built_after_boot_inserts_and_removes(guest, guest_tmp_path
     guest.check_kernel_log()                      # the teardown checks again
 
 
+def test_host_kmod_tools_work_in_chroot(guest, guest_tmp_path, kdir):
+    # plc-manager runs in the chroot and uses the host's kmod tools there
+    rc, out = guest.run("command -v insmod rmmod modinfo", chroot=True)
+    assert rc == 0, "kmod missing on the host: apt-get install kmod (scripts/setup.sh)"
+    ko = build_hello(guest_tmp_path, kdir)
+    guest.check_call(f"insmod {ko} greeting=kmod", chroot=True)
+    assert "iec2kmod_hello" in guest.check_call("lsmod", chroot=True)
+    guest.check_call("rmmod iec2kmod_hello", chroot=True)
+    assert "iec2kmod_hello: kmod from the PREEMPT_RT guest" in guest.dmesg(guest.baseline)
+
+
 def test_kernel_is_preempt_rt(guest):
     assert guest.check_call("cat /sys/kernel/realtime").strip() == "1"
     assert "PREEMPT_RT" in guest.check_call("uname -v")
