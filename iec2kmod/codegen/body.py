@@ -158,10 +158,21 @@ class BodyEmitter:
     def cond(self, f, e):
         return self.expr.emit(f, e, BOOL)
 
+    def checked_value(self, f, code, ctype, pos):
+        """A condition or selector that can fault is computed first, into a
+        temporary, and the fault checked before any branch runs."""
+        if not f.may_fault:
+            return code
+        tmp = f"sel{self.next_temp()}"
+        f.decls.append(f"{ctype} {tmp};")
+        f.pre += [f"{tmp} = {code};", self.fault_check(pos)]
+        f.may_fault = False
+        return tmp
+
     def if_(self, branches, else_):
         cond, body = branches[0]
         f = Frame(self)
-        c = self.cond(f, cond)
+        c = self.checked_value(f, self.cond(f, cond), "iec_bool", cond.pos)
         lines = [f"if ({c}) {{"] + self.block(body)
         rest = branches[1:]
         if rest or else_:
@@ -176,8 +187,8 @@ class BodyEmitter:
 
     def case(self, s):
         f = Frame(self)
-        sel = self.expr.emit(f, s.selector)
         st = concrete(s.selector.type)
+        sel = self.checked_value(f, self.expr.emit(f, s.selector), N.ctype(st), s.pos)
         lines = [f"switch ({sel}) {{"]
         for (labels, body), values in zip(s.elements, s.values):
             for lo, hi in values:
@@ -203,10 +214,8 @@ class BodyEmitter:
 
     def while_(self, s):
         f = Frame(self)
-        c = self.cond(f, s.cond)
+        c = self.checked_value(f, self.cond(f, s.cond), "iec_bool", s.pos)
         head = f.pre + [f"if (!({c}))", self.ind + "break;"]
-        if f.may_fault:
-            head.append(self.fault_check(s.pos))
         lines = self.loop(s.pos, head, s.body)
         return (["{"] + self.indent(f.decls + lines) + ["}"]) if f.decls else lines
 
