@@ -10,7 +10,15 @@ path as on the host, both in the initramfs and in a chroot of ``/host``.  So:
   be ``insmod``-ed in the guest by their host path;
 * ``Guest.run(cmd, chroot=True)`` (or ``Guest.python(...)``) runs host programs,
   for instance this very Python interpreter with the installed project
-  (pyroute2, plc-manager), inside the guest.
+  (pyroute2, plc-manager), inside the guest;
+* ``Guest.pyrun(code | module= | script=)`` runs Python forked from a warm
+  interpreter in the guest (pyroute2 preloaded): ~0.1 s instead of several
+  seconds for a fresh interpreter under TCG.
+
+The kernel is booted through its PVH entry (uncompressed ELF extracted from
+the bzImage once), which saves the firmware and decompression time.  An Oops
+panics the guest (``oops=panic``): the next use raises :class:`GuestDied` with
+the console tail, and the pytest fixture boots a fresh guest for the next test.
 
 Commands travel over a virtio-serial port (binary clean, no tty line
 discipline) driven by a tiny shell agent; the kernel console (ttyS0) is logged
