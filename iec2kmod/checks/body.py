@@ -447,8 +447,6 @@ class BodyChecker:
             if c is None or isinstance(c, FBType) or isinstance(c, (ArrayT, StructT)):
                 self.error(e.pos, f"cannot compare {lt.name} with {rt.name}")
                 return ERROR
-            if op not in ("=", "<>") and isinstance(c, EnumT):
-                pass
             return BOOL
         if op in LOGIC:
             if not is_bit(lt) or not is_bit(rt):

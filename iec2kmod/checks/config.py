@@ -297,8 +297,6 @@ class ConfigChecker:
                 if g.constant and not v.constant:
                     self.error(v.src, v.pos, f"global '{g.name}' is CONSTANT: declare the "
                                              "external VAR_EXTERNAL CONSTANT")
-                if v.assigned and g.constant:
-                    pass
                 g.used = True
                 if v.assigned:
                     g.assigned = True
