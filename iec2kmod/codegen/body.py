@@ -32,6 +32,7 @@ class BodyEmitter:
         self.ind = ind
         self.uses_ret_label = False
         self.used_labels: set[str] = set()
+        self.cr_depth = 0
 
     # ---------------------------------------------------------- helpers
     def next_temp(self):
@@ -333,6 +334,9 @@ class BodyEmitter:
                              else f"{member} = {lv};")
             elif a.value is not None:
                 lines += self.assign_code(f, member, param.type, a.value)
+        if en is not None and pou.var("EN") is not None and not pou.standard:
+            # a block that declares EN sees it TRUE when it runs
+            lines.append(f"{base}.{N.member(pou, pou.var('EN').name)} = 1;")
         body_fn = N.pou_prefix(pou) + ("" if pou.standard else "_body")
         lines.append(f"{body_fn}(&{base}, ctx);")
         if not pou.standard:
@@ -446,6 +450,7 @@ class BodyEmitter:
         if op is None:
             call = i.call
             res = i.cr_out
+            self.cr_depth = depth       # the current result passed as first input
             code = self.expr.emit(f, call, res)
             lines.append(f"{self.cr_var(res, depth)} = {code};")
         elif i.deferred:
@@ -514,6 +519,8 @@ class BodyEmitter:
                 neg = "!" if op == "CALCN" else ""
                 lines += [f"if ({neg}{self.cr_var(cr_in, depth)}) {{"] + self.indent(call_lines) + ["}"]
             f.may_fault = f.may_fault or not i.call.target.type.pou.standard
+        elif op == "NOP":
+            pass                # a label on a line of its own
         else:
             raise CodegenError(f"IL operator {op}")
         return out + self.wrap(f, lines, i.pos)

@@ -147,6 +147,8 @@ class ExprEmitter:
             return self.call(f, e, t)
         if isinstance(e, CRNode):
             return self.body.cr_var(e.cr_type, e.depth)
+        if isinstance(e, _CR):
+            return self.body.cr_var(e.cr_type, self.body.cr_depth)
         if isinstance(e, Raw):
             return e.code
         raise CodegenError(f"cannot emit {e!r}")
