@@ -61,6 +61,12 @@ def recipe_dir() -> str:
     d = os.environ.get("IEC2KMOD_CONTAINER_RECIPE") or os.path.join(
         os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "containers")
     if not os.path.isfile(os.path.join(d, "build-rootfs.sh")):
+        try:  # an installed (non-editable) copy ships it as package data
+            from iec2kmod_containers import ROOT
+            d = str(ROOT)
+        except ImportError:
+            pass
+    if not os.path.isfile(os.path.join(d, "build-rootfs.sh")):
         raise ContainerError(f"container recipe not found ({d}/build-rootfs.sh)")
     return d
 
