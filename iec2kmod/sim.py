@@ -222,7 +222,12 @@ def value_for(entry, text: str):
             if name not in t.values:
                 raise ValueError(f"'{s}' is not a value of {t.name}")
             return "i", t.values[name][1]
+        sign = 1
+        if s[:1] in "+-" and "#" not in s:
+            sign, s = (-1 if s[0] == "-" else 1), s[1:].strip()
         kind, value, _ = classify(s)
+        if sign < 0 and kind in ("int", "real"):
+            value = -value
     except (LiteralError, ValueError, IndexError) as exc:
         raise SimError(f"invalid value '{text}' for {entry.path}: {exc}") from None
     if entry.kind == "f":
