@@ -6,6 +6,7 @@ from __future__ import annotations
 import gc
 import re
 import sys
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 
@@ -18,9 +19,11 @@ from . import ast
 from .diagnostics import Diagnostics, SourceFile
 from .literals import LiteralError, classify
 
-# Arpeggio descends about 25 Python frames per parenthesis; Python 3.11 keeps
-# pure-Python frames off the C stack, so this allows ~300 nested levels.
-RECURSION_LIMIT = 8000
+# Arpeggio descends about 16 Python frames per parenthesis, 28 per nested
+# call and 10 per nested IF; Python 3.11 keeps pure-Python frames off the C
+# stack, so this allows about 570 nested parentheses, 320 nested calls and
+# 900 nested statements (no less than before the Operand fast path).
+RECURSION_LIMIT = 9200
 
 GRAMMAR = Path(__file__).resolve().parent / "grammar" / "iec61131.tx"
 
@@ -140,6 +143,20 @@ def _args(call_args):
     return out
 
 
+def _simple(obj):
+    """A SIMPLE_OPERAND token: the Ref or Lit the full Unary rule makes."""
+    text = obj.text
+    if "#" in text or not (text[0].isalpha() or text[0] == "_") or \
+            text.upper() in ("TRUE", "FALSE"):
+        return _literal(obj)
+    name, _, rest = text.partition(".")
+    pos = _pos(obj)
+    accessors = []
+    if rest:
+        _path_accessors(rest, pos + len(name) + 1, accessors)
+    return ast.Ref(pos, name, accessors)
+
+
 def _call_or_variable(obj):
     var = obj.var
     if obj.call is None:
@@ -167,6 +184,7 @@ def metamodel():
         "Unary": _unary,
         "Paren": _paren,
         "Literal": _literal,
+        "Simple": _simple,
         "Variable": _variable,
         "CallOrVariable": _call_or_variable,
         "DirectVariable": _direct,
@@ -394,6 +412,45 @@ def fast_model_from_str(text: str, file_name: str | None = None):
         builder.parser = None
 
 
+# Fast-path tokens of the grammar (see SIMPLE_OPERAND in the grammar): they
+# only shortcut what other rules would match, so they are never named in
+# "expected ..." messages, and syntax errors are found again with them
+# switched off, which gives exactly the errors of the grammar without them.
+FAST_PATHS = ("SIMPLE_OPERAND",)
+_NEVER = re.compile(r"(?!)")
+
+
+@contextmanager
+def fast_paths(enabled: bool):
+    """Switches the grammar's fast-path tokens on or off (process-wide, for
+    the parses inside the ``with`` block)."""
+    rules = [metamodel()[name]._tx_peg_rule for name in FAST_PATHS]
+    saved = [r.regex for r in rules]
+    if not enabled:
+        for r in rules:
+            r.regex = _NEVER
+    try:
+        yield
+    finally:
+        for r, regex in zip(rules, saved):
+            r.regex = regex
+
+
+def _model(src: SourceFile, reference: bool):
+    def build():
+        if reference:
+            return metamodel().model_from_str(src.text, file_name=src.path)
+        return fast_model_from_str(src.text, file_name=src.path)
+    try:
+        return build()
+    except TextXSyntaxError:
+        pass
+    # The error (its position and expected tokens) of the grammar without
+    # the fast paths, which may try more at the place of the error.
+    with fast_paths(False):
+        return build()
+
+
 _PRAGMA_SCAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|(\{[^}]*\})",
                           re.S)
 
@@ -414,7 +471,7 @@ def _describe_expected(err) -> str:
         to_match = getattr(r, "to_match", None)
         if isinstance(to_match, str) and r.__class__.__name__ == "StrMatch":
             label = f"'{to_match}'"
-        elif name == "Comment":
+        elif name == "Comment" or name in FAST_PATHS:
             continue
         elif name in _TOKEN_NAMES:
             label = _TOKEN_NAMES[name]
@@ -461,10 +518,7 @@ def parse_source(src: SourceFile, diags: Diagnostics, reference: bool = False):
     gc_was_enabled = gc.isenabled()
     gc.disable()
     try:
-        if reference:
-            model = metamodel().model_from_str(src.text, file_name=src.path)
-        else:
-            model = fast_model_from_str(src.text, file_name=src.path)
+        model = _model(src, reference)
     except TextXSyntaxError as err:
         line, col = err.line or 1, err.col or 1
         offset = min(src.offset(line, col), len(src.text))

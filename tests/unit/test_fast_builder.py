@@ -1,10 +1,15 @@
-"""The fast model builder (parser.FastBuilder) against textX's own
-model_from_str: on every file of examples/ and tests/errors/, on the
-benchmark project and on small and broken inputs, both paths must give the
-same iec2kmod.ast unit and the same diagnostics, so the fast path can never
-silently diverge from the reference."""
+"""The fast paths of the parser against their references, on every file of
+examples/ and tests/errors/, on the benchmark project and on small, broken
+and fuzzed inputs; each must give the same iec2kmod.ast unit and the same
+diagnostics, so a fast path can never silently diverge:
+
+- the fast model builder (parser.FastBuilder) against textX's own
+  model_from_str;
+- the grammar with its fast-path tokens (SIMPLE_OPERAND) against the
+  grammar without them."""
 
 import random
+import re
 import sys
 from pathlib import Path
 
@@ -12,7 +17,7 @@ import pytest
 
 from iec2kmod import ast
 from iec2kmod.diagnostics import Diagnostics, SourceFile
-from iec2kmod.parser import parse_source
+from iec2kmod.parser import fast_paths, metamodel, parse_source
 
 pytestmark = pytest.mark.unit
 ROOT = Path(__file__).resolve().parents[2]
@@ -37,14 +42,19 @@ def dump(x):
     return (type(x).__name__, x)
 
 
+def result(text, path, reference=False):
+    diags = Diagnostics()
+    unit = parse_source(SourceFile(path, text), diags, reference=reference)
+    return dump(unit), [(d.path, d.line, d.col, d.severity, d.message, d.source_line)
+                        for d in diags.items]
+
+
 def both(text, path="t.st"):
-    out = []
-    for reference in (True, False):
-        diags = Diagnostics()
-        unit = parse_source(SourceFile(path, text), diags, reference=reference)
-        out.append((dump(unit), [(d.path, d.line, d.col, d.severity, d.message, d.source_line)
-                                 for d in diags.items]))
-    return out
+    """(reference, fast) results: model_from_str and the grammar without
+    fast paths, against FastBuilder and the grammar with them."""
+    with fast_paths(False):
+        reference = result(text, path, reference=True)
+    return reference, result(text, path)
 
 
 @pytest.mark.parametrize("path", FILES, ids=[str(p.relative_to(ROOT)) for p in FILES])
@@ -59,9 +69,29 @@ def test_same_model_on_the_benchmark_project():
         from gen_project import project
     finally:
         sys.path.remove(str(ROOT / "benchmarks"))
-    reference, fast = both(project(10000), "bench.st")
+    # a quarter of the 10,000-line benchmark: every kind of block it makes
+    # (ST and IL function blocks, programs, the configuration), in less time
+    reference, fast = both(project(2500), "bench.st")
     assert reference[0][0] == "SourceUnit" and not reference[1]
     assert fast == reference
+
+
+def test_the_fast_paths_are_used():
+    with fast_paths(False):
+        assert "SIMPLE_OPERAND" not in repr(metamodel()._parser_blueprint.clone().parse("""
+            PROGRAM p x := a + 1; END_PROGRAM"""))
+    assert "SIMPLE_OPERAND" in repr(metamodel()._parser_blueprint.clone().parse("""
+        PROGRAM p x := a + 1; END_PROGRAM"""))
+
+
+def test_simple_operand_is_var_path_or_literal():
+    """SIMPLE_OPERAND repeats the VAR_PATH and LITERAL expressions: they
+    must stay the same."""
+    regex = {name: metamodel()[name]._tx_peg_rule.to_match_regex
+             for name in ("SIMPLE_OPERAND", "VAR_PATH", "LITERAL")}
+    assert regex["SIMPLE_OPERAND"] == (
+        "(?>" + regex["VAR_PATH"] + r")(?![ \t\r\n]*(?:[\[({]|\*\*|\/\/))"
+        r"|(?!NOT\b)(?>" + regex["LITERAL"] + r")(?![ \t\r\n]*(?:\*\*|\(\*|\/\/|\{))")
 
 
 SNIPPETS = [
@@ -88,6 +118,13 @@ SNIPPETS = [
     "PROGRAM p\n CASE x OF 1, 2..3: y := 1; ELSE y := 2; END_CASE\n FOR i := 1 TO 10 BY 2 DO EXIT; END_FOR"
     "\n WHILE a DO RETURN; END_WHILE\n REPEAT ; UNTIL b END_REPEAT\nEND_PROGRAM\n",
     "PROGRAM p\n x := " + "(" * 400 + "1" + ")" * 400 + ";\nEND_PROGRAM\n",
+    "PROGRAM p\n x := a (* c *) [1] + b // c\n (2) + 3 (* c *) ** 2 + c {p} [3] + NOT#1 + d\f[1];\n"
+    " y := a.b.3 + a.b[1].c + T#1s + INT#-5 + 16#FF + 'x' + \"w\" + 1.5e3 + TRUE + e1 ** 2 + f ();"
+    "\nEND_PROGRAM\n",
+    "PROGRAM p\n x := 1\nEND_PROGRAM\n",
+    "PROGRAM p\n x := a\nEND_PROGRAM\n",
+    "PROGRAM p\n x := a.b\nEND_PROGRAM\n",
+    "PROGRAM p\n f(a, b c);\nEND_PROGRAM\n",
 ]
 
 
@@ -107,3 +144,23 @@ def test_same_result_on_fuzzed_input():
         text = "PROGRAM p\n" + " ".join(rng.choice(words) for _ in range(40)) + "\nEND_PROGRAM\n"
         reference, fast = both(text)
         assert fast == reference, text
+
+
+def test_same_result_on_mutated_files():
+    """Token-level mutations of project files: mostly syntax errors next to
+    operands, where the fast paths try less than the full rules."""
+    rng = random.Random(99)
+    token = re.compile(r"\(\*.*?\*\)|//[^\n]*|\{[^}]*\}|'(?:[^'$\n]|\$.)*'|\w+#[\w.#'-]+"
+                       r"|\w+(?:\.\w+)*|:=|=>|\*\*|<>|<=|>=|\S|\n", re.S)
+    vocab = [";", ":=", "=>", "(", ")", "[", "]", ",", ".", "**", "*", "+", "-", "NOT", "(* c *)",
+             "// c\n", "{p}", "x", "a.b", "1", "T#1s", "16#FF", "'s'", "%IX0.1", "IF", "END_IF",
+             "\n", "..", ":", "END_VAR", "LD", "ADD(", "&", "MOD", "=", "#", "\f"]
+    for path in FILES[::3]:
+        text = path.read_text()
+        spans = [m.span() for m in token.finditer(text)]
+        for _ in range(6):
+            a, b = spans[rng.randrange(len(spans))]
+            mutant = text[:a] + rng.choice(["", text[a:b] + " " + text[a:b], rng.choice(vocab),
+                                             rng.choice(vocab) + " " + text[a:b]]) + text[b:]
+            reference, fast = both(mutant, str(path))
+            assert fast == reference, (path, a, mutant[max(0, a - 40):a + 40])
