@@ -89,11 +89,24 @@ class BodyEmitter:
 
     def cr_var(self, t, depth=0):
         t = concrete(t)
-        if isinstance(t, (StringT, ArrayT, StructT, FBType, ErrorT)) or t is None:
+        if isinstance(t, StringT):
+            # a string current result has the length of its type
+            name = f"cr{depth}_{'w' if t.wide else ''}s{t.length}"
+            self.cr_vars[name] = N.string_struct(t)
+            return name
+        if isinstance(t, (ArrayT, StructT, FBType, ErrorT)) or t is None:
             raise CodegenError(f"IL current result of type {getattr(t, 'name', t)}")
         name = f"cr{depth}_{N.type_tag(t)}"
         self.cr_vars[name] = N.ctype(t)
         return name
+
+    def cr_set(self, f, t, depth, value) -> list[str]:
+        """Current result := value (C code of IEC type t, or an expression)."""
+        cr = self.cr_var(t, depth)
+        if isinstance(concrete(t), StringT):
+            return self.assign_code(f, cr, t, Raw(value, t) if isinstance(value, str) else value)
+        code = value if isinstance(value, str) else self.expr.emit(f, value, concrete(t))
+        return [f"{cr} = {code};"]
 
     # ------------------------------------------------------------- body
     def body(self, stmts) -> list[str]:
@@ -393,14 +406,15 @@ class BodyEmitter:
                 if a is not None and a.value is not None:
                     outs.append((a, tmp, v))
         call = f"{N.fn(pou.name)}({', '.join(args)})"
+        # every call is a statement of its own, in the order of the source
+        # (left to right): a call may change the caller's variables through
+        # VAR_IN_OUT, and C leaves the order of operands unspecified
         if ret_tmp is not None:
             f.pre.append(f"{call};")
             result_code = ret_tmp
-        elif outs:
+        else:
             result_code = f.temp(result.type, "ret")
             f.pre.append(f"{result_code} = {call};")
-        else:
-            return call
         for a, tmp, v in outs:
             val = f"((iec_bool)!{tmp})" if a.negate else tmp
             f.pre += self.assign_ref(f, a.value, Raw(val, v.type))
@@ -452,12 +466,11 @@ class BodyEmitter:
             res = i.cr_out
             self.cr_depth = depth       # the current result passed as first input
             code = self.expr.emit(f, call, res)
-            lines.append(f"{self.cr_var(res, depth)} = {code};")
+            lines += self.cr_set(f, res, depth, code)
         elif i.deferred:
             inner = []
             if i.operand is not None:
-                inner.append(f"{self.cr_var(i.operand.type, depth + 1)} = "
-                             f"{self.expr.emit(f, i.operand, concrete(i.operand.type))};")
+                inner += self.cr_set(f, i.operand.type, depth + 1, i.operand)
             for n in i.nested:
                 inner += self.il(n, depth + 1)
             inner_t = i.nested[-1].cr_out if i.nested else i.operand.type
@@ -468,10 +481,13 @@ class BodyEmitter:
         elif op in ("LD", "LDN"):
             t = concrete(i.operand.type) if not isinstance(i.operand.type, LiteralT) else \
                 concrete(i.cr_out)
-            val = self.expr.emit(f, i.operand, t)
-            if op == "LDN":
-                val = f"((iec_bool)!{val})" if t is BOOL else f"iec_not_{N.type_tag(t)}({val})"
-            lines.append(f"{self.cr_var(t, depth)} = {val};")
+            if isinstance(t, StringT):
+                lines += self.cr_set(f, t, depth, i.operand)
+            else:
+                val = self.expr.emit(f, i.operand, t)
+                if op == "LDN":
+                    val = f"((iec_bool)!{val})" if t is BOOL else f"iec_not_{N.type_tag(t)}({val})"
+                lines.append(f"{self.cr_var(t, depth)} = {val};")
         elif op in ("ST", "STN"):
             cr = self.cr_var(cr_in, depth)
             if op == "STN":

@@ -249,7 +249,10 @@ def wrapper_config(name: str, cases) -> str:
 
 
 def check_project(paths):
-    res = frontend.run([str(p) for p in paths], use_cache=False)
+    try:
+        res = frontend.run([str(p) for p in paths], use_cache=False)
+    except Exception as exc:  # noqa: BLE001 - a crash of the front end is a case failure
+        raise CaseError(f"the front end crashed: {type(exc).__name__}: {exc}") from exc
     if not res.ok:
         msgs = "\n".join(d.format() for d in res.diags.sorted() if d.severity == "error")
         raise CaseError(f"the front end rejected the sources:\n{msgs}")
