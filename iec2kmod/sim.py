@@ -21,7 +21,7 @@ from jinja2 import Environment, FileSystemLoader, StrictUndefined
 
 from . import __version__
 from .checks.types import EnumT, concrete
-from .codegen import generate
+from .codegen import generate, source_list
 from .codegen import cnames as N
 from .codegen.plan import build_plan, PlanEmitter
 from .literals import LiteralError, classify, parse_duration
@@ -108,6 +108,7 @@ def render_sim(project):
         globals=[N.declare(g.var.type, g.c_name) for g in plan.globals],
         directs=[N.declare(t, c) for c, t in plan.directs.values()],
         instances=[f"{N.pou_struct(ip.pou)} {ip.c_name}" for ip in plan.instances],
+        sources=source_list(project),
         init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init),
         init=f.pre + init, tasks=tasks, vars=vars_, pou_files=pou_files)
     files = {gen.header_name: gen.header, "sim_project.c": text}

@@ -42,3 +42,9 @@ def test_case(case, sanitize):
     problems = runner.verify(case, _area_run(case, sanitize), sanitize)
     assert not problems, f"{case.path}:\n  " + "\n  ".join(problems)
 
+
+
+def test_enough_cases():
+    assert len(CASES) >= 150
+    il = sum(1 for c in CASES if c.path.suffix.lower() == ".il")
+    assert il >= 15
