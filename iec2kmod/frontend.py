@@ -17,7 +17,6 @@ import os
 import re
 import pickle
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -178,6 +177,7 @@ def _parse_parallel(sources, jobs, total):
         share = max(1, round(2 * jobs * len(s.text) / total))
         parts += [(i, p) for p in split_source(s, share)]
     import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor  # only here: a cache hit needs none
     ctx = multiprocessing.get_context("fork")
     # biggest parts first so the cores finish together
     order = sorted(range(len(parts)), key=lambda k: -len(parts[k][1].text.lstrip()))
