@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -23,6 +24,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from gen_project import project  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+CPU: list[float] = []  # CPU seconds (all processes) of each check run
+
+
+def load() -> str:
+    return "load average " + " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 def split_files(text: str, nfiles: int) -> list[str]:
@@ -41,10 +47,13 @@ def split_files(text: str, nfiles: int) -> list[str]:
 
 def check(paths, cache_dir, extra=()):
     env = dict(os.environ, IEC2KMOD_CACHE=str(cache_dir), PYTHONPATH=str(ROOT))
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
     p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "check", "--timings", *extra,
                         *map(str, paths)], env=env, capture_output=True, text=True)
     wall = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    CPU.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
     if p.returncode != 0:
         sys.exit(f"check failed ({p.returncode}):\n{p.stderr[-3000:]}")
     timings = {}
@@ -70,14 +79,16 @@ def main():
             p.write_text(part)
             paths.append(p)
         nlines = sum(p.read_text().count("\n") for p in paths)
-        print(f"project: {nlines} lines in {len(paths)} files, {os.cpu_count()} cores")
+        print(f"project: {nlines} lines in {len(paths)} files, {os.cpu_count()} cores; {load()}")
         colds = []
         for run in range(args.runs):
             cache = tmp / f"cache{run}"
             wall, timings = check(paths, cache)
-            colds.append((wall, timings))
-        wall, timings = min(colds, key=lambda c: c[0])
-        print(f"cold check:   {wall:6.2f} s  ({nlines / wall:,.0f} lines/s)  best of {args.runs}")
+            colds.append((wall, timings, CPU[-1]))
+        wall, timings, cpu = min(colds, key=lambda c: c[0])
+        print(f"cold check:   {wall:6.2f} s  ({nlines / wall:,.0f} lines/s)  best of {args.runs}"
+              f" (all: {', '.join(f'{c[0]:.2f}' for c in colds)});"
+              f" CPU {cpu:.2f} s in all processes")
         inproc = sum(timings.values())
         for name, secs in timings.items():
             print(f"  {name:>10}: {secs:6.3f} s")
@@ -86,9 +97,10 @@ def main():
         print(f"repeat check: {min(reps):6.2f} s  (unchanged files, result cache)")
         one, _ = check([tmp / "all.st"] if (tmp / "all.st").write_text(text) else [],
                        tmp / "cache-single")
-        print(f"single file:  {one:6.2f} s  (the same project as one file: one core)")
+        print(f"single file:  {one:6.2f} s  (the same project as one file, cut into parts"
+              f" for the cores)")
         print("targets: cold <= 6 s, repeat <= 1 s;",
-              "MET" if wall <= 6 and min(reps) <= 1 else "NOT MET")
+              "MET" if wall <= 6 and min(reps) <= 1 else "NOT MET", f"({load()})")
 
 
 if __name__ == "__main__":
