@@ -298,8 +298,7 @@ class BodyEmitter:
         t0 = t
         t = concrete(t)
         if isinstance(t, StringT):
-            w = "wstring" if t.wide else "string"
-            return [f"iec_assign_{w}({self.expr.strbuf(code, t)}, {self.expr.strv(f, value)});"]
+            return self.assign_string(f, code, t, value)
         if isinstance(t, ArrayT):
             src = self.expr.emit(f, value)
             elem, count = N.array_flat(t)
@@ -313,6 +312,29 @@ class BodyEmitter:
             val = (f"(({N.ctype(t0.elem)})iec_range_{wide}(ctx, {val}, {t0.low}LL, "
                    f"{t0.high}LL))")
         return [f"{code} = {val};"]
+
+    def assign_string(self, f, code, t, value) -> list[str]:
+        from .expr import std_target, std_args
+        buf = self.expr.strbuf(code, t)
+        vt = concrete(value.type) if value.type is not None else None
+        if isinstance(value, ast.Ref) and isinstance(vt, StringT) and vt.wide == t.wide and \
+                vt.length == t.length and not any(k == "bit" for k, _, _ in value.accessors):
+            # the same string type: a structure copy
+            lv, _, _ = self.expr.lvalue(f, value)
+            return [f"{code} = {lv};"]
+        if t.wide:
+            return [f"iec_assign_wstring({buf}, {self.expr.strv(f, value)});"]
+        fres = std_target(value)
+        if fres is not None and fres.family == "CONCAT" and not code.startswith("(*"):
+            parts = self.expr.concat_parts(f, std_args(value))
+            if not any(code in arg for _, arg in parts[1:]):
+                # built in place: truncating each piece at the destination's
+                # capacity gives the truncated whole
+                return self.expr.concat_lines(buf, parts)
+            tmp = f.temp(concrete(fres.result))
+            return self.expr.concat_lines(self.expr.strbuf(tmp, concrete(fres.result)),
+                                          parts) + [f"iec_str_set({buf}, IEC_STRV({tmp}));"]
+        return [f"iec_str_set({buf}, {self.expr.strv(f, value)});"]
 
     # ------------------------------------------------------------ calls
     def call_stmt(self, c: ast.Call, pos) -> list[str]:

@@ -240,6 +240,8 @@ class ExprEmitter:
             c = concrete(common(lt, rt))
             if isinstance(c, StringT):
                 a, b = self.strv(f, e.left), self.strv(f, e.right)
+                if not c.wide and op in ("=", "<>"):
+                    return f"((iec_bool){'!' if op == '<>' else ''}iec_str_eq({a}, {b}))"
                 fn = "iec_cmp_wstring" if c.wide else "iec_cmp_string"
                 return f"((iec_bool)({fn}({a}, {b}) {_cop(op)} 0))"
             a = self.emit(f, e.left, c)
@@ -466,8 +468,49 @@ class ExprEmitter:
         if isinstance(e, ast.Lit) and e.kind in ("string", "wstring"):
             return self.string_literal(f, e)
         t = concrete(e.type)
+        fres = std_target(e)
+        if fres is not None and fres.family in ("LEFT", "RIGHT", "MID") and not t.wide:
+            # a substring is a view into its input: no copy
+            args = std_args(e)
+            src = self.strv(f, args[0])
+            rest = [self.emit(f, a, ELEMENTARY["LINT"]) for a in args[1:]]
+            return f"iec_strv_{fres.family.lower()}({', '.join([src] + rest)})"
         code = self.emit(f, e)
         return f"IEC_{'W' if t.wide else ''}STRV({code})"
+
+    def concat_parts(self, f, args):
+        """The pieces of a narrow CONCAT: (helper, C argument) to append."""
+        parts = []
+        for a in args:
+            fres = std_target(a)
+            src = concrete(fres.param_types[0]) if fres is not None and \
+                fres.family == "CONVERT" else None
+            if src is not None and isinstance(concrete(fres.result), StringT) and \
+                    not concrete(fres.result).wide and scalar_kind(src) in ("sint", "uint", "bit"):
+                # INT_TO_STRING(x) appended as digits, without a temporary
+                arg = std_args(a)[0]
+                if src.bits <= 32 and (scalar_kind(src) == "sint" or src.bits < 32):
+                    parts.append(("iec_str_append_s32", f"(iec_s32){self.emit(f, arg, src)}"))
+                elif scalar_kind(src) == "sint":
+                    parts.append(("iec_str_append_s64", self.emit(f, arg, src)))
+                else:
+                    parts.append(("iec_str_append_u64", f"(iec_u64){self.emit(f, arg, src)}"))
+            else:
+                parts.append(("iec_str_append", self.strv(f, a)))
+        return parts
+
+    @staticmethod
+    def concat_lines(buf, parts):
+        """Set the first piece, append the others (each truncates)."""
+        out = []
+        for k, (fn, arg) in enumerate(parts):
+            if k == 0 and fn == "iec_str_append":
+                out.append(f"iec_str_set({buf}, {arg});")
+                continue
+            if k == 0:
+                out.append(f"iec_str_set({buf}, iec_strv_make(\"\", 0, 0));")
+            out.append(f"{fn}({buf}, {arg});")
+        return out
 
     @staticmethod
     def strbuf(code, t) -> str:
@@ -477,6 +520,10 @@ class ExprEmitter:
         out = f.temp(res)
         w = "wstring" if res.wide else "string"
         buf = self.strbuf(out, res)
+        if fam == "CONCAT" and not res.wide:
+            # set, then append piece after piece, into one temporary
+            f.pre += self.concat_lines(buf, self.concat_parts(f, args))
+            return out
         if fam == "CONCAT":
             # CONCAT(a, b, c) = CONCAT(CONCAT(a, b), c), accumulated in out
             first = self.strv(f, args[0])
@@ -540,6 +587,18 @@ class ExprEmitter:
 _TIMEISH = {"time", "ltime", "date", "tod", "dt"}
 # time-to-time conversions of the standard (the runtime's iec_<a>_to_<b>)
 _TIME_CONV = {("time", "ltime"), ("ltime", "time"), ("dt", "date"), ("dt", "tod")}
+
+
+def std_target(e):
+    """The resolved standard function of a call expression, or None."""
+    if isinstance(e, ast.Call) and isinstance(getattr(e, "target", None), stdlib.StdFunc):
+        return e.target
+    return None
+
+
+def std_args(e):
+    """Argument expressions of a standard function call, in parameter order."""
+    return [a.value for a in e.args if a.kind == "pos" or a.name.upper() not in ("EN", "ENO")]
 
 
 def tag_of(t):
