@@ -272,16 +272,18 @@ class BodyEmitter:
         return self.assign_code(f, code, t, value)
 
     def set_bit(self, f, code, target, bit, val):
-        base = target.symbol.type
-        for kind, _, _ in target.accessors[:-1]:
-            pass
+        """x.bit := val, where val is a BOOL (0 or 1, never anything else)."""
         # the variable holding the bit: its type is the expression before .bit
         holder_t = self._holder_type(target)
         width = holder_t.bits
         u = UNSIGNED[width]
         ct = N.ctype(holder_t)
+        if val in ("1", "((iec_bool)1)"):
+            return f"{code} = ({ct})(({u}){code} | (({u})1 << {bit}));"
+        if val in ("0", "((iec_bool)0)"):
+            return f"{code} = ({ct})(({u}){code} & ~(({u})1 << {bit}));"
         return (f"{code} = ({ct})((({u}){code} & ~(({u})1 << {bit})) | "
-                f"(({u})({val} != 0) << {bit}));")
+                f"(({u}){val} << {bit}));")
 
     @staticmethod
     def _holder_type(target):
@@ -373,7 +375,12 @@ class BodyEmitter:
             # a block that declares EN sees it TRUE when it runs
             lines.append(f"{base}.{N.member(pou, pou.var('EN').name)} = 1;")
         body_fn = N.pou_prefix(pou) + ("" if pou.standard else "_body")
-        lines.append(f"{body_fn}(&{base}, ctx);")
+        inline = _INLINE_FB.get(pou.name.upper()) if pou.standard else None
+        if inline:
+            # the bistables and edge detectors of iec_std_fb.c, written out
+            lines += [ln.format(b=base) for ln in inline]
+        else:
+            lines.append(f"{body_fn}(&{base}, ctx);")
         if not pou.standard:
             f.may_fault = True
         for key, a in bound.items():
@@ -583,6 +590,16 @@ class BodyEmitter:
             fres = stdlib.resolve(op, [cr_in, operand.type])
             code = self.expr.std_apply(f, fres, [left, operand], BOOL)
         return [f"{self.cr_var(res, depth)} = {code};"]
+
+
+# Standard FBs simple enough to be written out at the call (the same
+# statements as their bodies in kmod_templates/runtime/iec_std_fb.c).
+_INLINE_FB = {
+    "SR": ["{b}.q1 = {b}.s1 || (!{b}.r && {b}.q1);"],
+    "RS": ["{b}.q1 = !{b}.r1 && ({b}.s || {b}.q1);"],
+    "R_TRIG": ["{b}.q = {b}.clk && !{b}.prev;", "{b}.prev = !!{b}.clk;"],
+    "F_TRIG": ["{b}.q = !{b}.clk && {b}.prev;", "{b}.prev = !!{b}.clk;"],
+}
 
 
 def _copy(dst, src, t):

@@ -250,7 +250,12 @@ class ExprEmitter:
         if op in ("AND", "OR", "XOR"):
             rtype = concrete(t)
             a = self.emit(f, e.left, rtype)
+            mark = (len(f.pre), f.may_fault)
             b = self.emit(f, e.right, rtype)
+            if rtype is BOOL and op != "XOR" and mark == (len(f.pre), f.may_fault):
+                # the right operand cannot fault and has no side effect: the
+                # compiler may skip it (C's && and ||), the value is the same
+                return f"((iec_bool)({a} {'&&' if op == 'AND' else '||'} {b}))"
             if rtype is BOOL:
                 return f"((iec_bool)({a} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {b}))"
             return f"iec_{op.lower()}_{N.type_tag(rtype)}({a}, {b})"
