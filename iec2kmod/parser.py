@@ -115,18 +115,24 @@ def _path_accessors(path, pos, out):
         pos += len(part) + 1
 
 
-def _variable(obj):
-    name, _, rest = obj.name.partition(".")
-    pos = _pos(obj)
+def _path_ref(path, pos):
+    """The Ref of a VAR_PATH token 'a.b.3' at offset pos."""
+    name, _, rest = path.partition(".")
     accessors = []
     if rest:
         _path_accessors(rest, pos + len(name) + 1, accessors)
+    return ast.Ref(pos, name, accessors)
+
+
+def _variable(obj):
+    ref = _path_ref(obj.name, _pos(obj))
+    accessors = ref.accessors
     for idx in obj.indexes:
         accessors.append(("index", list(idx.indexes), _pos(idx)))
         if idx.members:
             _path_accessors(idx.members[1:], idx._tx_position_end - len(idx.members) + 1,
                             accessors)
-    return ast.Ref(pos, name, accessors)
+    return ref
 
 
 def _args(call_args):
@@ -148,13 +154,8 @@ def _simple(obj):
     text = obj.text
     if "#" in text or not (text[0].isalpha() or text[0] == "_") or \
             text.upper() in ("TRUE", "FALSE"):
-        return _literal(obj)
-    name, _, rest = text.partition(".")
-    pos = _pos(obj)
-    accessors = []
-    if rest:
-        _path_accessors(rest, pos + len(name) + 1, accessors)
-    return ast.Ref(pos, name, accessors)
+        return _literal(obj)  # a LITERAL (a VAR_PATH has no '#' and no reserved word)
+    return _path_ref(text, _pos(obj))
 
 
 def _call_or_variable(obj):
@@ -507,16 +508,24 @@ def parse_source(src: SourceFile, diags: Diagnostics, reference: bool = False):
     The model is built by FastBuilder; ``reference=True`` builds it with
     textX's own model_from_str instead (the reference the tests compare
     the fast path with)."""
+    # The parse allocates millions of objects and almost no garbage cycles:
+    # the cyclic collector would only rescan the growing parse tree over and
+    # over (about a fifth of the parse time).
+    gc_was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return _parse_source(src, diags, reference)
+    finally:
+        if gc_was_enabled:
+            gc.enable()
+
+
+def _parse_source(src: SourceFile, diags: Diagnostics, reference: bool):
     _ctx.src = src
     _ctx.diags = diags
     _warn_pragmas(src, diags)
     if sys.getrecursionlimit() < RECURSION_LIMIT:
         sys.setrecursionlimit(RECURSION_LIMIT)
-    # The parse allocates millions of short-lived objects and almost no
-    # garbage cycles: the cyclic collector would only rescan the growing
-    # tree over and over (about a fifth of the parse time).
-    gc_was_enabled = gc.isenabled()
-    gc.disable()
     try:
         model = _model(src, reference)
     except TextXSyntaxError as err:
@@ -536,21 +545,14 @@ def parse_source(src: SourceFile, diags: Diagnostics, reference: bool = False):
         return None
     finally:
         _ctx.src = None
-        if gc_was_enabled:
-            gc.enable()
     if not hasattr(model, "elements"):  # an empty file
         return ast.SourceUnit(0, src=src, types=[], pous=[], configurations=[])
-    if gc_was_enabled:
-        gc.disable()
     try:
         return to_ast(model, src, diags)
     except RecursionError:
         diags.error(src, _deepest_nesting(src.text),
                     "nested too deeply for the parser (simplify this expression or statement)")
         return None
-    finally:
-        if gc_was_enabled:
-            gc.enable()
 
 
 def _deepest_nesting(text: str) -> int:
