@@ -209,7 +209,9 @@ def generate_tree(project, out: Path) -> dict:
             g = next((g for g in plan.globals if g.c_name == e.c_lvalue.split("[")[0]
                       .split(".")[0]), None)
             if g is not None and g.resource is not None:
-                res_vars[g.resource].append((e, f"res_image.{e.c_lvalue}", 0))
+                ev = single_events[id(g.var)] + 1 if id(g.var) in single_events and \
+                    e.c_lvalue == g.c_name else 0
+                res_vars[g.resource].append((e, f"res_image.{e.c_lvalue}", ev))
                 continue
             if g is not None and id(g.var) in single_events and e.c_lvalue == g.c_name:
                 event = single_events[id(g.var)] + 1
@@ -337,8 +339,13 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
             for member, gname, is_array in ip.externals:
                 init.append(f"{ip.c_name}.{member} = {'' if is_array else '&'}"
                             f"task{tp.index}_image.{gname};")
+    # an instance variable belongs to the task that runs its instance (1 + index in tasks[]):
+    # the manager writes it between two cycles of that task
+    task_no = {t["name"].upper(): n + 1 for n, t in enumerate(tasks)}
+    task_of = {ip.path: task_no.get((ip.task or "").upper(), 0) for ip in instances}
     vars_out = [{"path": N.c_string(e.path.encode()), "lvalue": lv, "kind": e.kind,
-                 "writable": int(e.writable), "event": ev} for e, lv, ev in vars_]
+                 "writable": int(e.writable), "event": ev, "task": task_of.get(e.owner, 0)}
+                for e, lv, ev in vars_]
     return env.get_template("resource_main.c.j2").render(
         resource=r.name, resource_lower=r.name.lower(), config=cfg.name, version=__version__,
         header=gen.header_name, image_header="iec_image.h",
@@ -447,7 +454,7 @@ def _manifest(cfg, plan, config_mod, prog_modules, res_modules, source_hash, ifa
     for e in plan.table:
         variables.append({"path": e.path, "type": getattr(e.type, "name", "?"),
                           "kind": e.kind, "size": e.size, "writable": e.writable,
-                          "owner": e.owner})
+                          "owner": e.owner, **_value_info(e.type)})
     return {
         "format": 1,
         "generator": f"iec2kmod {__version__}",
@@ -467,5 +474,29 @@ def _manifest(cfg, plan, config_mod, prog_modules, res_modules, source_hash, ifa
                            "build_id": m["build_id"], "interface_hash": m["interface_hash"],
                            "uses_fpu": m["uses_fpu"], "interface": m["interface"]}
                           for m in prog_modules],
+        "instances": [{"path": ip.path, "type": ip.pou.name, "resource": ip.resource,
+                       "task": ip.task} for ip in plan.instances],
         "variables": variables,
     }
+
+
+def _value_info(t):
+    """What plc-manager needs to check a value written to a variable: the
+    elementary type, a subrange's bounds, an enumeration's values, a
+    string's length."""
+    from ..checks.types import Elementary, SubrangeT
+    t = concrete(t)
+    info = {}
+    if isinstance(t, SubrangeT):
+        info["range"] = [t.low, t.high]
+        t = t.elem
+    if isinstance(t, EnumT):
+        info["base"] = N.enum_base(t).name
+        info["enum"] = {name: value for name, value in sorted(t.values.values(),
+                                                               key=lambda x: x[1])}
+    elif isinstance(t, StringT):
+        info["base"] = "WSTRING" if t.wide else "STRING"
+        info["length"] = t.length
+    elif isinstance(t, Elementary):
+        info["base"] = t.name
+    return info

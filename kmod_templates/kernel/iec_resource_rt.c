@@ -19,6 +19,7 @@
 #include <linux/kthread.h>
 #include <linux/sched.h>
 #include <linux/sched/types.h>
+#include <linux/string.h>
 #include <uapi/linux/sched/types.h>
 
 #include "iec_kmod.h"
@@ -50,6 +51,7 @@ static void iec_task_cycle(struct iec_task *t, ktime_t release)
 	ktime_t start = ktime_get();
 
 	iec_ctx_cycle_begin(&t->ctx, ktime_to_ns(start));
+	iec2kmod_cycle_begin(t);	/* forces; the manager waits from here */
 	t->copy_in();
 	t->run(&t->ctx);
 	if (t->ctx.fault != IEC_FAULT_NONE) {
@@ -57,6 +59,10 @@ static void iec_task_cycle(struct iec_task *t, ktime_t release)
 		t->stats.faults++;
 		t->stats.fault_code = t->ctx.fault;
 		t->stats.fault_pou = t->ctx.fault_pou;
+		/* the POU name lives in a program module, which may go */
+		strscpy(t->stats.fault_pou_name,
+			t->ctx.fault_pou ? t->ctx.fault_pou : "?",
+			sizeof(t->stats.fault_pou_name));
 		t->stats.fault_line = t->ctx.fault_line;
 		smp_store_release(&t->state, IEC_TASK_FAULT);
 		pr_warn("iec2kmod: task %s.%s stopped: %s in %s line %d\n",
@@ -66,6 +72,7 @@ static void iec_task_cycle(struct iec_task *t, ktime_t release)
 	} else {
 		t->copy_out();
 	}
+	iec2kmod_cycle_end(t);
 	iec_task_account(t, ktime_to_ns(ktime_sub(start, release)),
 			 ktime_to_ns(ktime_sub(ktime_get(), start)));
 }
@@ -162,6 +169,7 @@ static int iec_task_create(struct iec_resource *res, struct iec_task *t)
 	int ret;
 
 	t->res = res;
+	raw_spin_lock_init(&t->var_lock);
 	iec_ctx_init(&t->ctx, t->loop_budget);
 	p = kthread_create(iec_task_thread, t, "iec/%s/%s", res->name, t->name);
 	if (IS_ERR(p))
@@ -197,6 +205,7 @@ static int iec_resource_start(struct iec_resource *res)
 		iec_fault_clear(&t->ctx);
 		t->stats.fault_code = 0;
 		t->stats.fault_pou = NULL;
+		t->stats.fault_pou_name[0] = '\0';
 		t->stats.fault_line = 0;
 		WRITE_ONCE(t->event_pending, false);
 		smp_store_release(&t->state, IEC_TASK_RUNNING);
@@ -259,4 +268,5 @@ static void iec_resource_exit(struct iec_resource *res)
 {
 	iec2kmod_unregister_resource(res);
 	iec_resource_destroy(res);
+	iec2kmod_resource_gone(res);	/* forces pointing into this module */
 }

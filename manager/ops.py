@@ -1,0 +1,510 @@
+# SPDX-License-Identifier: MIT
+"""The manager's protocols: load, swap, stop, start, and variable access.
+
+load   check the manifest and the kernel release; insert the configuration
+       module, the program types, the resources (manifest load_order);
+       confirm every slot runs its build; start the tasks.  A failure half
+       way removes what was inserted.
+swap   check the new program-type modules (interface hash against the
+       running slot, kernel release, files) before inserting anything; insert
+       each one (its init publishes it: RCU pointer swap, then
+       synchronize_srcu, so no task can still run the old body, and the old
+       module's reference is dropped); confirm the slot runs the new build
+       and a cycle ran it; remove the old module.  Timed step by step.
+stop   stop the tasks; remove the resources (their exit joins the threads),
+       clear the GFT, remove the program types and the configuration.
+"""
+
+from __future__ import annotations
+
+import difflib
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+from . import kmod, values
+from .errors import NotLoaded, PLCError, UsageError
+from .netlink import Client, KernelError, Status, VarValue
+from .project import (Candidate, Project, State, check_module_kernel, interface_changes,
+                      swap_candidates)
+
+Progress = Callable[[str], None]
+
+
+def _quiet(_msg: str) -> None:
+    pass
+
+
+def _ms(t0: float, t1: float) -> float:
+    return (t1 - t0) * 1000.0
+
+
+def connect(what: str = "") -> Client:
+    try:
+        return Client()
+    except NotLoaded:
+        if what:
+            raise NotLoaded(f"nothing is loaded: {what} needs a running configuration "
+                            f"(plc-manager load DIR first)") from None
+        raise
+
+
+def running_state(st: Status) -> Optional[State]:
+    """The saved state of the running configuration, if it is the one the
+    kernel runs."""
+    s = State.load(st.configuration)
+    if s is None:
+        return None
+    m = s.manifest
+    if m.get("interface_hash") != st.interface_hash or \
+            m.get("source_hash") != st.source_hash:
+        return None
+    return s
+
+
+def _wait_tasks(c: Client, pred, what: str, timeout: float = 5.0) -> Status:
+    deadline = time.monotonic() + timeout
+    while True:
+        st = c.status()
+        faults = [t for t in st.tasks() if t.state == "fault"]
+        if faults:
+            t = faults[0]
+            raise PLCError(f"task {t.path} stopped on a fault: {t.fault} in {t.fault_pou} "
+                           f"line {t.fault_line}")
+        if pred(st):
+            return st
+        if time.monotonic() > deadline:
+            raise PLCError(f"the tasks did not {what} within {timeout:.0f} s")
+        time.sleep(0.005)
+
+
+# ---------------------------------------------------------------------------
+# load / stop / start
+
+@dataclass
+class LoadReport:
+    configuration: str
+    modules: List[Tuple[str, float]] = field(default_factory=list)   # name, ms
+    start_ms: Optional[float] = None
+    total_ms: float = 0.0
+
+
+def _loaded_configurations() -> List[str]:
+    try:
+        import os
+        return sorted(os.listdir("/sys/kernel/iec2kmod"))
+    except OSError:
+        return []
+
+
+def load(path: str, start: bool = True, progress: Progress = _quiet) -> LoadReport:
+    kmod.require(kmod.CAP_SYS_MODULE, "load")
+    t_all = time.perf_counter()
+    proj = Project.open(path)
+    proj.check_built()
+    proj.check_kernel()
+    loaded = kmod.loaded()
+    running = _loaded_configurations()
+    if running:
+        raise PLCError(f"configuration {running[0]} is loaded already (one configuration at "
+                       f"a time: plc-manager stop first)")
+    clash = [n for n in proj.m["load_order"] if n in loaded]
+    if clash:
+        raise PLCError(f"module {clash[0]} is loaded already (plc-manager stop first)")
+    rep = LoadReport(proj.configuration)
+    progress(f"loading {proj.configuration} from {proj.path} "
+             f"({len(proj.m['load_order'])} modules)")
+    inserted: List[str] = []
+    try:
+        for name in proj.m["load_order"]:
+            t0 = time.perf_counter()
+            kmod.insert(str(proj.ko(name)))
+            dt = _ms(t0, time.perf_counter())
+            inserted.append(name)
+            rep.modules.append((name, dt))
+            progress(f"  inserted {name:<44} {dt:8.1f} ms")
+        with connect() as c:
+            st = c.status()
+            for t in proj.m["program_types"]:
+                s = st.slot(t["name"])
+                if s is None or s.build_id != t["build_id"]:
+                    raise PLCError(f"slot {t['name']} does not run build {t['build_id']}")
+            names = {r.name.lower() for r in st.resources}
+            for r in proj.m["resources"]:
+                if r["name"].lower() not in names:
+                    raise PLCError(f"resource {r['name']} did not register")
+            State.create(proj).save()
+            if start:
+                t0 = time.perf_counter()
+                c.start()
+                _wait_tasks(c, _all_running, "start")
+                rep.start_ms = _ms(t0, time.perf_counter())
+                progress(f"  started every task{'':<32} {rep.start_ms:8.1f} ms")
+    except BaseException as e:
+        if inserted:
+            progress(f"  failed: {e}")
+            progress("  removing what was inserted")
+            _rollback(proj, inserted, progress)
+        raise
+    rep.total_ms = _ms(t_all, time.perf_counter())
+    progress(f"loaded {proj.configuration}: {len(inserted)} modules in "
+             f"{rep.total_ms:.0f} ms{'' if start else ' (tasks stopped)'}")
+    return rep
+
+
+def _all_running(st: Status) -> bool:
+    """Every task runs; every periodic one has completed a cycle."""
+    return all(t.state == "running" and (t.cycles > 0 or not t.interval_ns)
+               for t in st.tasks())
+
+
+def _rollback(proj: Project, inserted: List[str], progress: Progress) -> None:
+    config = proj.m["load_order"][0]
+    try:
+        if config in inserted:
+            unload(config, progress)
+        else:
+            for name in reversed(inserted):
+                kmod.remove(name)
+        State.remove(proj.configuration)
+    except PLCError as e:
+        progress(f"  rollback incomplete: {e}")
+
+
+def unload(config_module: str, progress: Progress = _quiet) -> List[str]:
+    """Stop everything and remove the configuration module and every module
+    that uses it: resources first (their exit joins the task threads), then
+    the GFT is cleared, then program types, then the configuration."""
+    removed = []
+    resources: List[str] = []
+    try:
+        with Client() as c:
+            c.stop()
+            st = c.status()
+            resources = [r.module for r in st.resources]
+            for m in resources:
+                t0 = time.perf_counter()
+                kmod.remove(m)
+                removed.append(m)
+                progress(f"  removed {m:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
+            c.clear()
+    except NotLoaded:
+        pass
+    for m in kmod.holders(config_module):
+        t0 = time.perf_counter()
+        kmod.remove(m)
+        removed.append(m)
+        progress(f"  removed {m:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
+    t0 = time.perf_counter()
+    kmod.remove(config_module)
+    removed.append(config_module)
+    progress(f"  removed {config_module:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
+    return removed
+
+
+def stop(keep_loaded: bool = False, resource: Optional[str] = None,
+         progress: Progress = _quiet) -> None:
+    if not keep_loaded and not resource:
+        kmod.require(kmod.CAP_SYS_MODULE, "stop")
+    with connect("stop") as c:
+        st = c.status()
+        if resource:
+            r = _resource(st, resource)
+            c.stop(r.name)
+            _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()
+                                         if t.resource == r.name), "stop")
+            progress(f"stopped resource {r.name} ({len(r.tasks)} tasks)")
+            return
+        c.stop()
+        _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()), "stop")
+        progress(f"stopped every task of {st.configuration}")
+        if keep_loaded:
+            return
+    config = st.configuration
+    removed = unload(st.module, progress)
+    State.remove(config)
+    progress(f"removed {len(removed)} modules: nothing of {config} is loaded")
+
+
+def start(resource: Optional[str] = None, progress: Progress = _quiet) -> None:
+    with connect("start") as c:
+        st = c.status()
+        if resource:
+            r = _resource(st, resource)
+            c.start(r.name)
+            _wait_tasks(c, lambda s: all(t.state == "running" and (t.cycles or not t.interval_ns)
+                                         for t in s.tasks() if t.resource == r.name), "start")
+            progress(f"started resource {r.name} ({len(r.tasks)} tasks)")
+            return
+        c.start()
+        _wait_tasks(c, _all_running, "start")
+        progress(f"started every task of {st.configuration}")
+
+
+def _resource(st: Status, name: str):
+    for r in st.resources:
+        if r.name.lower() == name.lower():
+            return r
+    raise UsageError(f"no resource {name!r} in configuration {st.configuration} "
+                     f"(resources: {', '.join(r.name for r in st.resources) or 'none'})")
+
+
+# ---------------------------------------------------------------------------
+# swap
+
+@dataclass
+class SwapStep:
+    type_name: str
+    old_module: Optional[str]
+    old_build: Optional[str]
+    new_module: str
+    new_build: str
+    insert_ms: float = 0.0
+    confirm_ms: float = 0.0
+    first_cycle_ms: Optional[float] = None
+    first_cycle_task: Optional[str] = None
+    remove_ms: float = 0.0
+    publish_ms: float = 0.0          # command to the slot's publication (kernel clock)
+    latency_ms: float = 0.0          # command to new body running (or confirmed)
+
+
+@dataclass
+class SwapReport:
+    check_ms: float = 0.0
+    steps: List[SwapStep] = field(default_factory=list)
+    total_ms: float = 0.0
+
+
+def _tasks_running_type(manifest: Optional[dict], type_name: str) -> List[str]:
+    """resource.task of every task that runs an instance of the type."""
+    if not manifest or "instances" not in manifest:
+        return []
+    return sorted({f"{i['resource']}.{i['task']}".lower() for i in manifest["instances"]
+                   if i["type"].upper() == type_name.upper() and i.get("task")})
+
+
+def swap(new: str, progress: Progress = _quiet) -> SwapReport:
+    kmod.require(kmod.CAP_SYS_MODULE, "swap")
+    t_cmd = time.perf_counter()
+    t_wall = time.time_ns()
+    rep = SwapReport()
+    with connect("swap") as c:
+        st = c.status()
+        state = running_state(st)
+        running = {s.type_name.upper(): s.build_id for s in st.slots}
+        cands = swap_candidates(new, running)
+        if not cands:
+            progress(f"nothing to swap: every program type in {new} runs already")
+            return rep
+        loaded = kmod.loaded()
+        # every check before anything is touched; interfaces first
+        for cand in cands:
+            _check_interface(cand, st, state)
+        for cand in cands:
+            _check_candidate(cand, st, loaded)
+        rep.check_ms = _ms(t_cmd, time.perf_counter())
+        for cand in cands:
+            step, st = _swap_one(c, cand, st, state, t_cmd, t_wall, progress)
+            rep.steps.append(step)
+        if state is not None:
+            state.save()
+    rep.total_ms = _ms(t_cmd, time.perf_counter())
+    return rep
+
+
+def _check_interface(cand: Candidate, st: Status, state: Optional[State]) -> None:
+    slot = st.slot(cand.type_name)
+    if cand.manifest and cand.manifest.get("configuration", "").lower() != \
+            st.configuration.lower():
+        raise UsageError(f"swap refused: {cand.module} belongs to configuration "
+                         f"{cand.manifest['configuration']}, the running one is "
+                         f"{st.configuration}")
+    if slot is None:
+        raise UsageError(f"swap refused: program type {cand.type_name} is not part of the "
+                         f"running configuration {st.configuration}")
+    if cand.interface_hash != slot.interface:
+        old = None
+        if state is not None:
+            t = next((p for p in state.manifest["program_types"]
+                      if p["name"].upper() == cand.type_name.upper()), None)
+            old = t and t.get("interface")
+        new = cand.entry and cand.entry.get("interface")
+        changes = interface_changes(old, new) if old is not None and new is not None else []
+        what = "; ".join(changes) if changes else \
+            f"interface {slot.interface} -> {cand.interface_hash}" + \
+            ("" if state is not None else " (the running configuration's manifest is unknown: "
+             "no details)")
+        raise UsageError(f"swap refused: the interface of program type {cand.type_name} "
+                         f"changed ({what}); a hot swap changes algorithms, not interfaces: "
+                         f"stop and load the configuration again")
+
+
+def _check_candidate(cand: Candidate, st: Status, loaded: dict) -> None:
+    slot = st.slot(cand.type_name)
+    if slot.build_id == cand.build_id:
+        raise UsageError(f"slot {slot.type_name} runs build {cand.build_id} already")
+    if cand.module in loaded:
+        raise UsageError(f"module {cand.module} is loaded already")
+    if not cand.ko.is_file():
+        raise UsageError(f"{cand.ko} is missing: the new build is not built "
+                         f"(run `iec2kmod build`)")
+    check_module_kernel(cand.ko)
+
+
+def _swap_one(c: Client, cand: Candidate, st: Status, state: Optional[State], t_cmd: float,
+              t_wall: int, progress: Progress) -> Tuple[SwapStep, Status]:
+    slot = st.slot(cand.type_name)
+    step = SwapStep(slot.type_name, slot.module, slot.build_id, cand.module, cand.build_id)
+    manifest = state.manifest if state is not None else cand.manifest
+    using = _tasks_running_type(manifest, cand.type_name)
+
+    t0 = time.perf_counter()
+    kmod.insert(str(cand.ko))            # publishes: pointer swap + grace period
+    t1 = time.perf_counter()
+    step.insert_ms = _ms(t0, t1)
+
+    # confirm the slot, then wait for a cycle that certainly ran the new
+    # body: every cycle in flight at the publication was waited for by
+    # synchronize_srcu, but one may still be accounting; two more cycles
+    # than at the confirmation leave no doubt
+    st = c.status()
+    s2 = st.slot(cand.type_name)
+    if s2 is None or s2.build_id != cand.build_id or s2.module != cand.module:
+        raise PLCError(f"slot {slot.type_name} does not run {cand.module} after inserting it "
+                       f"(it runs {s2.module if s2 else '?'})")
+    t2 = time.perf_counter()
+    step.confirm_ms = _ms(t1, t2)
+    step.publish_ms = (s2.since_ns - t_wall) / 1e6
+    watch = {t.path: t.cycles for t in st.tasks()
+             if t.path.lower() in using and t.state == "running" and t.interval_ns}
+    deadline = time.monotonic() + 5.0
+    while watch and time.monotonic() < deadline:
+        st = c.status()
+        done = [t.path for t in st.tasks() if t.path in watch and t.cycles >= watch[t.path] + 2]
+        if done:
+            step.first_cycle_ms = _ms(t2, time.perf_counter())
+            step.first_cycle_task = done[0]
+            break
+    step.latency_ms = _ms(t_cmd, time.perf_counter())
+
+    if slot.module:
+        t4 = time.perf_counter()
+        # the publication dropped the old module's reference after the
+        # grace period: nothing can run the old body any more
+        for _ in range(200):
+            if kmod.refcnt(slot.module) in (0, None):
+                break
+            time.sleep(0.005)
+        try:
+            kmod.remove(slot.module)
+        except PLCError as e:
+            raise PLCError(f"swapped {slot.type_name} to build {cand.build_id}, but the old "
+                           f"module could not be removed: {e}") from None
+        step.remove_ms = _ms(t4, time.perf_counter())
+    if state is not None:
+        state.swapped(cand)
+    progress(f"swapped {slot.type_name}: {slot.module or '(empty slot)'} -> {cand.module}")
+    progress(f"  insert + publish   {step.insert_ms:8.2f} ms   (RCU pointer swap, "
+             f"synchronize_srcu: no task runs the old body)")
+    progress(f"  confirm slot       {step.confirm_ms:8.2f} ms   (slot runs build "
+             f"{cand.build_id})")
+    if step.first_cycle_ms is not None:
+        progress(f"  new body ran       {step.first_cycle_ms:8.2f} ms   "
+                 f"(cycles of task {step.first_cycle_task})")
+    else:
+        progress("  new body ran            -      (no running periodic task uses it: "
+                 "it runs at its next cycle)")
+    if slot.module:
+        progress(f"  remove old module  {step.remove_ms:8.2f} ms   ({slot.module})")
+    progress(f"  command to publication {step.publish_ms:.2f} ms, to new body running "
+             f"{step.latency_ms:.2f} ms")
+    return step, st
+
+
+# ---------------------------------------------------------------------------
+# variables
+
+class Variables:
+    """Variable names -> types, from the running configuration's manifest
+    (saved at load, or --project), else from the kernel's variable table."""
+
+    def __init__(self, c: Client, st: Status, project: Optional[str] = None) -> None:
+        self.c = c
+        self.st = st
+        self.types: Dict[str, values.VarType] = {}
+        self.source = "kernel"
+        manifest = None
+        if project:
+            p = Project.open(project)
+            if p.configuration.lower() != st.configuration.lower():
+                raise UsageError(f"{project} is configuration {p.configuration}, the running "
+                                 f"one is {st.configuration}")
+            manifest = p.m
+            self.source = str(p.path)
+        else:
+            s = running_state(st)
+            if s is not None:
+                manifest = s.manifest
+                self.source = "manifest"
+        kernel = {v.path.lower(): v for v in c.var_list()}
+        if manifest:
+            for v in manifest["variables"]:
+                k = kernel.get(v["path"].lower())
+                if k is None:
+                    continue             # not in the kernel's table (budget)
+                t = values.VarType.from_manifest(v, size=k.size)
+                t.writable = k.writable
+                self.types[v["path"].lower()] = t
+        for path, k in kernel.items():
+            if path not in self.types:
+                self.types[path] = values.VarType(path=k.path, kind=k.kind, size=k.size,
+                                                  writable=k.writable)
+
+    def get(self, name: str) -> values.VarType:
+        t = self.types.get(name.strip().lower())
+        if t is None:
+            close = difflib.get_close_matches(name.lower(), list(self.types), n=3)
+            names = [self.types[c].path for c in close]
+            raise UsageError(f"unknown variable {name!r} in configuration "
+                             f"{self.st.configuration}" +
+                             (f" (did you mean {', '.join(names)}?)" if names else ""))
+        return t
+
+    def read(self, names: Sequence[str]) -> List[Tuple[values.VarType, VarValue, object]]:
+        types = [self.get(n) for n in names]
+        got = self.c.var_get([t.path for t in types])
+        return [(t, v, values.decode(t, v.value)) for t, v in zip(types, got)]
+
+    def parse(self, name: str, text: str, force: bool = False) -> Tuple[values.VarType, bytes]:
+        t = self.get(name)
+        if not force and not t.writable:
+            raise UsageError(f"{t.path} is read-only")
+        v = values.parse(t, text)
+        return t, values.encode(t, v)
+
+    def write(self, items: Sequence[Tuple[str, str]]) -> List[values.VarType]:
+        enc = [self.parse(n, v) for n, v in items]
+        forced = [t.path for t, v, _ in self.read([t.path for t, _ in enc]) if v.forced]
+        if forced:
+            raise UsageError(f"{forced[0]} is forced: unforce it first")
+        try:
+            self.c.var_set([(t.path, data) for t, data in enc])
+        except KernelError as e:
+            raise PLCError(f"write refused by the kernel: {e}") from None
+        return [t for t, _ in enc]
+
+    def force(self, items: Sequence[Tuple[str, str]]) -> List[values.VarType]:
+        enc = [self.parse(n, v, force=True) for n, v in items]
+        try:
+            self.c.var_force([(t.path, data) for t, data in enc])
+        except KernelError as e:
+            raise PLCError(f"force refused by the kernel: {e}") from None
+        return [t for t, _ in enc]
+
+    def unforce(self, names: Sequence[str]) -> List[values.VarType]:
+        types = [self.get(n) for n in names]
+        not_forced = [t.path for t, v, _ in self.read([t.path for t in types]) if not v.forced]
+        if not_forced:
+            raise UsageError(f"{not_forced[0]} is not forced")
+        self.c.var_unforce([t.path for t in types])
+        return types

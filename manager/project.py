@@ -1,0 +1,262 @@
+# SPDX-License-Identifier: MIT
+"""Built projects (a directory with manifest.json, as `iec2kmod gen` and
+`iec2kmod build` write it), program-type modules given for a swap, the
+interface comparison that decides whether a swap is allowed, and the state
+plc-manager keeps about the running configuration."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Optional
+
+from . import kmod
+from .errors import PLCError, UsageError
+
+MANIFEST = "manifest.json"
+
+
+class Project:
+    """A project directory and its manifest."""
+
+    def __init__(self, path: Path, manifest: dict) -> None:
+        self.path = path
+        self.m = manifest
+
+    @classmethod
+    def open(cls, path) -> "Project":
+        p = Path(path).resolve()
+        if not p.exists():
+            raise UsageError(f"{path}: no such directory")
+        if not p.is_dir():
+            raise UsageError(f"{path}: not a directory")
+        f = p / MANIFEST
+        if not f.is_file():
+            raise UsageError(f"{path}: no {MANIFEST} (not a project written by `iec2kmod gen`)")
+        try:
+            m = json.loads(f.read_text())
+        except (OSError, ValueError) as e:
+            raise UsageError(f"{f}: unreadable manifest: {e}") from None
+        for key in ("configuration", "load_order", "modules", "program_types", "variables"):
+            if key not in m:
+                raise UsageError(f"{f}: not an iec2kmod manifest (no {key!r})")
+        return cls(p, m)
+
+    # ------------------------------------------------------------------
+    @property
+    def configuration(self) -> str:
+        return self.m["configuration"]
+
+    def ko(self, module: str) -> Path:
+        return self.path / module / f"{module}.ko"
+
+    def module_kind(self, module: str) -> str:
+        for m in self.m["modules"]:
+            if m["name"] == module:
+                return m["kind"]
+        return "?"
+
+    def program_type(self, name: str) -> Optional[dict]:
+        for p in self.m["program_types"]:
+            if p["name"].upper() == name.upper():
+                return p
+        return None
+
+    def check_built(self, modules: Optional[List[str]] = None) -> None:
+        for name in modules if modules is not None else self.m["load_order"]:
+            if not self.ko(name).is_file():
+                raise UsageError(f"{self.path}: {name}.ko is missing: the project is not built "
+                                 f"(run `iec2kmod build {self.path}`)")
+
+    def check_kernel(self, modules: Optional[List[str]] = None,
+                     release: Optional[str] = None) -> None:
+        """Every module was built for the running kernel."""
+        release = release or os.uname().release
+        built = self.m.get("kernel_release")
+        if built and built != release:
+            raise UsageError(f"{self.path}: built for kernel {built}, this is {release} "
+                             f"(rebuild with `iec2kmod build {self.path}` on this kernel)")
+        for name in modules if modules is not None else self.m["load_order"]:
+            check_module_kernel(self.ko(name), release)
+
+
+def check_module_kernel(ko: Path, release: Optional[str] = None) -> None:
+    release = release or os.uname().release
+    try:
+        got = kmod.vermagic_release(str(ko))
+    except (OSError, PLCError) as e:
+        raise UsageError(f"{ko}: not a kernel module ({e})") from None
+    if got != release:
+        raise UsageError(f"{ko.name} was built for kernel {got or '?'}, this is {release} "
+                         f"(rebuild it on this kernel)")
+
+
+# ---------------------------------------------------------------------------
+# interfaces
+
+def interface_changes(old: List[dict], new: List[dict]) -> List[str]:
+    """What changed between two program-type interfaces (manifest
+    ``interface`` lists): variables added, removed, retyped, moved to
+    another section, reordered."""
+    o = {v["name"].upper(): v for v in old}
+    n = {v["name"].upper(): v for v in new}
+    out = []
+    for k, v in o.items():
+        if k not in n:
+            out.append(f"variable removed: {v['name']} : {v['type']} ({v['section']})")
+    for k, v in n.items():
+        if k not in o:
+            out.append(f"variable added: {v['name']} : {v['type']} ({v['section']})")
+    for k, v in n.items():
+        if k in o:
+            if o[k]["type"].upper() != v["type"].upper():
+                out.append(f"variable retyped: {v['name']} : {o[k]['type']} -> {v['type']}")
+            if o[k]["section"] != v["section"]:
+                out.append(f"variable {v['name']} moved from {o[k]['section']} to "
+                           f"{v['section']}")
+    if not out:
+        common_o = [k for k in o if k in n]
+        common_n = [k for k in n if k in o]
+        if common_o != common_n:
+            out.append("variables reordered: " + ", ".join(n[k]["name"] for k in common_n))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# swap candidates
+
+@dataclass
+class Candidate:
+    """A rebuilt program-type module to swap in."""
+    ko: Path
+    module: str
+    type_name: str
+    build_id: str
+    interface_hash: str
+    entry: Optional[dict]          # its manifest entry (program_types), if known
+    manifest: Optional[dict]       # the manifest it came with, if known
+
+
+_DESC = re.compile(r"program type (\S+) of (\S+), build (\w+)")
+
+
+def _candidate_from_ko(ko: Path, manifest: Optional[dict]) -> Candidate:
+    info = kmod.modinfo(str(ko))
+    module = (info.get("name") or [ko.stem])[0]
+    entry = None
+    if manifest:
+        entry = next((p for p in manifest["program_types"] if p["module"] == module), None)
+    if entry:
+        return Candidate(ko, module, entry["name"], entry["build_id"],
+                         entry["interface_hash"], entry, manifest)
+    m = _DESC.search((info.get("description") or [""])[0])
+    if not m:
+        raise UsageError(f"{ko}: not an iec2kmod program-type module")
+    return Candidate(ko, module, m.group(1), m.group(3),
+                     (info.get("iec_interface_hash") or ["?"])[0], None, manifest)
+
+
+def swap_candidates(new: str, running_builds: Dict[str, str]) -> List[Candidate]:
+    """The program-type modules NEW names: a .ko file, a module directory,
+    or a project directory (every program type whose build differs from the
+    one running; *running_builds* maps type name (upper) -> build id)."""
+    p = Path(new).resolve()
+    if not p.exists():
+        raise UsageError(f"{new}: no such file or directory")
+    if p.is_file():
+        if p.suffix != ".ko":
+            raise UsageError(f"{new}: not a kernel module (.ko), a module directory or a "
+                             f"project directory")
+        manifest = _manifest_near(p.parent.parent)
+        return [_candidate_from_ko(p, manifest)]
+    if (p / MANIFEST).is_file():
+        proj = Project.open(p)
+        out = []
+        for t in proj.m["program_types"]:
+            if running_builds.get(t["name"].upper()) == t["build_id"]:
+                continue
+            out.append(Candidate(proj.ko(t["module"]), t["module"], t["name"], t["build_id"],
+                                 t["interface_hash"], t, proj.m))
+        return out
+    ko = p / f"{p.name}.ko"
+    if ko.is_file():
+        return [_candidate_from_ko(ko, _manifest_near(p.parent))]
+    if (p / "Kbuild").is_file():
+        raise UsageError(f"{new}: module directory without {p.name}.ko (not built)")
+    raise UsageError(f"{new}: not a kernel module (.ko), a module directory or a project "
+                     f"directory with {MANIFEST}")
+
+
+def _manifest_near(d: Path) -> Optional[dict]:
+    try:
+        return json.loads((d / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+# ---------------------------------------------------------------------------
+# state
+
+def state_dir() -> Path:
+    return Path(os.environ.get("PLC_MANAGER_STATE_DIR", "/run/plc-manager"))
+
+
+class State:
+    """What plc-manager remembers about the running configuration: the
+    manifest it was loaded from (a copy: the project directory may be
+    regenerated for a swap), the project directory, and which build runs in
+    each slot."""
+
+    def __init__(self, data: dict) -> None:
+        self.data = data
+
+    @property
+    def manifest(self) -> dict:
+        return self.data["manifest"]
+
+    @classmethod
+    def path(cls, configuration: str) -> Path:
+        return state_dir() / f"{configuration.lower()}.json"
+
+    @classmethod
+    def load(cls, configuration: str) -> Optional["State"]:
+        try:
+            return cls(json.loads(cls.path(configuration).read_text()))
+        except (OSError, ValueError):
+            return None
+
+    @classmethod
+    def create(cls, project: Project) -> "State":
+        return cls({"configuration": project.configuration, "project": str(project.path),
+                    "manifest": project.m})
+
+    def save(self) -> None:
+        p = self.path(self.data["configuration"])
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=".state-")
+            with os.fdopen(fd, "w") as f:
+                json.dump(self.data, f)
+            os.replace(tmp, p)
+        except OSError as e:
+            raise PLCError(f"cannot save the manager's state in {p.parent}: {e.strerror}") \
+                from None
+
+    @classmethod
+    def remove(cls, configuration: str) -> None:
+        try:
+            cls.path(configuration).unlink()
+        except OSError:
+            pass
+
+    def swapped(self, cand: Candidate) -> None:
+        """Record that *cand* runs in its slot now (same interface)."""
+        for t in self.manifest["program_types"]:
+            if t["name"].upper() == cand.type_name.upper():
+                t["module"] = cand.module
+                t["build_id"] = cand.build_id
+                t["ko"] = str(cand.ko)
