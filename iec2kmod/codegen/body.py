@@ -13,8 +13,10 @@ from ..checks.body import IL_ARITH, IL_COMPARE, IL_LOGIC, _CR
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT, FBType,
                             LiteralT, StringT, StructT, SubrangeT, concrete)
+from . import analysis
 from . import cnames as N
-from .expr import CodegenError, CRNode, ExprEmitter, Frame, Raw, c_int, scalar_kind
+from .expr import (CodegenError, CRNode, ExprEmitter, Frame, Raw, _const_int, c_int,
+                   scalar_kind)
 
 UNSIGNED = {8: "iec_u8", 16: "iec_u16", 32: "iec_u32", 64: "iec_u64", 1: "iec_u8"}
 
@@ -33,6 +35,7 @@ class BodyEmitter:
         self.uses_ret_label = False
         self.used_labels: set[str] = set()
         self.cr_depth = 0
+        self.ranges: dict[int, tuple] = {}   # id(Var) -> (lo, hi) inside a FOR body
 
     # ---------------------------------------------------------- helpers
     def next_temp(self):
@@ -148,8 +151,9 @@ class BodyEmitter:
         if isinstance(s, ast.Repeat):
             return self.repeat(s)
         if isinstance(s, ast.Exit):
-            self.used_labels.add(self.exit_labels[-1])
-            return [f"goto {self.exit_labels[-1]};"]
+            label, on_exit = self.exit_labels[-1]
+            self.used_labels.add(label)
+            return list(on_exit) + [f"goto {label};"]
         if isinstance(s, ast.Return):
             return [self.return_stmt()]
         if isinstance(s, ast.Empty):
@@ -215,12 +219,16 @@ class BodyEmitter:
         lines += [self.ind + "break;", "}"]
         return self.wrap(f, lines, s.pos)
 
-    def loop(self, pos, head, body_stmts, tail=(), label=None):
+    def loop(self, pos, head, body_stmts, tail=(), tick=True, on_exit=()):
+        """for (;;) { head; tick; body; tail }: EXIT jumps past it after the
+        on_exit statements."""
         exit_label = self.new_label("exit")
-        self.exit_labels.append(exit_label)
+        self.exit_labels.append((exit_label, on_exit))
         inner = self.block(body_stmts)
         self.exit_labels.pop()
-        lines = ["for (;;) {"] + self.indent(list(head)) + [self.ind + self.loop_tick(pos)]
+        lines = ["for (;;) {"] + self.indent(list(head))
+        if tick:
+            lines.append(self.ind + self.loop_tick(pos))
         lines += inner + self.indent(list(tail)) + ["}"]
         if exit_label in self.used_labels:
             lines.append(f"{exit_label}:;")
@@ -247,10 +255,67 @@ class BodyEmitter:
         ct = N.ctype(vt)
         f = Frame(self)
         var = self.var_access(v)
+        cstart, cend = _const_int(s.start), _const_int(s.end)
+        cstep = 1 if s.step is None else _const_int(s.step)
         start = self.expr.emit(f, s.start, vt)
         end = self.expr.emit(f, s.end, vt)
-        step = self.expr.emit(f, s.step, vt) if s.step is not None else c_int(1, vt)
         n = self.next_temp()
+        if not cstep:
+            return self.for_generic(s, v, vt, f, var, start, end, n)
+        # a constant step: the loop test and the increment are known
+        lo_t, hi_t = vt.range
+        e_name = f"for_end{n}"
+        if cend is not None:
+            e_name = c_int(cend, vt)
+            setup = list(f.pre)
+        else:
+            f.decls.append(f"{ct} {e_name};")
+            setup = f.pre + [f"{e_name} = {end};"]
+        setup.append(f"{var} = {start};")
+        if f.may_fault:
+            setup.append(self.fault_check(s.pos))
+        head = [f"if ({var} {'>' if cstep > 0 else '<'} {e_name})", self.ind + "break;"]
+        if cend is not None and cend == (hi_t if cstep > 0 else lo_t):
+            head = []       # up to the type's limit: the increment ends the loop
+        # the control variable cannot change but by the loop itself
+        safe = v.section in ("VAR", "VAR_TEMP", "VAR_INPUT", "VAR_OUTPUT", "RESULT") and \
+            not analysis.modifies(s.body, v)
+        if safe and cend is not None and lo_t <= cend + cstep <= hi_t:
+            # var stays within start..end inside the loop: var + step cannot
+            # leave the type
+            tail = [f"{var} = ({ct})({var} + {c_int(cstep, vt)});"]
+        else:
+            nx = f"for_next{n}"
+            f.decls.append(f"{ct} {nx};")
+            tail = [f"if (__builtin_add_overflow({var}, {c_int(cstep, vt)}, &{nx}))",
+                    self.ind + "break;", f"{var} = {nx};"]
+        # constant bounds: the control variable's range inside the body
+        known = safe and cstart is not None and cend is not None
+        trips = 0
+        if cstart is not None and cend is not None:
+            trips = max(0, (cend - cstart) // cstep + 1)
+        # an innermost loop of a known number of iterations charges them to
+        # the loop budget at once (EXIT gives back the ones not run)
+        charge = safe and 0 < trips <= 1_000_000 and not analysis.has_loop(s.body) and \
+            not analysis.has_return(s.body)
+        on_exit = ()
+        if charge:
+            setup.append(self.loop_charge(s.pos, trips))
+            left = (f"((iec_lint){c_int(cend, vt)} - (iec_lint){var})" if cstep > 0 else
+                    f"((iec_lint){var} - (iec_lint){c_int(cend, vt)})")
+            on_exit = [f"IEC_LOOP_REFUND(ctx, {left} / {abs(cstep)});"]
+        if known:
+            self.ranges[id(v)] = (min(cstart, cend), max(cstart, cend))
+        try:
+            lines = setup + self.loop(s.pos, head, s.body, tail, tick=not charge,
+                                      on_exit=on_exit)
+        finally:
+            self.ranges.pop(id(v), None)
+        return ["{"] + self.indent(f.decls + lines) + ["}"] if f.decls else lines
+
+    def for_generic(self, s, v, vt, f, var, start, end, n):
+        ct = N.ctype(vt)
+        step = self.expr.emit(f, s.step, vt) if s.step is not None else c_int(1, vt)
         e_name, s_name, nx = f"for_end{n}", f"for_step{n}", f"for_next{n}"
         f.decls += [f"{ct} {e_name};", f"{ct} {s_name};", f"{ct} {nx};"]
         setup = f.pre + [f"{e_name} = {end};", f"{s_name} = {step};", f"{var} = {start};"]
@@ -263,6 +328,12 @@ class BodyEmitter:
                 f"{var} = {nx};"]
         lines = setup + self.loop(s.pos, head, s.body, tail)
         return ["{"] + self.indent(f.decls + lines) + ["}"]
+
+    def loop_charge(self, pos, n):
+        name = N.c_string(self.pou.name.encode())
+        if self.is_function and self.ret_value():
+            return f"IEC_LOOP_CHARGE_RET(ctx, {name}, {self.line(pos)}, {n}U, {self.ret_value()});"
+        return f"IEC_LOOP_CHARGE(ctx, {name}, {self.line(pos)}, {n}U);"
 
     # ------------------------------------------------------- assignment
     def assign_ref(self, f, target: ast.Ref, value) -> list[str]:

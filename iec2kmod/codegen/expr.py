@@ -228,9 +228,31 @@ class ExprEmitter:
         v = _const_int(e)
         if v is not None and lo <= v <= hi:
             return str(v - lo)
+        r = self.value_range(e)
+        if r is not None and lo <= r[0] and r[1] <= hi:
+            # provably inside the bounds (a FOR variable, maybe +- a constant)
+            return f"((iec_lint){self.emit(f, e, ELEMENTARY['LINT'])} - {lo}LL)"
         f.may_fault = True
         code = self.emit(f, e, ELEMENTARY["LINT"])
         return f"iec_index(ctx, {code}, {lo}LL, {hi}LL)"
+
+    def value_range(self, e):
+        """(lo, hi) the value of an integer expression is known to lie in
+        (constants, FOR control variables with constant bounds, sums and
+        differences of them that do not leave their type), or None."""
+        v = _const_int(e)
+        if v is not None:
+            return (v, v)
+        if isinstance(e, ast.Ref) and not e.accessors and id(e.symbol) in self.body.ranges:
+            return self.body.ranges[id(e.symbol)]
+        if isinstance(e, ast.BinOp) and e.op in ("+", "-"):
+            a, b = self.value_range(e.left), self.value_range(e.right)
+            t = concrete(e.type)
+            if a is None or b is None or not isinstance(t, Elementary) or t.range is None:
+                return None
+            r = (a[0] + b[0], a[1] + b[1]) if e.op == "+" else (a[0] - b[1], a[1] - b[0])
+            return r if t.range[0] <= r[0] and r[1] <= t.range[1] else None
+        return None
 
     # -------------------------------------------------------- operators
     def binop(self, f, e, t):
@@ -310,7 +332,8 @@ class ExprEmitter:
                 return "(" + f" {sym} ".join(vs) + ")"
             fn = f"iec_{fam.lower()}_{tag(res)}"
             if fam in ("DIV", "MOD"):
-                f.may_fault = True
+                if not _const_int(args[1]):
+                    f.may_fault = True      # a divisor that is not a non-zero constant
                 return f"{fn}(ctx, {vs[0]}, {vs[1]})"
             acc = vs[0]
             for v in vs[1:]:

@@ -38,6 +38,36 @@
 						sizeof((s).data[0]) - 1) })
 
 /*
+ * Loop budget of a FOR loop whose iteration count n is known when it
+ * starts: the n iterations are charged at once (IEC_LOOP_CHARGE, which
+ * records IEC_FAULT_LOOP and returns like IEC_LOOP_TICK when the budget is
+ * short), an EXIT gives back the iterations not run (IEC_LOOP_REFUND).
+ */
+#define IEC_LOOP_CHARGE(ctx, pou, line, n)				\
+	do {								\
+		if (iec_unlikely((ctx)->loop_budget < (iec_u32)(n))) {	\
+			(ctx)->loop_budget = 0;				\
+			iec_fault_raise((ctx), IEC_FAULT_LOOP);		\
+			iec_fault_locate((ctx), (pou), (line));		\
+			return;						\
+		}							\
+		(ctx)->loop_budget -= (iec_u32)(n);			\
+	} while (0)
+
+#define IEC_LOOP_CHARGE_RET(ctx, pou, line, n, retval)			\
+	do {								\
+		if (iec_unlikely((ctx)->loop_budget < (iec_u32)(n))) {	\
+			(ctx)->loop_budget = 0;				\
+			iec_fault_raise((ctx), IEC_FAULT_LOOP);		\
+			iec_fault_locate((ctx), (pou), (line));		\
+			return (retval);				\
+		}							\
+		(ctx)->loop_budget -= (iec_u32)(n);			\
+	} while (0)
+
+#define IEC_LOOP_REFUND(ctx, n)	((ctx)->loop_budget += (iec_u32)(n))
+
+/*
  * Fast paths for STRING that the code generator uses instead of a call
  * into iec_string.c where the result is the same (see iec_string.h for the
  * semantics): set and append with truncation at the capacity, the decimal
