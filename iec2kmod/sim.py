@@ -119,9 +119,7 @@ def render_sim(project):
 
 
 RUNTIME_SOURCES = ("iec_string.c", "iec_std_fb.c", "iec_math.c", "iec_real.c")
-CFLAGS = ["-std=gnu11", "-O1", "-Wall", "-Wextra", "-Werror", "-Wdeclaration-after-statement",
-          "-Wno-unused-function",
-          "-Wno-unused-variable", "-Wno-unused-but-set-variable"]
+CFLAGS = ["-std=gnu11", "-O1", "-Wall", "-Wextra", "-Werror", "-Wdeclaration-after-statement"]
 
 
 def _compiler():
