@@ -164,3 +164,30 @@ def test_same_result_on_mutated_files():
                                              rng.choice(vocab) + " " + text[a:b]]) + text[b:]
             reference, fast = both(mutant, str(path))
             assert fast == reference, (path, a, mutant[max(0, a - 40):a + 40])
+
+
+def test_parallel_parse_is_the_sequential_parse():
+    """parse_all over forked workers, with big files cut into parts, gives
+    the units and diagnostics of parsing each file whole, and leaves the
+    cyclic garbage collector as it found it."""
+    import gc
+
+    from iec2kmod.frontend import parse_all
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from gen_project import project
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    text = project(2500)
+    broken = text.replace("acc := acc + 2;", "acc := acc + ;", 1)
+    sources = [SourceFile("a.st", text), SourceFile("b.st", broken),
+               SourceFile("c.st", (ROOT / "examples/pid_loop/pid.st").read_text())]
+    assert gc.isenabled()
+    parallel = parse_all(sources, jobs=2)
+    assert gc.isenabled()
+    sequential = parse_all(sources, jobs=1)
+    canon = [(dump(unit), [(d.path, d.line, d.col, d.message, d.source_line) for d in items])
+             for unit, items in parallel]
+    assert canon == [(dump(unit), [(d.path, d.line, d.col, d.message, d.source_line)
+                                   for d in items]) for unit, items in sequential]
+    assert canon[1][0] == ("NoneType", None) and canon[1][1][0][3].startswith("expected")
