@@ -25,6 +25,17 @@ to inline; runtime objects linked separately; -O2 for everything.
 
 Prints: program, IEC instructions/cycle, hand-written instructions/cycle,
 ratio (target <= 1.3).  Exit status 1 if a ratio is above --target.
+
+Results (gcc 12 -O2, x86-64, 20000 cycles), emitter before and after the
+optimisations this benchmark prompted (string fast paths, && for pure BOOL
+operands, SR/RS/R_TRIG/F_TRIG written out, FOR loops with constant bounds:
+unchecked in-range indexes and one loop-budget charge, no fault check after
+a division by a non-zero constant):
+
+    program      IEC before   IEC after   hand   ratio before  ratio after
+    interlock       160.9       104.4     82.1       1.96          1.27
+    pid             128.9       129.9    130.7       0.99          0.99
+    recipe         1702.2       350.5    394.7       4.31          0.89
 """
 
 from __future__ import annotations
