@@ -676,6 +676,11 @@ def _names_with_pos(d):
     return out
 
 
+def _body(stmt_list):
+    """Statements of a StmtList; an empty list matches nothing (None)."""
+    return _stmts(stmt_list.statements) if stmt_list is not None else []
+
+
 def _stmts(lst):
     return [_stmt(s) for s in lst]
 
@@ -691,23 +696,23 @@ def _stmt(s):
             _ctx.diags.error(_ctx.src, target.pos, f"'{target!r}' cannot be called")
         return ast.CallStmt(pos, call=ast.Call(target.pos, target.name, s.call.arglist))
     if c == "IfStmt":
-        branches = [(s.cond, _stmts(s.then.statements))]
-        branches += [(e.cond, _stmts(e.body.statements)) for e in s.elsifs]
+        branches = [(s.cond, _body(s.then))]
+        branches += [(e.cond, _body(e.body)) for e in s.elsifs]
         return ast.If(pos, branches=branches,
-                      else_=_stmts(s.else_.statements) if s.else_ else None)
+                      else_=_body(s.else_) if s.else_ else None)
     if c == "CaseStmt":
-        elements = [([(lab.low, lab.high) for lab in el.labels], _stmts(el.body.statements))
+        elements = [([(lab.low, lab.high) for lab in el.labels], _body(el.body))
                     for el in s.cases]
         return ast.Case(pos, selector=s.selector, elements=elements,
-                        else_=_stmts(s.else_.statements) if s.else_ else None)
+                        else_=_body(s.else_) if s.else_ else None)
     if c == "ForStmt":
         m = _NAME_RE.search(_ctx.src.text, pos + 3)
         return ast.For(pos, var=s.var, var_pos=m.start() if m else pos, start=s.start,
-                       end=s.end, step=s.step, body=_stmts(s.body.statements))
+                       end=s.end, step=s.step, body=_body(s.body))
     if c == "WhileStmt":
-        return ast.While(pos, cond=s.cond, body=_stmts(s.body.statements))
+        return ast.While(pos, cond=s.cond, body=_body(s.body))
     if c == "RepeatStmt":
-        return ast.Repeat(pos, body=_stmts(s.body.statements), cond=s.cond)
+        return ast.Repeat(pos, body=_body(s.body), cond=s.cond)
     if c == "ExitStmt":
         return ast.Exit(pos)
     if c == "ReturnStmt":
@@ -789,7 +794,7 @@ def _pou(e, kind, src):
     elif body.il is not None:
         language, stmts = "IL", _il(body.il.instructions)
     else:
-        language, stmts = "ST", _stmts(body.st.statements)
+        language, stmts = "ST", _body(body.st)
     return ast.POU(_pos(e), kind=kind, name=e.name,
                    result=_spec(e.result) if kind == "FUNCTION" else None,
                    blocks=[_block(b) for b in e.blocks], body=stmts, language=language,

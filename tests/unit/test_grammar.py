@@ -365,3 +365,11 @@ def test_syntax_errors_point_at_the_token(text, expected):
     assert unit is None
     d = diags.errors[0]
     assert f"{d.line}:{d.col}: {d.message}".startswith(expected)
+
+
+def test_empty_statement_lists():
+    stmts = body("IF x THEN ELSIF y THEN ELSE END_IF; FOR i := 1 TO 2 DO END_FOR; "
+                 "WHILE x DO END_WHILE; REPEAT UNTIL x END_REPEAT; CASE i OF 1: ELSE END_CASE;")
+    assert [type(s).__name__ for s in stmts] == ["If", "For", "While", "Repeat", "Case"]
+    assert stmts[0].branches[0][1] == [] and stmts[1].body == [] and stmts[3].body == []
+    assert stmts[4].elements[0][1] == []
