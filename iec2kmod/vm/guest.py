@@ -166,8 +166,20 @@ mount -t sysfs sysfs /host/sys || fail "mount /host/sys"
 mount --rbind /dev /host/dev || fail "bind /host/dev"
 mount -t tracefs tracefs /host/sys/kernel/tracing 2>/dev/null
 mount -t debugfs debugfs /host/sys/kernel/debug 2>/dev/null
+# host paths under /tmp or /run that the chroot needs (a virtualenv, a CI
+# checkout): kept visible, read-only, through the new tmpfs
+mkdir -p /mnt/hosttmp /mnt/hostrun
+mount --bind /host/tmp /mnt/hosttmp && mount --bind /host/run /mnt/hostrun
 mount -t tmpfs -o mode=1777 tmpfs /host/tmp || fail "mount /host/tmp"
 mount -t tmpfs -o mode=755 tmpfs /host/run || fail "mount /host/run"
+for p in $KEEP; do
+    case "$p" in
+    /tmp/*) src="/mnt/hosttmp${p#/tmp}" ;;
+    /run/*) src="/mnt/hostrun${p#/run}" ;;
+    *) continue ;;
+    esac
+    mkdir -p "/host$p" && mount --bind "$src" "/host$p" || fail "keep $p"
+done
 mkdir -p "/host$WORKDIR" && mount --bind /mnt/work "/host$WORKDIR" || fail "bind /host$WORKDIR"
 hostname iec2kmod-guest
 for p in /sys/class/virtio-ports/*; do
@@ -235,6 +247,23 @@ def _qemu_preexec() -> None:
         libc.prctl(1, signal.SIGKILL, 0, 0, 0)     # PR_SET_PDEATHSIG
     except Exception:
         pass
+
+
+def _keep_paths(python_exe: str):
+    """Host paths under /tmp or /run that the guest's chroot must still see
+    although it mounts its own tmpfs there: the Python installation in use
+    and the checkout the project is imported from."""
+    import iec2kmod
+    out = set()
+    for p in (sys.prefix, os.path.dirname(os.path.dirname(os.path.abspath(python_exe))),
+              os.path.dirname(os.path.dirname(os.path.realpath(python_exe))),
+              os.path.dirname(os.path.dirname(os.path.realpath(iec2kmod.__file__)))):
+        for top in ("/tmp/", "/run/"):
+            if p.startswith(top):
+                first = p[len(top):].split("/", 1)[0]
+                if first and not any(c.isspace() or c in "'\"\\$`" for c in first):
+                    out.add(top + first)
+    return out
 
 
 class Guest:
@@ -312,7 +341,8 @@ class Guest:
         for k, v in env.items():
             if any(c.isspace() or c in "'\"\\$`" for c in v):
                 raise GuestError(f"cannot pass {k}={v!r} into the guest (whitespace/quotes)")
-        conf = (f"WORKDIR='{self.workdir}'\n"
+        keep = " ".join(sorted(_keep_paths(self.python_exe)))
+        conf = (f"WORKDIR='{self.workdir}'\nKEEP='{keep}'\n"
                 f"MODULES='{' '.join(order)}'\n"
                 f"MSIZE=512000\nHOSTCACHE={self.host_cache}\n"
                 f"CHROOT_ENV='{' '.join(f'{k}={v}' for k, v in env.items())}'\n"
