@@ -18,13 +18,14 @@ stop   stop the tasks; remove the resources (their exit joins the threads),
 from __future__ import annotations
 
 import difflib
+import errno
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import kmod, values
 from .errors import NotLoaded, PLCError, UsageError
-from .netlink import Client, KernelError, Status, VarValue
+from .netlink import MAX_FORCES, Client, KernelError, Status, VarValue
 from .project import (Candidate, Project, State, check_module_kernel, interface_changes,
                       swap_candidates)
 
@@ -446,19 +447,14 @@ class Variables:
             if s is not None:
                 manifest = s.manifest
                 self.source = "manifest"
-        kernel = {v.path.lower(): v for v in c.var_list()}
         if manifest:
+            # the manifest lists exactly the kernel's table, with the types
             for v in manifest["variables"]:
-                k = kernel.get(v["path"].lower())
-                if k is None:
-                    continue             # not in the kernel's table (budget)
-                t = values.VarType.from_manifest(v, size=k.size)
-                t.writable = k.writable
-                self.types[v["path"].lower()] = t
-        for path, k in kernel.items():
-            if path not in self.types:
-                self.types[path] = values.VarType(path=k.path, kind=k.kind, size=k.size,
-                                                  writable=k.writable)
+                self.types[v["path"].lower()] = values.VarType.from_manifest(v)
+        else:
+            for k in c.var_list():
+                self.types[k.path.lower()] = values.VarType(path=k.path, kind=k.kind,
+                                                            size=k.size, writable=k.writable)
 
     def get(self, name: str) -> values.VarType:
         t = self.types.get(name.strip().lower())
@@ -484,13 +480,10 @@ class Variables:
 
     def write(self, items: Sequence[Tuple[str, str]]) -> List[values.VarType]:
         enc = [self.parse(n, v) for n, v in items]
-        forced = [t.path for t, v, _ in self.read([t.path for t, _ in enc]) if v.forced]
-        if forced:
-            raise UsageError(f"{forced[0]} is forced: unforce it first")
         try:
             self.c.var_set([(t.path, data) for t, data in enc])
         except KernelError as e:
-            raise PLCError(f"write refused by the kernel: {e}") from None
+            raise self._refused("write", e, [t for t, _ in enc]) from None
         return [t for t, _ in enc]
 
     def force(self, items: Sequence[Tuple[str, str]]) -> List[values.VarType]:
@@ -498,13 +491,29 @@ class Variables:
         try:
             self.c.var_force([(t.path, data) for t, data in enc])
         except KernelError as e:
-            raise PLCError(f"force refused by the kernel: {e}") from None
+            raise self._refused("force", e, [t for t, _ in enc]) from None
         return [t for t, _ in enc]
 
     def unforce(self, names: Sequence[str]) -> List[values.VarType]:
         types = [self.get(n) for n in names]
-        not_forced = [t.path for t, v, _ in self.read([t.path for t in types]) if not v.forced]
-        if not_forced:
-            raise UsageError(f"{not_forced[0]} is not forced")
-        self.c.var_unforce([t.path for t in types])
+        try:
+            self.c.var_unforce([t.path for t in types])
+        except KernelError as e:
+            raise self._refused("unforce", e, types) from None
         return types
+
+    @staticmethod
+    def _refused(what: str, e: KernelError, types) -> PLCError:
+        name = types[0].path if len(types) == 1 else "a variable"
+        if e.code == errno.EBUSY and what == "write":
+            return UsageError(f"{name} is forced: unforce it first")
+        if e.code == errno.ENODATA:
+            return UsageError(f"{name} is not forced")
+        if e.code == errno.EACCES:
+            return UsageError(f"{name} is read-only")
+        if e.code == errno.ENOENT:
+            return UsageError(f"{name}: not in the kernel's variable table (the manifest does "
+                              f"not match the running configuration?)")
+        if e.code == errno.ENOSPC:
+            return UsageError(f"too many forced variables (at most {MAX_FORCES}): unforce some")
+        return PLCError(f"{what} refused by the kernel: {e}")

@@ -821,7 +821,7 @@ static int iec_nl_var_force(struct sk_buff *skb, struct genl_info *info)
 {
 	struct iec_force **forces = NULL;
 	struct iec_var_ref *refs;
-	u32 n, i;
+	u32 n, i, added = 0;
 	int err;
 
 	mutex_lock(&iec_ctl_mutex);
@@ -838,6 +838,14 @@ static int iec_nl_var_force(struct sk_buff *skb, struct genl_info *info)
 		err = iec_value_check(&refs[i], info->extack);
 		if (err)
 			goto out;
+		if (!iec_var_forced(&refs[i]))
+			added++;
+	}
+	/* each force costs the tasks a copy at every cycle boundary */
+	if (iec_forced_count() + added > IEC_NL_MAX_FORCES) {
+		NL_SET_ERR_MSG(info->extack, "too many forced variables");
+		err = -ENOSPC;
+		goto out;
 	}
 	err = -ENOMEM;
 	forces = kcalloc(n, sizeof(*forces), GFP_KERNEL);

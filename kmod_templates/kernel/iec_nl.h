@@ -32,6 +32,7 @@
 #define IEC_NL_VERSION		1
 #define IEC_NL_VALUE_MAX	65000	/* bytes of one VALUE */
 #define IEC_NL_MAX_VARS		256	/* variables in one request */
+#define IEC_NL_MAX_FORCES	128	/* forced variables at a time */
 
 enum iec_nl_cmd {
 	IEC_CMD_UNSPEC,

@@ -180,6 +180,13 @@ def test_load_status_variables_swap_stop(guest, plant):
         assert v["main.mix.level"]["value"] == 80 and v["mode"]["text"] == "FILL"
         table = pm(guest, "read", "sum", "mode", "scaled", check=0)[1]
         assert "42" in table and "FILL" in table and "40.0" in table
+        out = pm(guest, "vars", "main.c1.*", check=0)[1]
+        assert "main.c1.count" in out and "main.mix" not in out and "read-write" in out
+        frames = [json.loads(ln) for ln in pm(guest, "watch", "--json", "--count", "2",
+                                              "--interval", "0.1", "count", "mode",
+                                              check=0)[1].splitlines()]
+        assert len(frames) == 2 and frames[1]["variables"][1]["value"] == "FILL"
+        assert frames[1]["variables"][0]["value"] > frames[0]["variables"][0]["value"]
 
         # a program-instance variable, written between two cycles of its task
         pm(guest, "write", "main.mix.runs", "-1000000", check=0)
@@ -292,9 +299,29 @@ def test_bad_input_changes_nothing(guest, plant):
     # not root
     refused(guest, "load", plant.a, user="nobody", want="load needs CAP_SYS_MODULE")
     assert loaded_modules(guest) == []
+    # a failure half way: the last module (here: another build of a program
+    # type, whose interface does not fit its slot) fails, the rest goes again
+    broken = plant.base / "broken"
+    if broken.exists():
+        shutil.rmtree(broken)
+    shutil.copytree(plant.a, broken, symlinks=True)
+    last = m["load_order"][-1]
+    shutil.copyfile(plant.counter_x, broken / last / f"{last}.ko")
+    rc, out = pm(guest, "load", broken)
+    assert rc == 1, out
+    assert f"inserted {m['load_order'][-2]}" in out and "removing what was inserted" in out
+    assert out.strip().splitlines()[-1].startswith(
+        f"plc-manager: insert {last}.ko: the interface of the program type does not match "
+        f"its slot -- kernel: iec2kmod: "), out
+    assert loaded_modules(guest) == []
+    assert "plant.json" not in guest.run("ls /host/run/plc-manager/ 2>&1").output
 
-    pm(guest, "load", plant.a, check=0)
+    pm(guest, "load", "--no-start", plant.a, check=0)
     try:
+        st = status(guest)
+        assert all(t["state"] == "stopped" and t["cycles"] == 0
+                   for r in st["resources"] for t in r["tasks"])
+        pm(guest, "start", check=0)
         before = snapshot(guest)
         values = read(guest, "a", "level", "mode", "label", "limit")
         refused(guest, "status", user="nobody", want="need CAP_NET_ADMIN")

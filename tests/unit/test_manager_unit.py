@@ -122,6 +122,7 @@ def test_netlink_numbers_match_the_kernel_header():
     assert f'"{netlink.FAMILY}"' in h
     assert re.search(r"IEC_NL_VALUE_MAX\s+%d\b" % netlink.VALUE_MAX, h)
     assert re.search(r"IEC_NL_MAX_VARS\s+%d\b" % netlink.MAX_VARS, h)
+    assert re.search(r"IEC_NL_MAX_FORCES\s+%d\b" % netlink.MAX_FORCES, h)
     assert len(netlink.FAMILY) <= 15
 
 
