@@ -31,7 +31,9 @@
  *    variables are written at both ends of every cycle of their task.
  *    Forcing an instance variable that a program connection assigns
  *    (an input) has no lasting effect: force the global or the %I
- *    address it is connected to.
+ *    address it is connected to.  A task that writes a forced SINGLE
+ *    variable may still wake its event tasks: the edge is detected in the
+ *    copy-out before the forced value is written back.
  */
 #include <linux/delay.h>
 #include <linux/kobject.h>
