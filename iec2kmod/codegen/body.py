@@ -23,6 +23,9 @@ UNSIGNED = {8: "iec_u8", 16: "iec_u16", 32: "iec_u32", 64: "iec_u64", 1: "iec_u8
 
 class BodyEmitter:
     def __init__(self, pou, ind="\t"):
+        self.pooling = False            # set for real POU bodies (pou_body)
+        self.pool: dict[str, str] = {}  # pooled temporary name -> declaration
+        self._pool_names: dict = {}
         self.pou = pou
         self.src = pou.src
         self.is_function = pou.kind == "FUNCTION"
@@ -38,6 +41,18 @@ class BodyEmitter:
         self.ranges: dict[int, tuple] = {}   # id(Var) -> (lo, hi) inside a FOR body
 
     # ---------------------------------------------------------- helpers
+    def pool_name(self, decl_key, i):
+        """The i-th pooled temporary of a C type (see Frame.temp)."""
+        key = (decl_key, i)
+        if key not in self._pool_names:
+            name = f"pool{len(self._pool_names) + 1}"
+            self._pool_names[key] = name
+            self.pool[name] = decl_key.replace("@", name) + ";"
+        return self._pool_names[key]
+
+    def pool_decls(self):
+        return list(self.pool.values())
+
     def next_temp(self):
         self._temp += 1
         return self._temp
@@ -541,7 +556,10 @@ class BodyEmitter:
                 return c_int(v.type.low, t)
             return c_int(0, t)
         tmp = f.temp(t)
-        f.decls[-1] = f.decls[-1][:-1] + " = { 0 };"
+        if f.is_pooled(tmp):
+            f.pre.append(f"iec_memset(&{tmp}, 0, sizeof({tmp}));")
+        else:
+            f.decls[-1] = f.decls[-1][:-1] + " = { 0 };"
         if v.init is not None:
             f.pre += self.assign_code(f, tmp, t, v.init)
         return tmp if isinstance(t, ArrayT) else f"&{tmp}"

@@ -53,11 +53,26 @@ class Frame:
         self.pre: list[str] = []
         self.decls: list[str] = []
         self.may_fault = False
+        self.pooled: dict[str, int] = {}
 
     def temp(self, t, prefix="tmp"):
+        """A temporary of IEC type t for this statement.  In a POU body,
+        strings, arrays and structures come from a pool declared once at
+        the top of the function: only the innermost statement's
+        temporaries are ever live, so the stack frame holds the largest
+        statement's temporaries, not their sum (the kernel's stack is
+        small; its frame-size warning is 2048 bytes)."""
+        if self.body.pooling and isinstance(concrete(t), (StringT, ArrayT, StructT)):
+            decl_key = N.declare(concrete(t), "@")
+            i = self.pooled.get(decl_key, 0)
+            self.pooled[decl_key] = i + 1
+            return self.body.pool_name(decl_key, i)
         name = f"{prefix}{self.body.next_temp()}"
         self.decls.append(N.declare(t, name) + ";")
         return name
+
+    def is_pooled(self, name):
+        return name.startswith("pool")
 
 
 def c_int(value: int, t) -> str:

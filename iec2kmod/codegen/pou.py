@@ -212,6 +212,7 @@ def function_signature(pou) -> str:
 def pou_body(project, pou) -> list[str]:
     """The body function of a POU."""
     be = BodyEmitter(pou)
+    be.pooling = True
     stmts = be.body(pou.node.body)
     out = []
     if pou.kind == "FUNCTION":
@@ -251,7 +252,7 @@ def pou_body(project, pou) -> list[str]:
                     init += ie.lines(f"(*{name})", v.type, v.init, f)
         if any("for (i = 0;" in ln for ln in init):
             locals_.append("iec_u32 i;")
-        locals_ += f.decls
+        locals_ += f.decls + be.pool_decls()
         locals_ += [f"{ct} {name};" for name, ct in sorted(be.cr_vars.items())]
         out += ["\t" + ln for ln in locals_ + ["(void)ctx;"] + [x for x in f.pre + init if x]]
         out += ["\t" + ln for ln in stmts]
@@ -274,7 +275,7 @@ def pou_body(project, pou) -> list[str]:
             init += ie.lines(N.var(v.name), v.type, v.init, f)
     if any("for (i = 0;" in ln for ln in init):
         locals_.append("iec_u32 i;")
-    locals_ += f.decls
+    locals_ += f.decls + be.pool_decls()
     locals_ += [f"{ct} {name};" for name, ct in sorted(be.cr_vars.items())]
     edge = []
     for v in pou.inputs:

@@ -20,7 +20,7 @@
 #include "iec_real.h"
 
 #ifndef IEC_POU_SCOPE
-#define IEC_POU_SCOPE static
+#define IEC_POU_SCOPE static __attribute__((__unused__))
 #endif
 
 /* Views and destinations of fixed-length string variables. */
