@@ -19,12 +19,48 @@
 #include <linux/kthread.h>
 #include <linux/sched.h>
 #include <linux/sched/types.h>
+#include <linux/sysfs.h>
 #include <linux/string.h>
 #include <uapi/linux/sched/types.h>
 
 #include "iec_kmod.h"
 
 #define IEC_FIFO_TOP	49
+
+static struct iec_resource *iec_this_res;
+
+/*
+ * /sys/module/<resource module>/iec_latency: per task, the release latency
+ * histogram (1 us buckets, the last one holds everything above), for the
+ * jitter benchmark.  Root-only.
+ */
+static ssize_t iec_latency_show(struct kobject *kobj, struct kobj_attribute *attr,
+				char *buf)
+{
+	struct iec_resource *res = iec_this_res;
+	int len = 0;
+	u32 i, b;
+
+	for (i = 0; res && i < res->ntasks; i++) {
+		const struct iec_task_stats *s = &res->tasks[i].stats;
+
+		/* a line is at most ~900 bytes: stop while the page has room */
+		if (len > PAGE_SIZE - 1024) {
+			len += sysfs_emit_at(buf, len, "...\n");
+			break;
+		}
+		len += sysfs_emit_at(buf, len, "%s cycles %llu overruns %llu max_ns %lld sum_ns %lld hist",
+				     res->tasks[i].name, s->cycles, s->overruns,
+				     s->latency_max_ns, s->latency_sum_ns);
+		for (b = 0; b < IEC_HIST_BUCKETS; b++)
+			len += sysfs_emit_at(buf, len, " %llu", s->hist[b]);
+		len += sysfs_emit_at(buf, len, "\n");
+	}
+	return len;
+}
+
+static struct kobj_attribute iec_latency_attr = __ATTR(iec_latency, 0400,
+						       iec_latency_show, NULL);
 
 static void iec_task_account(struct iec_task *t, s64 latency, s64 exec)
 {
@@ -257,6 +293,9 @@ static int iec_resource_init(struct iec_resource *res)
 	ret = iec2kmod_register_resource(res);
 	if (ret)
 		goto err_threads;
+	iec_this_res = res;
+	if (sysfs_create_file(&THIS_MODULE->mkobj.kobj, &iec_latency_attr.attr))
+		pr_warn("iec2kmod: resource %s: no iec_latency file in sysfs\n", res->name);
 	return 0;
 
 err_threads:
@@ -266,6 +305,7 @@ err_threads:
 
 static void iec_resource_exit(struct iec_resource *res)
 {
+	sysfs_remove_file(&THIS_MODULE->mkobj.kobj, &iec_latency_attr.attr);
 	iec2kmod_unregister_resource(res);
 	iec_resource_destroy(res);
 	iec2kmod_resource_gone(res);	/* forces pointing into this module */
