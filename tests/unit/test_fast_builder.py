@@ -125,6 +125,8 @@ SNIPPETS = [
     "PROGRAM p\n x := a\nEND_PROGRAM\n",
     "PROGRAM p\n x := a.b\nEND_PROGRAM\n",
     "PROGRAM p\n f(a, b c);\nEND_PROGRAM\n",
+    "PROGRAM p\n IF a THEN ELSIF b THEN ELSE END_IF;\n WHILE a DO END_WHILE;\n CASE x OF 1: END_CASE;"
+    "\nEND_PROGRAM\n",
 ]
 
 
