@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -52,6 +53,14 @@ def _sha(*texts) -> str:
         h.update(t.encode() if isinstance(t, str) else t)
         h.update(b"\0")
     return h.hexdigest()
+
+
+_C_COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.S)
+
+
+def _code(text: str) -> str:
+    """C text without comments (a build id must not depend on them)."""
+    return _C_COMMENT.sub("", text)
 
 
 def _type_defs(t, out, seen, project):
@@ -161,7 +170,9 @@ def generate_tree(project, out: Path) -> dict:
         body = env.get_template("program_body.c.j2").render(
             type=pou.name, header=gen.header_name, bodies=[gen.bodies[p.key][0] for p in deps],
             prefix=prefix, uses_fpu=fpu, version=__version__)
-        build_id = _sha(body, *[gen.bodies[p.key][1] for p in deps], gen.header)[:8]
+        # the code only: comments name the sources and change with any edit
+        build_id = _sha(*[_code(t) for t in [body, gen.header] +
+                          [gen.bodies[p.key][1] for p in deps]])[:8]
         mod = f"iec_{cname}_p_{_ident(pou.name)}_{build_id}"
         main = env.get_template("program_main.c.j2").render(
             type=pou.name, type_upper=pou.name.upper(), build_id=build_id, config=cfg.name,
