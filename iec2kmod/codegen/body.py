@@ -480,7 +480,7 @@ class BodyEmitter:
                 lines.append(self.set_bit(f, lv, a.value, bit, val))
             else:
                 lines.append(f"{lv} = {self.expr.convert(val, param.type, lt)};"
-                             if N.is_scalar(lt) else _copy(lv, member, lt))
+                             if N.is_scalar(lt) else copy_value(lv, member, lt))
         if eno is not None and eno.value is not None:
             lv, _, _ = self.expr.lvalue(f, eno.value)
             lines.append(f"{lv} = 1;")
@@ -691,7 +691,8 @@ _INLINE_FB = {
 }
 
 
-def _copy(dst, src, t):
+def copy_value(dst, src, t):
+    """C statement copying a value of IEC type t from lvalue src to dst."""
     t = concrete(t)
     if isinstance(t, StringT):
         w = "W" if t.wide else ""

@@ -257,14 +257,5 @@ class PlanEmitter:
 
     @staticmethod
     def connection_outputs(ip: InstancePlan):
-        lines = []
-        for gname, member, t in ip.outputs:
-            src = f"{ip.c_name}.{member}"
-            t0 = concrete(t)
-            if isinstance(t0, StringT):
-                w = "W" if t0.wide else ""
-                lines.append(f"iec_assign_{w.lower()}string(IEC_{w}STRBUF({gname}), "
-                             f"IEC_{w}STRV({src}));")
-            else:
-                lines.append(f"{gname} = {src};")
-        return lines
+        from .body import copy_value
+        return [copy_value(gname, f"{ip.c_name}.{member}", t) for gname, member, t in ip.outputs]

@@ -26,7 +26,7 @@ from ..checks.types import ArrayT, FBType, StringT, StructT, EnumT, concrete
 from ..codegen import generate, pou_order, uses_real
 from ..codegen import cnames as N
 from ..codegen.expr import Frame, Raw
-from ..codegen.body import BodyEmitter
+from ..codegen.body import BodyEmitter, copy_value
 from ..codegen.plan import PlanEmitter, build_plan, kind_of
 from ..codegen.pou import InitEmitter, pou_struct
 
@@ -321,14 +321,14 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
             src = f"res_image.{name}" if g is not None and g.resource else \
                 f"iec2kmod_image.{name}"
             image.append(N.declare(t, name))
-            copy_in.append(_copy(f"task{tp.index}_image.{name}", src, t))
+            copy_in.append(copy_value(f"task{tp.index}_image.{name}", src, t))
             if wr:
                 if g is not None and id(g.var) in single_events:
                     ev = single_events[id(g.var)]
                     copy_out.append(f"if (!{src} && task{tp.index}_image.{name})")
                     copy_out.append(f"\tevents[nevents++] = {ev};")
                     events.append(ev)
-                copy_out.append(_copy(src, f"task{tp.index}_image.{name}", t))
+                copy_out.append(copy_value(src, f"task{tp.index}_image.{name}", t))
         run = []
         for ip in tp.instances:
             cf, lines = _connection_inputs(pe, ip, tp)
@@ -337,7 +337,7 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
             block.append(f"if (iec2kmod_run_program({slot_of[ip.pou.key]}, &{ip.c_name}, ctx))")
             block.append("\treturn;")
             for gname, member, t in ip.outputs:
-                block.append(_copy(f"task{tp.index}_image.{gname}", f"{ip.c_name}.{member}", t))
+                block.append(copy_value(f"task{tp.index}_image.{gname}", f"{ip.c_name}.{member}", t))
             run += (["{"] + ["\t" + d for d in cf.decls + block] + ["}"]) if cf.decls else block
         if not run:
             run = ["(void)ctx;"]
@@ -380,16 +380,6 @@ def _global_c(plan, var):
         if g.var is var:
             return g.c_name
     raise KeyError(var.name)
-
-
-def _copy(dst, src, t):
-    t = concrete(t)
-    if isinstance(t, StringT):
-        w = "W" if t.wide else ""
-        return f"iec_assign_{w.lower()}string(IEC_{w}STRBUF({dst}), IEC_{w}STRV({src}));"
-    if isinstance(t, ArrayT):
-        return f"iec_memcpy({dst}, {src}, sizeof({dst}));"
-    return f"{dst} = {src};"
 
 
 def _connection_inputs(pe, ip, tp):
