@@ -27,6 +27,11 @@ from .codegen.plan import build_plan, PlanEmitter
 from .literals import LiteralError, classify, parse_duration
 
 
+# the same per-cycle loop budget as the kernel's tasks, so that a long loop
+# faults in the simulation exactly when it would in the kernel
+from .kmod import DEFAULT_LOOP_BUDGET as LOOP_BUDGET  # noqa: E402
+
+
 class SimError(Exception):
     """A usage error of `sim` (bad trace, unknown variable): exit 2."""
 
@@ -95,6 +100,7 @@ def render_sim(project):
         tasks.append({"index": tp.index,
                       "name": tp.name if implicit else f"{tp.resource}.{tp.name}",
                       "interval": tp.interval_ns or 0, "priority": tp.priority,
+                      "loop_budget": LOOP_BUDGET,
                       "single": f"&{tp.single.c_name}" if tp.single else "NULL", "body": body})
     vars_ = [{"path": N.c_string(e.path.encode()), "addr": f"&{e.c_lvalue}", "kind": e.kind,
               "size": e.size} for e in plan.table]

@@ -20,6 +20,7 @@ struct sim_task {
 	int priority;		/* IEC: 0 is the most urgent */
 	const iec_bool *single;	/* SINGLE variable of an event task */
 	void (*run)(struct iec_ctx *ctx);
+	unsigned int loop_budget;	/* iterations per cycle, as in the kernel */
 };
 
 struct sim_pou_file {

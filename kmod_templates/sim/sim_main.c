@@ -261,7 +261,7 @@ int main(int argc, char **argv)
 
 	sim_init();
 	for (i = 0; i < sim_ntasks; i++) {
-		iec_ctx_init(&ctx[i], 0);
+		iec_ctx_init(&ctx[i], sim_tasks[i].loop_budget);
 		if (sim_tasks[i].single)
 			prev_single[i] = *sim_tasks[i].single;
 	}
