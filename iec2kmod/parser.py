@@ -124,6 +124,14 @@ def _path_ref(path, pos):
     return ast.Ref(pos, name, accessors)
 
 
+def _signed_number(obj):
+    """An IL operand such as -7 or -2.5: a literal with its sign."""
+    text = obj.text
+    pos = _pos(obj)
+    kind, value, _ = classify(text[1:])
+    return ast.Lit(pos, text, kind, -value if text[0] == "-" else value)
+
+
 def _variable(obj):
     ref = _path_ref(obj.name, _pos(obj))
     accessors = ref.accessors
@@ -185,6 +193,7 @@ def metamodel():
         "Unary": _unary,
         "Paren": _paren,
         "Literal": _literal,
+        "ILSignedNumber": _signed_number,
         "Simple": _simple,
         "Variable": _variable,
         "CallOrVariable": _call_or_variable,

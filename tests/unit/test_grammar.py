@@ -373,3 +373,9 @@ def test_empty_statement_lists():
     assert [type(s).__name__ for s in stmts] == ["If", "For", "While", "Repeat", "Case"]
     assert stmts[0].branches[0][1] == [] and stmts[1].body == [] and stmts[3].body == []
     assert stmts[4].elements[0][1] == []
+
+
+def test_il_negative_constant_operands():
+    il = parse_ok("PROGRAM p\n  LD -7\n  ADD +3\n  MUL -2.5E1\nEND_PROGRAM\n").pous[0].body
+    assert [(i.op, i.operand.kind, i.operand.value) for i in il] == [
+        ("LD", "int", -7), ("ADD", "int", 3), ("MUL", "real", -25.0)]
