@@ -13,6 +13,8 @@ from iec2kmod.parser import parse_source
 
 HERE = Path(__file__).resolve().parent
 CASES = sorted(HERE.glob("*.st"))
+# an empty or shrunken list would pass as "skipped": fail at collection instead
+assert len(CASES) >= 10, f"only {len(CASES)} error test files in {HERE}"
 EXPECT = re.compile(r"\(\*\s*EXPECT\s*\n(.*?)\*\)", re.S)
 
 

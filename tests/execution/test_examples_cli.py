@@ -17,6 +17,8 @@ pytestmark = pytest.mark.execution
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted(p for p in (ROOT / "examples").iterdir() if p.is_dir())
+# an empty or shrunken list would pass as "skipped": fail at collection instead
+assert len(EXAMPLES) >= 12, f"only {len(EXAMPLES)} example projects under {ROOT / 'examples'}"
 
 
 @pytest.mark.parametrize("sanitize", [False, True], ids=["plain", "sanitize"])

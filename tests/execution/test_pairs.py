@@ -12,6 +12,8 @@ import runner
 pytestmark = pytest.mark.execution
 
 PAIRS = runner.discover_pairs()
+# an empty or shrunken list would pass as "skipped": fail at collection instead
+assert len(PAIRS) >= 10, f"only {len(PAIRS)} ST/IL pairs under {runner.PAIRS}"
 _RUNS: dict = {}
 
 

@@ -29,3 +29,10 @@ def test_driver(builder, driver, mode):
     m = re.search(r"^(\d+) passed, (\d+) failed$", r.stdout, re.M)
     assert m, out
     assert int(m.group(1)) > 0 and int(m.group(2)) == 0, out
+
+
+def test_every_driver_file_is_run():
+    """A test_*.c added to tests/runtime/c but not to DRIVERS would never run."""
+    on_disk = sorted(p.name for p in cfile("test_int.c").parent.glob("test_*.c"))
+    assert len(on_disk) >= 4, on_disk
+    assert on_disk == sorted(DRIVERS), f"drivers on disk {on_disk}, run {sorted(DRIVERS)}"

@@ -15,6 +15,8 @@ from helpers import parse_ok  # noqa: F401 - keeps the helpers importable
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted(p for p in (ROOT / "examples").iterdir() if p.is_dir())
+# an empty or shrunken list would pass as "skipped": fail at collection instead
+assert len(EXAMPLES) >= 12, f"only {len(EXAMPLES)} example projects under {ROOT / 'examples'}"
 
 _GEN = r"""
 import hashlib, json, sys

@@ -23,6 +23,8 @@ pytestmark = pytest.mark.unit
 ROOT = Path(__file__).resolve().parents[2]
 FILES = sorted(p for d in ("examples", "tests/errors") for p in (ROOT / d).rglob("*")
                if p.suffix.lower() in (".st", ".il", ".iec"))
+# an empty or shrunken list would pass as "skipped": fail at collection instead
+assert len(FILES) >= 27, f"only {len(FILES)} source files under examples/ and tests/errors/"
 
 
 def dump(x):
