@@ -356,6 +356,8 @@ class Pair:
     st: Path
     il: Path
     cycles: int = 300
+    inputs: list = field(default_factory=list)    # VAR_INPUT names (set by run_pairs)
+    outputs: list = field(default_factory=list)   # VAR_OUTPUT names (set by run_pairs)
 
 
 def discover_pairs(root: Path = PAIRS) -> list[Pair]:
@@ -426,7 +428,9 @@ def run_pairs(pairs, sanitize=False, interval=DEFAULT_INTERVAL):
     iface = {}
     for p in pairs:
         pou = project.pous[f"{p.name}_st".upper()]
-        names = [v.name for v in pou.inputs + pou.outputs]
+        p.inputs = [v.name for v in pou.inputs]
+        p.outputs = [v.name for v in pou.outputs]
+        names = p.inputs + p.outputs
         iface[p.name] = names
         for suffix in ("st", "il"):
             watch += [f"{p.name}_{suffix}.{n}" for n in names]
@@ -448,3 +452,43 @@ def run_pairs(pairs, sanitize=False, interval=DEFAULT_INTERVAL):
                           if res.names[i].upper().startswith(prefix)]
         traces[p.name] = (tr["st"], tr["il"])
     return res, traces, iface
+
+
+MIN_OUTPUT_CHANGES = 10        # changes of all outputs together, over a pair's run
+MIN_CHANGES_PER_OUTPUT = 2     # every output goes and comes back at least once
+
+
+def output_changes(trace, outputs) -> dict:
+    """{output: number of changes} in a pair's trace; the first report of a
+    variable (its initial value) is not a change, and inputs do not count."""
+    wanted = {n.upper() for n in outputs}
+    seen, count = set(), {n.upper(): 0 for n in outputs}
+    for _, n, _ in trace:
+        if n not in wanted:
+            continue
+        if n in seen:
+            count[n] += 1
+        seen.add(n)
+    return count
+
+
+def pair_problems(pair: Pair, st, il) -> list[str]:
+    """Why a pair's traces do not prove ST == IL (empty: they do): the
+    outputs must show behaviour, and the two traces must be identical."""
+    if not pair.outputs:
+        return [f"{pair.name}: no VAR_OUTPUT (or run_pairs has not run it)"]
+    problems = []
+    changes = output_changes(st, pair.outputs)
+    if sum(changes.values()) < MIN_OUTPUT_CHANGES:
+        problems.append(f"{pair.name}: the outputs change {sum(changes.values())} times in "
+                        f"{pair.cycles} cycles (at least {MIN_OUTPUT_CHANGES}): {changes}; "
+                        "make the inputs drive them")
+    idle = {n: c for n, c in changes.items() if c < MIN_CHANGES_PER_OUTPUT}
+    if idle:
+        problems.append(f"{pair.name}: outputs that change fewer than "
+                        f"{MIN_CHANGES_PER_OUTPUT} times: {idle}")
+    if st != il:
+        diff = next(k for k, (a, b) in enumerate(zip(st + [None], il + [None])) if a != b)
+        problems.append(f"{pair.name}: traces differ at change {diff}: ST {st[diff:diff + 3]} "
+                        f"IL {il[diff:diff + 3]}")
+    return problems
