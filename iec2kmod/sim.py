@@ -23,7 +23,7 @@ from . import __version__
 from .checks.types import EnumT, concrete
 from .codegen import generate, source_list
 from .codegen import cnames as N
-from .codegen.plan import build_plan, PlanEmitter
+from .codegen.plan import BindingError, PlanEmitter, build_plan, unbound_pointer_check
 from .literals import LiteralError, classify, parse_duration
 
 
@@ -77,8 +77,8 @@ def render_sim(project):
     f, init = pe.global_inits()
     for ip in plan.instances:
         init.append(f"{N.pou_prefix(ip.pou)}_init(&{ip.c_name});")
-        for member, gname, is_array in ip.externals:
-            init.append(f"{ip.c_name}.{member} = {'' if is_array else '&'}{gname};")
+        for b in ip.bindings:
+            init += b.lines(ip.c_name, lambda g: g.c_name)
     tasks = []
     for tp in plan.tasks:
         body = []
@@ -116,7 +116,8 @@ def render_sim(project):
         instances=[f"{N.pou_struct(ip.pou)} {ip.c_name}" for ip in plan.instances],
         sources=source_list(project),
         init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init),
-        init=f.pre + init, tasks=tasks, vars=vars_, pou_files=pou_files)
+        init=f.pre + init, tasks=tasks, vars=vars_, pou_files=pou_files,
+        unbound_check=unbound_pointer_check(plan.instances))
     files = {gen.header_name: gen.header, "sim_project.c": text}
     for key in gen.order:
         name, body = gen.bodies[key]

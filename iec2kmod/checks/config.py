@@ -7,8 +7,9 @@ from __future__ import annotations
 from .. import ast
 from .body import BodyChecker
 from .declare import ConstError, address_span, check_address_type
-from .symbols import ConfigInfo, POUInfo, ProgramInstance, ResourceInfo, TaskInfo, Var
-from .types import BOOL, ERROR, ErrorT, FBType, assignable, same
+from .symbols import (Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo,
+                      TaskInfo, Var)
+from .types import BOOL, ERROR, ArrayT, ErrorT, FBType, StructT, assignable, same
 
 MAX_PRIORITY = 48   # IEC 0 (most urgent) .. 48 -> SCHED_FIFO 49 .. 1
 
@@ -190,14 +191,51 @@ class ConfigChecker:
                 self.error(src, conn.pos, f"'{conn.name}' is connected twice")
                 continue
             seen.add(conn.name.upper())
+            if param is not None and param.section == "VAR_IN_OUT" and conn.direction == "in":
+                self.inout_connection(conn, param, r, cfg, inst)
+                continue
             want = "VAR_INPUT" if conn.direction == "in" else "VAR_OUTPUT"
             if param is None or param.section != want:
                 kind = "input" if conn.direction == "in" else "output"
                 self.error(src, conn.pos, f"program '{pou.name}' has no {kind} '{conn.name}'")
                 continue
             self.connection(conn, param, r, cfg, inst)
+        for v in pou.inouts:
+            if v.key not in seen:
+                self.error(src, pc.pos, f"VAR_IN_OUT '{v.name}' of program '{pou.name}' must be "
+                                        f"connected to a global variable ({v.name} := ...)")
         self.bind_externals(pou, r, cfg, inst, src)
         return inst
+
+    def inout_connection(self, conn, param, r, cfg, inst):
+        """A program's VAR_IN_OUT refers to a whole global of its type."""
+        src = cfg.src
+        value = conn.value
+        g = None
+        if isinstance(value, ast.Ref) and not value.accessors:
+            g = self.visible(r, cfg, value.name)
+            if g is None:
+                self.error(src, value.pos, f"unknown global variable '{value.name}'")
+                return
+        if g is None:
+            self.error(src, value.pos, f"VAR_IN_OUT '{param.name}' must be connected to a "
+                                       "global variable")
+            return
+        if not _same_type(g.type, param.type):
+            self.error(src, value.pos, f"VAR_IN_OUT '{param.name}' is {param.type.name}; "
+                                       f"'{g.name}' is {g.type.name}")
+            return
+        if g.constant:
+            self.error(src, value.pos, f"cannot connect VAR_IN_OUT '{param.name}' to "
+                                       f"constant '{g.name}'")
+            return
+        g.used = True
+        if param.assigned:
+            g.assigned = True
+        value.symbol = g
+        value.type = g.type
+        self.note_global_use(g, r, src, value.pos)
+        inst.bindings.append(Binding((param,), g))
 
     def visible(self, r, cfg, name):
         return r.globals.get(name.upper()) or cfg.globals.get(name.upper())
@@ -268,14 +306,17 @@ class ConfigChecker:
 
     # ------------------------------------------------------- externals
     def bind_externals(self, pou, r, cfg, inst, src):
-        """VAR_EXTERNAL of the program and of every FB instance inside it
-        must match a global of the same name and type in scope."""
+        """VAR_EXTERNAL of the program and of every FB instance inside it, at
+        every depth (also in arrays and structures), must match a global of
+        the same name and type in scope; each becomes a Binding of the
+        instance, so the code generator has the complete list of pointer
+        members to set when the instance is initialised."""
         scope = {}
         scope.update(cfg.globals)
         scope.update(r.globals)
-        self._bind(pou, scope, r, inst, set(), src)
+        self._bind(pou, scope, r, inst, frozenset(), src, ())
 
-    def _bind(self, pou, scope, r, inst, stack, src):
+    def _bind(self, pou, scope, r, inst, stack, src, steps):
         if pou.key in stack:
             return  # recursion is reported by the call-graph check
         stack = stack | {pou.key}
@@ -300,16 +341,21 @@ class ConfigChecker:
                 g.used = True
                 if v.assigned:
                     g.assigned = True
-                if pou is inst.pou:
+                if not steps:
                     inst.externals[v.key] = g
+                inst.bindings.append(Binding(steps + (v,), g,
+                                             in_program=g.section == "VAR_GLOBAL" and
+                                             any(g is w for w in inst.pou.vars.values())))
                 self.note_global_use(g, r, src, None)
         inner = dict(scope)
         for v in pou.vars.values():
             if v.section == "VAR_GLOBAL":
                 inner[v.key] = v
         for v in pou.vars.values():
-            if isinstance(v.type, FBType) and not v.type.pou.standard:
-                self._bind(v.type.pou, inner, r, inst, stack, src)
+            if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT"):
+                continue   # a reference to an instance that is bound where it lives
+            for sub, fb in fb_slots(v.type, steps + (v,)):
+                self._bind(fb, inner, r, inst, stack, src, sub)
 
     # ------------------------------------------------ access, VAR_CONFIG
     def access(self, block, cfg):
@@ -457,3 +503,20 @@ def _const(decl, v):
         return decl.const_value(v.init, v.src) if isinstance(v.init, ast.Expr) else None
     except ConstError:
         return None
+
+
+def fb_slots(t, steps):
+    """(steps, POU) of every user FB instance inside a value of type t: the
+    value itself, the elements of an array, the fields of a structure."""
+    if isinstance(t, FBType):
+        if not t.pou.standard:
+            yield steps, t.pou
+    elif isinstance(t, ArrayT):
+        count, elem = t.count, t.elem
+        while isinstance(elem, ArrayT):
+            count *= elem.count
+            elem = elem.elem
+        yield from fb_slots(elem, steps + (Each(count),))
+    elif isinstance(t, StructT):
+        for fname, ft, _ in t.fields.values():
+            yield from fb_slots(ft, steps + (fname,))

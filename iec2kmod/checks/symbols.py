@@ -74,6 +74,27 @@ class ProgramInstance:
     inputs: list = field(default_factory=list)   # [(Var of the program, value expr)]
     outputs: list = field(default_factory=list)  # [(Var of the program, target expr)]
     externals: dict = field(default_factory=dict)  # upper external name -> global Var
+    bindings: list = field(default_factory=list)   # [Binding]: every pointer member, any depth
+
+
+@dataclass(frozen=True)
+class Each:
+    """A step into every element of an array of *count* (flattened) elements."""
+    count: int
+
+
+@dataclass(eq=False)
+class Binding:
+    """A pointer member of a program instance and the variable it refers to.
+
+    ``steps`` leads from the program instance to the member: a Var is a member
+    of the POU at that level (the last one is the VAR_EXTERNAL or VAR_IN_OUT
+    itself), a str is a structure field, an Each is every element of an
+    array.  ``target`` is a configuration or resource global, or a VAR_GLOBAL
+    of the program (``in_program``)."""
+    steps: tuple
+    target: Var
+    in_program: bool = False
 
 
 @dataclass(eq=False)

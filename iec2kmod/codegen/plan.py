@@ -8,13 +8,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .. import ast
-from ..checks.symbols import POUInfo, Var
+from ..checks.symbols import Each, POUInfo, Var
 from ..checks.types import (ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT,
                             concrete)
 from . import cnames as N
 from .body import BodyEmitter
 from .expr import Frame
-from .pou import InitEmitter
+from .pou import InitEmitter, pointer_members
 
 MAX_TABLE_ELEMENTS = 256   # array/struct elements listed per variable
 
@@ -37,6 +37,36 @@ class InstancePlan:
     inputs: list = field(default_factory=list)    # (member C lvalue, IEC type, value AST)
     outputs: list = field(default_factory=list)   # (global C lvalue, member, IEC type)
     externals: list = field(default_factory=list) # (member, global C name, is array)
+    bindings: list = field(default_factory=list)  # [PointerBinding], complete (check_bindings)
+
+
+class BindingError(Exception):
+    """A pointer member of an instance has no binding: a bug of ours."""
+
+
+@dataclass
+class PointerBinding:
+    """One pointer member of a program instance, at any depth, and what it
+    points to.  ``member`` is its C path from the instance with ``[*]`` for
+    every element of an array (``counts`` gives their sizes); the target is a
+    global (``target``) or a VAR_GLOBAL member of the program itself
+    (``program_member``)."""
+    iec_path: str
+    member: str
+    counts: tuple
+    target: GlobalPlan | None
+    program_member: str | None
+    is_array: bool
+
+    def lines(self, inst_c: str, global_expr) -> list[str]:
+        """C statements that set the pointer in instance *inst_c*;
+        global_expr(GlobalPlan) is where a global lives for that code."""
+        if self.target is not None:
+            obj = global_expr(self.target)
+        else:
+            obj = f"{inst_c}.{self.program_member}"
+        value = obj if self.is_array else f"&{obj}"
+        return _each_loops(f"{inst_c}.{self.member}", self.counts, f" = {value};")
 
 
 @dataclass
@@ -112,6 +142,9 @@ def build_plan(project) -> Plan:
                 ext = inst.pou.vars[key]
                 ip.externals.append((N.var(ext.name), by_var[id(g)].c_name,
                                      isinstance(ext.type, ArrayT)))
+            for b in inst.bindings:
+                ip.bindings.append(_pointer_binding(ip, b, by_var))
+            check_bindings(ip)
             for param, value in inst.inputs:
                 ip.inputs.append((N.var(param.name), param.type, value))
                 if isinstance(value, ast.Direct):
@@ -133,6 +166,80 @@ def build_plan(project) -> Plan:
         table.append(TableEntry(address, c_name, t, kind_of(t), _size(t),
                                 address[1] != "Q", "direct"))
     return Plan(cfg.name, globals_, instances, tasks, table, located, directs)
+
+
+def _pointer_binding(ip, b, by_var) -> PointerBinding:
+    member, iec, counts = [], [ip.path], []
+    for step in b.steps:
+        if isinstance(step, Each):
+            member.append("[*]")
+            iec.append("[*]")
+            counts.append(step.count)
+        elif isinstance(step, str):
+            member.append("." + N.var(step))
+            iec.append("." + step)
+        else:
+            member.append(("." if member else "") + N.var(step.name))
+            iec.append("." + step.name)
+    pointer = b.steps[-1]
+    target = None if b.in_program else by_var[id(b.target)]
+    return PointerBinding("".join(iec), "".join(member), tuple(counts), target,
+                          N.var(b.target.name) if b.in_program else None,
+                          isinstance(pointer.type, ArrayT))
+
+
+def check_bindings(ip: InstancePlan) -> None:
+    """Every pointer member of the instance's struct has exactly one binding
+    (the wrong state, an instance running with a NULL pointer, cannot be
+    generated)."""
+    want = {c: counts for c, _, counts in pointer_members(ip.pou)}
+    have = [b.member for b in ip.bindings]
+    missing = sorted(set(want) - set(have))
+    extra = sorted(set(have) - set(want))
+    twice = sorted({m for m in have if have.count(m) > 1})
+    wrong = sorted(b.member for b in ip.bindings if b.member in want and
+                   want[b.member] != b.counts)
+    if missing or extra or twice or wrong:
+        raise BindingError(f"instance {ip.path}: pointer members without a binding: "
+                           f"{missing}, bindings without a pointer member: {extra}, bound "
+                           f"twice: {twice}, element counts differ: {wrong}")
+
+
+def _each_loops(lvalue: str, counts, tail: str) -> list[str]:
+    """``lvalue + tail`` for every element where lvalue has ``[*]`` (one
+    loop per ``[*]``, b0, b1 ... as indexes, in a block of its own)."""
+    if not counts:
+        return [lvalue + tail]
+    idx = [f"b{k}" for k in range(len(counts))]
+    for k in idx:
+        lvalue = lvalue.replace("[*]", f"[{k}]", 1)
+    lines = ["{", f"\tiec_u32 {', '.join(idx)};"]
+    for depth, (k, n) in enumerate(zip(idx, counts)):
+        lines.append("\t" * (depth + 1) + f"for ({k} = 0; {k} < {n}; {k}++)")
+    lines.append("\t" * (len(counts) + 1) + lvalue + tail)
+    lines.append("}")
+    return lines
+
+
+def unbound_pointer_check(instances, inst_c=lambda ip: ip.c_name) -> list[str]:
+    """Body of a C function returning the IEC path of the first pointer
+    member that is NULL after initialisation, or NULL: the run-time side of
+    check_bindings(), derived from the struct layout alone."""
+    lines = []
+    for ip in instances:
+        for member, iec, counts in pointer_members(ip.pou):
+            body = _each_loops(f"{inst_c(ip)}.{member}", counts, "")
+            test = body[-2] if counts else body[0]
+            indent = test[:len(test) - len(test.lstrip("\t"))]
+            cond = [f"{indent}if (!{test.strip()})",
+                    f"{indent}\treturn {N.c_string(f'{ip.path}.{iec}'.encode())};"]
+            if counts:
+                body[-2:-1] = cond
+            else:
+                body = cond
+            lines += body
+    lines.append("return NULL;")
+    return lines
 
 
 def _direct_c_name(address: str) -> str:

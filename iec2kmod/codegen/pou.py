@@ -24,6 +24,41 @@ def member_decl(v) -> str:
     return N.declare(v.type, name) + ";"
 
 
+def pointer_members(pou, c_prefix="", iec_prefix="", counts=()):
+    """Every pointer member that must be set when an instance of *pou* is
+    initialised, as (C path from the instance with ``[*]`` for every element
+    of an array, IEC path, element counts of those arrays): the VAR_EXTERNALs
+    of the POU and of every FB instance in it, at any depth, and a program's
+    VAR_IN_OUTs.  An FB's VAR_IN_OUT is set by every call instead (the front
+    end requires it to be connected).
+
+    This walks the struct layout that member_decl() declares; the binding
+    table comes from the front end's scope resolution, and each must cover
+    the other (plan.check_bindings)."""
+    out = []
+    for v in pou.vars.values():
+        c, iec = f"{c_prefix}{N.var(v.name)}", f"{iec_prefix}{v.name}"
+        if v.section == "VAR_EXTERNAL" or (v.section == "VAR_IN_OUT" and pou.kind == "PROGRAM"):
+            out.append((c, iec, counts))
+        elif v.section != "VAR_IN_OUT":
+            out += _pointers_in(v.type, c, iec, counts)
+    return out
+
+
+def _pointers_in(t, c, iec, counts):
+    if isinstance(t, FBType):
+        return [] if t.pou.standard else pointer_members(t.pou, c + ".", iec + ".", counts)
+    if isinstance(t, ArrayT):
+        elem, count = N.array_flat(t)
+        return _pointers_in(elem, c + "[*]", iec + "[*]", counts + (count,))
+    if isinstance(t, StructT):
+        out = []
+        for fname, ft, _ in t.fields.values():
+            out += _pointers_in(ft, f"{c}.{N.var(fname)}", f"{iec}.{fname}", counts)
+        return out
+    return []
+
+
 class InitEmitter:
     """Initial values: C statements that bring storage to its declared state
     (after it was zeroed)."""

@@ -27,7 +27,7 @@ from ..codegen import generate, pou_order, uses_real
 from ..codegen import cnames as N
 from ..codegen.expr import Frame, Raw
 from ..codegen.body import BodyEmitter, copy_value
-from ..codegen.plan import PlanEmitter, build_plan, kind_of
+from ..codegen.plan import PlanEmitter, build_plan, kind_of, unbound_pointer_check
 from ..codegen.pou import InitEmitter, pou_struct
 
 RUNTIME_HEADERS = ("iec_platform.h", "iec_types.h", "iec_fault.h", "iec_int.h", "iec_conv.h",
@@ -299,9 +299,11 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
 
         for ip in tp.instances:
             inst = _instance(cfg, ip)
-            for key, g in inst.externals.items():
-                ext = ip.pou.vars[key]
-                use(_global_c(plan, g), True, ext.assigned and not g.constant)
+            for b in inst.bindings:
+                if b.in_program:
+                    continue
+                pointer = b.steps[-1]
+                use(_global_c(plan, b.target), True, pointer.assigned and not b.target.constant)
             for param, value in inst.inputs:
                 if hasattr(value, "symbol") and value.symbol is not None and \
                         id(value.symbol) in {id(x.var) for x in plan.globals}:
@@ -347,9 +349,8 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
                       "loop_budget": DEFAULT_LOOP_BUDGET, "image": image,
                       "copy_in": copy_in, "copy_out": copy_out, "events": events, "run": run})
         for ip in tp.instances:
-            for member, gname, is_array in ip.externals:
-                init.append(f"{ip.c_name}.{member} = {'' if is_array else '&'}"
-                            f"task{tp.index}_image.{gname};")
+            for b in ip.bindings:
+                init += b.lines(ip.c_name, lambda g, n=tp.index: f"task{n}_image.{g.c_name}")
     # an instance variable belongs to the task that runs its instance (1 + index in tasks[]):
     # the manager writes it between two cycles of that task
     task_no = {t["name"].upper(): n + 1 for n, t in enumerate(tasks)}
@@ -364,7 +365,8 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
         instances=[f"{N.pou_struct(ip.pou)} {ip.c_name}" for ip in instances], tasks=tasks,
         vars=vars_out, cpu=_cpu_of(r.processor), init_decls=f.decls,
         needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init,
-        source_hash=source_hash, iface_hash=iface_hash)
+        source_hash=source_hash, iface_hash=iface_hash,
+        unbound_check=unbound_pointer_check(instances))
 
 
 def _instance(cfg, ip):

@@ -35,5 +35,7 @@ extern const int sim_ntasks;
 extern const struct sim_pou_file sim_pou_files[];
 extern const int sim_npou_files;
 void sim_init(void);
+/* the IEC path of a pointer member left NULL by sim_init(), or NULL */
+const char *sim_unbound_pointer(void);
 
 #endif /* IEC_SIM_H */

@@ -233,6 +233,7 @@ int main(int argc, char **argv)
 	iec_bool *prev_single;
 	unsigned char *faulted, *pending;
 	struct iec_ctx *ctx;
+	const char *unbound;
 	int i;
 
 	if (argc < 3)
@@ -260,6 +261,12 @@ int main(int argc, char **argv)
 		die("out of memory");
 
 	sim_init();
+	unbound = sim_unbound_pointer();
+	if (unbound) {
+		fprintf(stderr, "sim: pointer member %s is not bound after initialisation\n",
+			unbound);
+		exit(70);
+	}
 	for (i = 0; i < sim_ntasks; i++) {
 		iec_ctx_init(&ctx[i], sim_tasks[i].loop_budget);
 		if (sim_tasks[i].single)
