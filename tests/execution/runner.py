@@ -20,14 +20,24 @@ Annotations are comments in the source:
                                  values after the Nth cycle (N >= 1)
     (* EXPECT FAULT in cycle 4 at line 12: division by zero *)
                                  the task stops in cycle 4 with a runtime
-                                 error at that line of this file
-                                 (text: part of the fault's name)
+                                 error at that line of this file; the text
+                                 is the fault's name, exactly (FAULT_NAMES)
+
+The keywords are written exactly so (EXPECT, FAULT, INPUT in capitals,
+after/in/at/cycle(s)/line and @interval in lower case) and only in
+``(* *)`` comments.  A comment -- or a line of one -- that starts with a
+word close to EXPECT, INPUT or @interval (EXPECTED, Expect, INPUTS,
+// EXPECT, { EXPECT }, EXPECT at 3 cycles, ...) and is not a well-formed
+annotation fails the case: a typo never drops a check silently.
 
 Several EXPECT blocks make several checkpoints; a block may span lines.
 Paths are relative to the program instance (``x``, ``fb.Q``, ``a[1,2]``,
-``rec.name``).  Values are IEC literals: TRUE, -5, 16#FF, 2.5, T#1s,
-'text', "wide", DT#..., or an enumeration value name.  REAL/LREAL compare
-with a relative tolerance of 1E-6 (write ``x == 0.1`` for an exact
+``rec.name``).  Values are IEC literals of the variable's type, exactly:
+TRUE/FALSE for BOOL (not 1/0), integers for integer and bit-string types,
+2.5 / NaN / Inf for REAL/LREAL, T#1s or LTIME#5ns for TIME/LTIME, D#...,
+TOD#..., DT#... for the date types, 'text' for STRING, "wide" for
+WSTRING, a value name (or Type#name) for an enumeration.  REAL/LREAL
+compare with a relative tolerance of 1E-6 (write ``x == 0.1`` for an exact
 comparison).  A case without EXPECT FAULT must not fault.
 
 ST/IL pairs live in ``pairs/``: ``<name>.st`` declares PROGRAM <name>_st,
@@ -46,7 +56,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from iec2kmod import frontend, sim
-from iec2kmod.checks.types import Elementary, EnumT, SubrangeT, concrete
+from iec2kmod.codegen.plan import build_plan
+from iec2kmod.checks.types import Elementary, EnumT, StringT, SubrangeT, concrete
 from iec2kmod.literals import LiteralError, classify
 
 HERE = Path(__file__).resolve().parent
@@ -55,18 +66,101 @@ PAIRS = HERE / "pairs"
 DEFAULT_INTERVAL = 10_000_000
 SANITIZER_REPORT = re.compile(r"runtime error|Sanitizer|^==\d+==|SUMMARY:", re.M)
 
-_COMMENT = re.compile(r"\(\*(.*?)\*\)", re.S)
-_EXPECT = re.compile(r"^\s*EXPECT\s+after\s+(\d+)\s+cycles?\s*:(.*)$", re.S | re.I)
+# the annotations, written exactly so (case-sensitive)
+_EXPECT = re.compile(r"^\s*EXPECT\s+after\s+(\d+)\s+cycles?\s*:(.*)$", re.S)
 _FAULT = re.compile(r"^\s*EXPECT\s+FAULT\s+in\s+cycle\s+(\d+)\s+at\s+line\s+(\d+)\s*:(.*)$",
-                    re.S | re.I)
-_INPUT = re.compile(r"^\s*INPUT\s+at\s+cycle\s+(\d+)\s*:(.*)$", re.S | re.I)
-_INTERVAL = re.compile(r"^\s*@interval\s+(\S+)\s*$", re.I)
+                    re.S)
+_INPUT = re.compile(r"^\s*INPUT\s+at\s+cycle\s+(\d+)\s*:(.*)$", re.S)
+_INTERVAL = re.compile(r"^\s*@interval\s+(\S+)\s*$")
+_USAGE = ("write 'EXPECT after N cycles: path = value; ...', 'EXPECT FAULT in cycle N at "
+          "line L: <fault name>', 'INPUT at cycle N: path = value; ...' or '@interval T#...' "
+          "in a (* *) comment")
 _PROGRAM = re.compile(r"^\s*PROGRAM\s+([A-Za-z_]\w*)", re.M | re.I)
 _CONFIG = re.compile(r"^\s*CONFIGURATION\b", re.M | re.I)
 
 
 class CaseError(Exception):
     """A malformed case file."""
+
+
+def _fault_names() -> tuple:
+    """The runtime's fault names (iec_fault_name() in iec_fault.h)."""
+    from kmod_templates import ROOT as KT
+    text = (KT / "runtime" / "iec_fault.h").read_text()
+    body = text[text.index("iec_fault_name("):]
+    body = body[:body.index("\n}\n")]
+    names = tuple(n for n in re.findall(r'return\s+"([^"]+)"', body)
+                  if n not in ("none", "unknown fault"))
+    assert len(names) >= 5, names
+    return names
+
+
+FAULT_NAMES = _fault_names()
+
+
+def iec_comments(text: str):
+    """(style, body, line of the comment start, line of the body start) of
+    every comment of an IEC source: style '(*', '//' or '{'.  String
+    literals are skipped, so "'(* x *)'" is no comment."""
+    i, n = 0, len(text)
+    while i < n:
+        ch = text[i]
+        if ch in "'\"":
+            j = i + 1
+            while j < n and text[j] != ch:
+                j += 2 if text[j] == "$" else 1
+            i = j + 1
+            continue
+        two = text[i:i + 2]
+        if two == "(*":
+            end = text.find("*)", i + 2)
+            end = n if end < 0 else end
+            yield "(*", text[i + 2:end], text.count("\n", 0, i) + 1
+            i = end + 2
+        elif two == "//":
+            end = text.find("\n", i)
+            end = n if end < 0 else end
+            yield "//", text[i + 2:end], text.count("\n", 0, i) + 1
+            i = end
+        elif ch == "{":
+            end = text.find("}", i + 1)
+            end = n if end < 0 else end
+            yield "{", text[i + 1:end], text.count("\n", 0, i) + 1
+            i = end + 1
+        else:
+            i += 1
+
+
+def _osa(a: str, b: str) -> int:
+    """Edit distance with adjacent transpositions (optimal string alignment)."""
+    d = [[max(i, j) if not i or not j else 0 for j in range(len(b) + 1)]
+         for i in range(len(a) + 1)]
+    for i in range(1, len(a) + 1):
+        for j in range(1, len(b) + 1):
+            cost = a[i - 1] != b[j - 1]
+            d[i][j] = min(d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost)
+            if i > 1 and j > 1 and a[i - 1] == b[j - 2] and a[i - 2] == b[j - 1]:
+                d[i][j] = min(d[i][j], d[i - 2][j - 2] + 1)
+    return d[-1][-1]
+
+
+_LEAD = re.compile(r"^[\s*]*(@?)\s*([A-Za-z_]\w*)?(.*)$", re.S)
+
+
+def looks_like_directive(line: str) -> bool:
+    """True if a comment (or a line of one) starts like an annotation: a
+    word close to EXPECT or INPUT, '@', or 'interval' before a time; a
+    path in an assignment (``expected_x = 3``) is not one."""
+    m = _LEAD.match(line)
+    at, word, rest = m.group(1), m.group(2) or "", m.group(3)
+    if at:
+        return True
+    if not word or re.match(r"\s*(==?(?!>)|:=|\.|\[|,)", rest):
+        return False
+    w = word.upper()
+    if w.startswith(("EXPECT", "INPUT")) or _osa(w, "EXPECT") <= 1 or _osa(w, "INPUT") <= 1:
+        return True
+    return w.startswith("INTERVAL") and bool(re.match(r"\s*[:=]?\s*(T#|TIME#|\d)", rest, re.I))
 
 
 @dataclass
@@ -129,12 +223,24 @@ def split_items(text: str) -> list[str]:
 
 def _assignments(text, where):
     out = []
-    for item in split_items(text):
+    items = split_items(text)
+    if not items:
+        raise CaseError(f"{where}: the annotation lists no values (write path = value; ...)")
+    for item in items:
         m = re.match(r"^([A-Za-z_%][\w.,\[\]%+-]*)\s*(==|=)\s*(.+)$", item, re.S)
         if not m:
             raise CaseError(f"{where}: cannot read '{item}' (write path = value)")
-        out.append(Check(m.group(1), m.group(3).strip(), m.group(2) == "=="))
+        c = Check(m.group(1), m.group(3).strip(), m.group(2) == "==")
+        try:
+            parse_value(c.text)
+        except CaseError as exc:
+            raise CaseError(f"{where}: {exc}") from None
+        out.append(c)
     return out
+
+
+def _malformed(where, what):
+    return CaseError(f"{where}: malformed annotation '{' '.join(what.split())[:70]}': {_USAGE}")
 
 
 def load_case(path: Path, area: str) -> Case:
@@ -144,24 +250,50 @@ def load_case(path: Path, area: str) -> Case:
     if not standalone and len(programs) != 1:
         raise CaseError(f"{path}: a case declares exactly one PROGRAM ({len(programs)} found)")
     case = Case(path, area, None if standalone else programs[0])
-    for m in _COMMENT.finditer(text):
-        body = m.group(1)
-        line = text.count("\n", 0, m.start()) + 1
+    intervals = 0
+    for style, body, line in iec_comments(text):
         where = f"{path}:{line}"
+        lines = body.split("\n")
+        if style != "(*":
+            for k, ln in enumerate(lines):
+                if looks_like_directive(ln):
+                    raise CaseError(f"{path}:{line + k}: an annotation in a '{style}' comment is "
+                                    f"not read: {_USAGE}")
+            continue
+        # a directive-like line later in a comment (two annotations in one
+        # comment, or one after a description) would be read as values or not at all
+        for k, ln in enumerate(lines[1:], 1):
+            if looks_like_directive(ln):
+                raise CaseError(f"{path}:{line + k}: an annotation must start its own (* *) "
+                                f"comment: '{' '.join(ln.split())[:70]}'")
         if mm := _FAULT.match(body):
-            case.faults.append((int(mm.group(1)), int(mm.group(2)), mm.group(3).strip()))
+            cycle, fline, name = int(mm.group(1)), int(mm.group(2)), " ".join(mm.group(3).split())
+            if name not in FAULT_NAMES:
+                raise CaseError(f"{where}: EXPECT FAULT needs the fault's exact name, one of "
+                                f"{', '.join(repr(n) for n in FAULT_NAMES)} (got '{name}')")
+            case.faults.append((cycle, fline, name))
         elif mm := _EXPECT.match(body):
             case.checkpoints.append((int(mm.group(1)), _assignments(mm.group(2), where)))
         elif mm := _INPUT.match(body):
             for c in _assignments(mm.group(2), where):
                 case.inputs.append((int(mm.group(1)), c.path, c.text))
         elif mm := _INTERVAL.match(body):
-            case.interval_ns = sim.parse_time(mm.group(1))
-        elif re.match(r"^\s*(EXPECT|INPUT)\b", body, re.I):
-            raise CaseError(f"{where}: malformed annotation: {body.strip()[:60]}")
+            if standalone:
+                raise CaseError(f"{where}: @interval in a case with its own CONFIGURATION is not "
+                                "used (its tasks set their intervals)")
+            try:
+                case.interval_ns = sim.parse_time(mm.group(1))
+            except sim.SimError as exc:
+                raise CaseError(f"{where}: {exc}") from None
+            intervals += 1
+            if case.interval_ns <= 0 or intervals > 1:
+                raise CaseError(f"{where}: one @interval, greater than zero")
+        elif looks_like_directive(lines[0]):
+            raise _malformed(where, body)
     if not case.checkpoints and not case.faults:
         raise CaseError(f"{path}: no EXPECT block")
-    if any(c < 1 for c, _ in case.checkpoints) or any(c < 1 for c, _, _ in case.faults):
+    if any(c < 1 for c, _ in case.checkpoints) or any(c < 1 for c, _, _ in case.faults) or \
+            any(c < 1 for c, _, _ in case.inputs):
         raise CaseError(f"{path}: cycles count from 1")
     return case
 
@@ -176,51 +308,118 @@ def discover(root: Path = CASES) -> list[Case]:
 
 
 # ------------------------------------------------------------------ values
-def parse_value(text: str):
-    """('bool'|'int'|'real'|'string'|'enum'|'nan'|'inf', value) of a literal."""
+def literal(text: str):
+    """(kind, value, type prefix or None) of an expected value: kind is one
+    of bool, int, real, nan, time, date, tod, dt, string, wstring, enum."""
     s = text.strip()
     sign = 1
     if s[:1] in "+-" and not s.startswith(("'", '"')):
         sign, s = (-1 if s[0] == "-" else 1), s[1:].strip()
     if s.upper() in ("NAN",):
-        return "nan", None
+        return "nan", None, None
     if s.upper() in ("INF", "INFINITY"):
-        return "real", sign * math.inf
+        return "real", sign * math.inf, None
     try:
-        kind, value, _ = classify(s)
+        kind, value, prefix = classify(s)
     except (LiteralError, ValueError):
-        if re.fullmatch(r"[A-Za-z_]\w*(#[A-Za-z_]\w*)?", s):
-            return "enum", s.split("#")[-1].upper()
+        if sign == 1 and re.fullmatch(r"[A-Za-z_]\w*", s):
+            return "enum", s.upper(), None
         raise CaseError(f"cannot read the value '{text}'") from None
-    if kind == "bool":
-        return "bool", bool(value)
+    if kind == "enum":
+        if sign != 1 or not re.fullmatch(r"[A-Za-z_]\w*", str(value)):
+            raise CaseError(f"cannot read the value '{text}'")
+        return "enum", str(value).upper(), prefix.upper()
+    if prefix == "BOOL" and kind == "int" and value in (0, 1):
+        kind, value = "bool", bool(value)
+    if kind in ("bool", "string", "wstring"):
+        if sign != 1:
+            raise CaseError(f"cannot read the value '{text}'")
+        return kind, value, prefix
     if kind in ("int", "time", "date", "tod", "dt"):
-        return "int", sign * int(value)
+        return kind, sign * int(value), prefix
     if kind == "real":
-        return "real", sign * float(value)
-    if kind in ("string", "wstring"):
-        return "string", value
+        return "real", sign * float(value), prefix
     raise CaseError(f"unsupported value '{text}'")
 
 
-def matches(actual, check: Check) -> bool:
-    kind, exp = parse_value(check.text)
+def parse_value(text: str):
+    """('bool'|'int'|'real'|'string'|'enum'|'nan', value) of a literal
+    (times and dates are 'int' nanoseconds)."""
+    kind, value, _ = literal(text)
+    if kind in ("time", "date", "tod", "dt"):
+        return "int", value
+    if kind == "wstring":
+        return "string", value
+    return kind, value
+
+
+# the literal kinds a variable of each category takes
+_KINDS = {"bool": ("bool",), "sint": ("int",), "uint": ("int",), "bit": ("int",),
+          "real": ("real", "nan"), "time": ("time",), "date": ("date",), "tod": ("tod",),
+          "dt": ("dt",), "string": ("string",), "wstring": ("wstring",), "enum": ("enum",)}
+_EXAMPLE = {"bool": "TRUE or FALSE", "sint": "an integer", "uint": "an integer",
+            "bit": "an integer (16#FF)", "real": "2.5, NaN or Inf", "time": "T#1s or LTIME#5ns",
+            "date": "D#2024-01-31", "tod": "TOD#12:00:00", "dt": "DT#2024-01-31-12:00:00",
+            "string": "'text'", "wstring": '"text"', "enum": "one of its value names"}
+
+
+def type_problem(check: Check, vtype) -> str | None:
+    """Why check's value is not a literal of the variable's type (None: it is)."""
+    t = concrete(vtype)
+    if isinstance(t, SubrangeT):
+        t = concrete(t.elem)
+    if isinstance(t, EnumT):
+        cat = "enum"
+    elif isinstance(t, StringT):
+        cat = "wstring" if t.wide else "string"
+    elif isinstance(t, Elementary):
+        cat = t.cat
+    else:
+        return f"{check.path} is a {getattr(t, 'name', t)}, not an elementary value"
+    kind, value, prefix = literal(check.text)
+    if kind not in _KINDS[cat]:
+        return (f"{check.path} is {t.name}: the expected value {check.text} is not a literal of "
+                f"that type (it reads as {kind}; write {_EXAMPLE[cat]})")
+    if cat == "enum":
+        if prefix and prefix != t.name.upper():
+            return f"{check.path} is {t.name}: {check.text} names another type"
+        if value not in t.values:
+            return f"{check.path} is {t.name}: {check.text} is not one of its values " \
+                   f"({', '.join(n for n, _ in t.values.values())})"
+    elif prefix and cat not in ("time", "date", "tod", "dt"):
+        base = ("WSTRING" if t.wide else "STRING") if isinstance(t, StringT) else t.name
+        if prefix.upper() != base.upper():
+            return f"{check.path} is {t.name}: {check.text} is typed {prefix}"
+    if check.exact and cat != "real":
+        return f"{check.path} is {t.name}: '==' (exact) is for REAL/LREAL values only"
+    return None
+
+
+def matches(actual, check: Check, vtype=None) -> bool:
+    """Whether a simulated value equals the expected one.  With the
+    variable's IEC type (vtype), a literal of another type is an error
+    (CaseError): TRUE is not 1, 'RED' is not the enumeration value RED."""
+    if vtype is not None and (why := type_problem(check, vtype)):
+        raise CaseError(why)
+    kind, exp, _ = literal(check.text)
     if kind == "nan":
         return isinstance(actual, float) and math.isnan(actual)
     if kind == "enum":
         return isinstance(actual, str) and actual.upper() == exp
     if kind == "bool":
         return isinstance(actual, bool) and actual == exp
-    if kind == "string":
+    if kind in ("string", "wstring"):
         return isinstance(actual, str) and actual == exp
     if isinstance(actual, bool):
-        return kind == "int" and int(actual) == exp
+        return False
     if isinstance(actual, float):
+        if kind != "real" and vtype is not None:
+            return False
         if check.exact or math.isinf(exp) or exp == 0:
             return actual == exp or (exp == 0 and abs(actual) < 1e-12 and not check.exact)
         return math.isclose(actual, exp, rel_tol=1e-6, abs_tol=1e-12)
     if isinstance(actual, int):
-        return kind == "int" and actual == exp
+        return kind in ("int", "time", "date", "tod", "dt") and actual == exp
     return False
 
 
@@ -265,6 +464,7 @@ class GroupRun:
     result: object = None          # sim.SimResult
     error: str | None = None
     task_of: dict = field(default_factory=dict)   # case name -> task name
+    types: dict = field(default_factory=dict)     # upper-case variable path -> IEC type
 
 
 def run_group(name: str, cases, sanitize=False) -> GroupRun:
@@ -290,6 +490,7 @@ def run_group(name: str, cases, sanitize=False) -> GroupRun:
             project = check_project(paths)
             for c in cases:
                 run.task_of[c.name] = f"t_{c.program}"
+        run.types = {e.path.upper(): e.type for e in build_plan(project).table}
         end = max((c.last_cycle - 1) * c.interval_ns for c in cases)
         watch, events = [], []
         for c in cases:
@@ -326,7 +527,7 @@ def verify(case: Case, run: GroupRun, sanitize=False) -> list[str]:
     for cycle, line, text in case.faults:
         t = (cycle - 1) * case.interval_ns
         ok = [f for f in faults if f[0] == t and f[5] == line and
-              Path(f[4]).resolve() == case.path.resolve() and text.lower() in f[2].lower()]
+              Path(f[4]).resolve() == case.path.resolve() and f[2] == text]
         if not ok:
             problems.append(f"expected fault '{text}' in cycle {cycle} at line {line}; got "
                             + (", ".join(f"'{f[2]}' at {Path(f[4]).name}:{f[5]} t={f[0]}"
@@ -339,8 +540,11 @@ def verify(case: Case, run: GroupRun, sanitize=False) -> list[str]:
         for k in checks:
             key = case.full_path(k.path)
             actual = next((v for n, v in vals.items() if n.upper() == key.upper()), "<none>")
+            if key.upper() not in run.types:
+                problems.append(f"after {cycle} cycles: no variable {k.path}")
+                continue
             try:
-                ok = matches(actual, k)
+                ok = matches(actual, k, run.types[key.upper()])
             except CaseError as exc:
                 problems.append(str(exc))
                 continue
