@@ -467,7 +467,20 @@ class GroupRun:
     types: dict = field(default_factory=dict)     # upper-case variable path -> IEC type
 
 
-def run_group(name: str, cases, sanitize=False) -> GroupRun:
+def simulate(project, end, watch=None, inputs=None, sanitize=False, engine="c"):
+    """One run of the compiled C simulator or (engine "vm") of the reference
+    interpreter, iec2kmod.interp; both give a result of the same shape."""
+    if engine == "vm":
+        from iec2kmod import interp
+        try:
+            return interp.run(project, end, watch=watch, inputs=inputs)
+        except interp.VMError as exc:
+            raise sim.SimError(str(exc)) from None
+    return sim.run(project, end, watch=watch, inputs=inputs, sanitize=sanitize,
+                   build_dir=build_root() / "sim")
+
+
+def run_group(name: str, cases, sanitize=False, engine="c") -> GroupRun:
     """Builds and runs cases as one simulation (standalone cases: one each)."""
     run = GroupRun(cases)
     try:
@@ -501,11 +514,12 @@ def run_group(name: str, cases, sanitize=False) -> GroupRun:
         watch = list(dict.fromkeys(watch))
         trace = None
         if events:
-            trace = out / f"{name}{'_san' if sanitize else ''}.{os.getpid()}.csv"
+            trace = out / f"{name}{'_san' if sanitize else ''}_{engine}.{os.getpid()}.csv"
             trace.write_text("".join(f"{t}ns,{p},{v}\n" for t, p, v in events))
         try:
-            run.result = sim.run(project, end, watch=watch or None, inputs=str(trace) if trace
-                                 else None, sanitize=sanitize, build_dir=build_root() / "sim")
+            run.result = simulate(project, end, watch=watch or None,
+                                  inputs=str(trace) if trace else None, sanitize=sanitize,
+                                  engine=engine)
         finally:
             if trace:
                 trace.unlink(missing_ok=True)
@@ -616,7 +630,7 @@ def pair_inputs(pair: Pair, project, cycles: int, interval: int):
     return events
 
 
-def run_pairs(pairs, sanitize=False, interval=DEFAULT_INTERVAL):
+def run_pairs(pairs, sanitize=False, interval=DEFAULT_INTERVAL, engine="c"):
     """Runs every pair in one simulation: {pair name: (st trace, il trace)} or raises."""
     out = build_root() / "exec"
     out.mkdir(parents=True, exist_ok=True)
@@ -640,11 +654,11 @@ def run_pairs(pairs, sanitize=False, interval=DEFAULT_INTERVAL):
             watch += [f"{p.name}_{suffix}.{n}" for n in names]
         for t, n, v in pair_inputs(p, project, p.cycles, interval):
             rows += [f"{t}ns,{p.name}_st.{n},{v}\n", f"{t}ns,{p.name}_il.{n},{v}\n"]
-    trace = out / f"pairs{'_san' if sanitize else ''}.{os.getpid()}.csv"
+    trace = out / f"pairs{'_san' if sanitize else ''}_{engine}.{os.getpid()}.csv"
     trace.write_text("".join(rows))
     try:
-        res = sim.run(project, (cycles - 1) * interval, watch=watch, inputs=str(trace),
-                      sanitize=sanitize, build_dir=build_root() / "sim")
+        res = simulate(project, (cycles - 1) * interval, watch=watch, inputs=str(trace),
+                       sanitize=sanitize, engine=engine)
     finally:
         trace.unlink(missing_ok=True)
     traces = {}

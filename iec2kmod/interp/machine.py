@@ -1,0 +1,603 @@
+"""The configuration at run time: globals, program instances, tasks, the
+variable table, and the scheduler on a simulated clock.
+
+Cycle model (IEC 61131-3 ed.3, 6.8.2 and the simulator's contract):
+  * every periodic task is released at 0, INTERVAL, 2*INTERVAL, ...; an
+    event task (SINGLE) on each rising edge of its BOOL variable, looked
+    for after the inputs of an instant are applied and after every task
+    cycle;
+  * tasks released at the same instant run in priority order (0 first),
+    ties in declaration order; a cycle runs to completion and takes no
+    simulated time;
+  * a task cycle runs its program instances in declaration order, each:
+    copy the connected inputs in, run the body, copy the connected outputs
+    out;
+  * a runtime fault stops the task (the programs after it in that cycle
+    do not run, its outputs are not copied); the other tasks go on;
+  * every loop iteration (WHILE, REPEAT, FOR, and IL backward jumps)
+    costs one unit of a per-cycle budget; a cycle that exceeds it faults
+    ("endless loop")."""
+
+from __future__ import annotations
+
+import csv
+import struct
+from dataclasses import dataclass, field
+
+from .. import ast
+from ..checks.types import ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, concrete
+from ..literals import LiteralError, classify, parse_duration
+from .compiler import PouCompiler
+from .errors import Fault, VMError
+from .fbs import body_of
+from .model import Initializer, Instance, copier
+from .values import base_of, f32, wrap, wrap64
+
+# the kernel's per-cycle loop budget (iec2kmod.kmod.DEFAULT_LOOP_BUDGET; a
+# test checks that both agree)
+LOOP_BUDGET = 1_000_000
+MAX_TABLE_ELEMENTS = 256
+
+
+class Runtime:
+    """What the running code reads from its task: the cycle's start time
+    and the loop budget left."""
+
+    __slots__ = ("now", "budget")
+
+    def __init__(self):
+        self.now = 0
+        self.budget = LOOP_BUDGET
+
+
+@dataclass
+class VMResult:
+    """The same shape as the C simulator's result (iec2kmod.sim.SimResult)."""
+
+    names: list
+    changes: list
+    faults: list = field(default_factory=list)
+    cycles: dict = field(default_factory=dict)
+    end_ns: int = 0
+    stderr: str = ""
+
+    def values_at(self, t_ns=None):
+        out = {}
+        for t, i, v in self.changes:
+            if t_ns is not None and t > t_ns:
+                break
+            out[self.names[i]] = v
+        return out
+
+
+@dataclass
+class Entry:
+    """One row of the variable table: an IEC path and where it lives."""
+
+    path: str
+    type: object
+    kind: str
+    size: int
+    writable: bool
+    owner: str
+    root: object       # a dict (or list) the path starts in
+    keys: tuple        # keys from the root to the value
+
+    def get(self):
+        c = self.root
+        for k in self.keys[:-1]:
+            c = c[k]
+            if isinstance(c, Instance):
+                c = c.v
+        return c[self.keys[-1]]
+
+    def set(self, v):
+        c = self.root
+        for k in self.keys[:-1]:
+            c = c[k]
+            if isinstance(c, Instance):
+                c = c.v
+        c[self.keys[-1]] = v
+
+
+def kind_of(t):
+    t = concrete(t)
+    if isinstance(t, EnumT):
+        return "e"
+    if isinstance(t, SubrangeT):
+        t = t.elem
+    if isinstance(t, StringT):
+        return "w" if t.wide else "s"
+    if not isinstance(t, Elementary):
+        return None
+    return {"bool": "b", "sint": "i", "uint": "u", "bit": "u", "real": "f", "time": "t",
+            "date": "t", "tod": "t", "dt": "t"}[t.cat]
+
+
+def size_of(t):
+    t = concrete(t)
+    if isinstance(t, SubrangeT):
+        t = t.elem
+    if isinstance(t, EnumT):
+        return (t.elem_base.bits if t.elem_base is not None else 32) // 8
+    if isinstance(t, StringT):
+        return 0
+    return max(1, t.bits // 8)
+
+
+@dataclass
+class ProgramRun:
+    path: str
+    inst: Instance
+    body: object
+    inputs: list        # (param key, fn() -> value)
+    outputs: list       # (param key, (container, key), store)
+
+
+@dataclass
+class TaskRun:
+    name: str
+    interval: int
+    priority: int
+    single: tuple | None     # (container, key) of the SINGLE variable
+    programs: list = field(default_factory=list)
+
+
+class Machine:
+    def __init__(self, project):
+        if not project.configurations:
+            raise VMError("the project has no CONFIGURATION to run")
+        self.p = project
+        self.rt = Runtime()
+        self.init = Initializer(project)
+        self.bodies = {}
+        self._frame_makers = {}
+        for pou in project.pous.values():
+            self.bodies[pou.key] = PouCompiler(self, pou).body()
+        self.cfg = project.configurations[0]
+        self._build_configuration()
+
+    # --------------------------------------------------------- storage
+    def maker(self, v):
+        """A function returning a fresh initial value of variable v."""
+        t = concrete(v.type)
+        if isinstance(t, FBType):
+            return lambda: self.new_instance(t.pou, {}, v.init)
+        val = self.init.value(v.type, v.init)
+        cp = copier(t)
+        if cp is None:
+            return lambda: val
+        return lambda: cp(val)
+
+    def new_frame(self, key):
+        """The activation of a FUNCTION: every variable at its initial value."""
+        makers = self._frame_makers.get(key)
+        if makers is None:
+            pou = self.p.pous[key]
+            makers = [(v.key, self.maker(v)) for v in pou.vars.values()
+                      if v.section != "VAR_IN_OUT"]
+            self._frame_makers[key] = makers
+        f = Instance(self.p.pous[key])
+        f.v = {k: mk() for k, mk in makers}
+        return f
+
+    def new_instance(self, pou, scope, init=None):
+        """A program or FB instance; its externals (and those of every FB
+        inside it, at every depth) bound by name to the globals of
+        ``scope`` (upper name -> (container, key))."""
+        inst = Instance(pou)
+        given = {}
+        if isinstance(init, ast.StructInit):
+            given = {name.upper(): val for name, val, _ in init.fields}
+        if pou.standard:
+            for v in pou.vars.values():
+                inst.v[v.key] = self.init.value(v.type, given.get(v.key))
+            inst.v.update(body_of(pou)[1])
+            return inst
+        inner = dict(scope)
+        for v in pou.vars.values():
+            if v.section == "VAR_GLOBAL":
+                inner[v.key] = (inst.v, v.key)
+        for v in pou.vars.values():
+            if v.section == "VAR_EXTERNAL":
+                if v.key not in scope:
+                    raise VMError(f"VAR_EXTERNAL '{v.name}' of {pou.name} has no global")
+                inst.r[v.key] = scope[v.key]
+                continue
+            if v.section == "VAR_IN_OUT":
+                continue
+            t = concrete(v.type)
+            vinit = given.get(v.key, v.init)
+            if isinstance(t, FBType):
+                inst.v[v.key] = self.new_instance(t.pou, inner, vinit)
+            elif isinstance(t, ArrayT) and isinstance(concrete(t.elem), FBType):
+                inst.v[v.key] = [self.new_instance(concrete(t.elem).pou, inner, None)
+                                 for _ in range(t.count)]
+            else:
+                inst.v[v.key] = self.init.value(v.type, vinit)
+        return inst
+
+    # --------------------------------------------------- configuration
+    def _build_configuration(self):
+        cfg = self.cfg
+        self.implicit = cfg.resources[0].node.name is None if cfg.resources else True
+        self.globals = {}
+        self.cells = {}              # id(global Var) -> (container, key)
+        self.global_paths = []       # (path, Var, container)
+        for v in cfg.globals.values():
+            self.globals[v.key] = self.init.value(v.type, v.init)
+            self.cells[id(v)] = (self.globals, v.key)
+            self.global_paths.append((v.name, v, self.globals))
+        self.res_globals = {}
+        for r in cfg.resources:
+            g = {}
+            self.res_globals[r.name] = g
+            for v in r.globals.values():
+                g[v.key] = self.init.value(v.type, v.init)
+                self.cells[id(v)] = (g, v.key)
+                self.global_paths.append((self._qual(r, v.name), v, g))
+        self.directs = {}            # address -> value
+        self.direct_types = {}
+        self.tasks = []
+        self.instances = []          # (path, Instance)
+        for r in cfg.resources:
+            scope = {k: (self.globals, k) for k in cfg.globals}
+            scope.update({k: (self.res_globals[r.name], k) for k in r.globals})
+            rtasks = {}
+            for t in r.tasks.values():
+                tr = TaskRun(t.name if self.implicit else f"{r.name}.{t.name}",
+                             t.interval_ns or 0, t.priority,
+                             self.cells[id(t.single)] if t.single is not None else None)
+                self.tasks.append(tr)
+                rtasks[t.name.upper()] = tr
+            for pi in r.programs:
+                path = self._qual(r, pi.name)
+                inst = self.new_instance(pi.pou, scope)
+                self.instances.append((path, inst))
+                pc = PouCompiler(self, pi.pou)
+                inputs = []
+                for param, value in pi.inputs:
+                    inputs.append((param.key, self._connection_in(pc, param, value)))
+                outputs = []
+                for param, target in pi.outputs:
+                    if isinstance(target, ast.Direct):
+                        cell = self._direct(target.address, param.type)
+                        store = pc.storer(param.type, param.type)
+                    else:
+                        cell = self.cells[id(target.symbol)]
+                        store = pc.storer(target.symbol.type, param.type)
+                    outputs.append((param.key, cell, store))
+                run = ProgramRun(path, inst, self.bodies[pi.pou.key], inputs, outputs)
+                if pi.task is not None:
+                    rtasks[pi.task.name.upper()].programs.append(run)
+
+    def _qual(self, r, name):
+        return f"{r.name}.{name}" if r.node.name else name
+
+    def _direct(self, address, t):
+        if address not in self.directs:
+            self.directs[address] = self.init.default(t)
+            self.direct_types[address] = t
+        return (self.directs, address)
+
+    def _connection_in(self, pc, param, value):
+        store = pc.storer(param.type, getattr(value, "type", None) or param.type)
+        if isinstance(value, ast.Direct):
+            c, k = self._direct(value.address, param.type)
+            return lambda: store(c[k])
+        if isinstance(value, ast.Ref) and id(value.symbol) in self.cells:
+            c, k = self.cells[id(value.symbol)]
+            return lambda: store(c[k])
+        if isinstance(value, ast.Lit) and value.kind in ("string", "wstring"):
+            s = value.value
+            return lambda: store(s)
+        v = self.init.const(value, param.type)
+        return lambda: v
+
+    # ---------------------------------------------------- variable table
+    def table(self):
+        out = []
+        for path, v, container in self.global_paths:
+            self._expand(path, v.type, not v.constant, "global", container, (v.key,), out,
+                         len(out) + 4096)
+        for path, inst in self.instances:
+            for v in inst.pou.vars.values():
+                if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
+                    continue
+                self._expand(f"{path}.{v.name}", v.type, not v.constant, path, inst.v,
+                             (v.key,), out, len(out) + 4096)
+        for address in sorted(self.directs):
+            t = self.direct_types[address]
+            out.append(Entry(address, t, kind_of(t), size_of(t), address[1] != "Q", "direct",
+                             self.directs, (address,)))
+        return out
+
+    def _expand(self, path, t, writable, owner, root, keys, out, budget):
+        if len(out) >= budget:
+            return
+        k = kind_of(t)
+        if k is not None:
+            out.append(Entry(path, t, k, size_of(t), writable, owner, root, keys))
+            return
+        t = concrete(t)
+        if isinstance(t, ArrayT):
+            dims, levels = [], []
+            cur = t
+            while isinstance(cur, ArrayT):
+                dims += cur.dims
+                levels.append(cur)
+                cur = cur.elem
+            count = 1
+            for lo, hi in dims:
+                count *= hi - lo + 1
+            for n in range(min(count, MAX_TABLE_ELEMENTS)):
+                rem = n
+                parts = []
+                for lo, hi in reversed(dims):
+                    size = hi - lo + 1
+                    parts.append(lo + rem % size)
+                    rem //= size
+                parts.reverse()
+                # the element's keys through nested lists: one flat index per level
+                ekeys = []
+                rest = n
+                inner_counts = [lv.count for lv in levels]
+                for i in range(len(levels)):
+                    below = 1
+                    for c in inner_counts[i + 1:]:
+                        below *= c
+                    ekeys.append(rest // below)
+                    rest %= below
+                self._expand(f"{path}[{','.join(map(str, parts))}]", cur, writable, owner, root,
+                             keys + tuple(ekeys), out, budget)
+            return
+        if isinstance(t, StructT):
+            for fkey, (fname, ft, _) in t.fields.items():
+                self._expand(f"{path}.{fname}", ft, writable, owner, root, keys + (fkey,), out,
+                             budget)
+            return
+        if isinstance(t, FBType):
+            pou = t.pou
+            for v in pou.vars.values():
+                if v.section in ("VAR_INPUT", "VAR_OUTPUT") or (not pou.standard and
+                                                             v.section == "VAR"):
+                    self._expand(f"{path}.{v.name}", v.type,
+                                 writable and v.section != "VAR_OUTPUT", owner, root,
+                                 keys + (v.key,), out, budget)
+
+
+def _store_as(entry, kind, value):
+    """An input value stored the way a write through the table stores it."""
+    t = base_of(entry.type)
+    if entry.kind == "f":
+        x = float(value)
+        return f32(x) if t.bits == 32 else x
+    if entry.kind == "b":
+        return bool(int(value) & 0xFF)
+    if entry.kind == "e":
+        bits = size_of(entry.type) * 8
+        v = int(value) & ((1 << bits) - 1)
+        return v - (1 << bits) if v >> (bits - 1) else v
+    if entry.kind == "t":
+        return wrap64(int(value))
+    return wrap(int(value), t)
+
+
+def present(entry, v):
+    """A value as the simulator reports it (sim.SimResult.changes)."""
+    if entry.kind == "e":
+        t = concrete(entry.type)
+        for name, val in t.values.values():
+            if val == v:
+                return name
+        return v
+    if entry.kind == "b":
+        return bool(v)
+    return v
+
+
+# ------------------------------------------------------------ traces
+def parse_time(text: str) -> int:
+    s = text.strip()
+    try:
+        if "#" in s:
+            kind, value, _ = classify(s)
+            if kind != "time":
+                raise ValueError
+            return value
+        for unit in ("ms", "us", "ns", "s", "m", "h", "d"):
+            if s.lower().endswith(unit) and s[:-len(unit)].replace(".", "", 1).isdigit():
+                return parse_duration(s)
+        return round(float(s) * 1e9)
+    except (LiteralError, ValueError):
+        raise VMError(f"'{text}' is not a time (write T#100ms, 100ms or 0.1)") from None
+
+
+def value_for(entry, text: str):
+    s = text.strip()
+    try:
+        t = concrete(entry.type)
+        if isinstance(t, EnumT):
+            name = s.split("#")[-1].upper()
+            if name not in t.values:
+                raise ValueError(f"'{s}' is not a value of {t.name}")
+            return "i", t.values[name][1]
+        sign = 1
+        if s[:1] in "+-" and "#" not in s:
+            sign, s = (-1 if s[0] == "-" else 1), s[1:].strip()
+        kind, value, _ = classify(s)
+        if sign < 0 and kind in ("int", "real"):
+            value = -value
+    except (LiteralError, ValueError, IndexError) as exc:
+        raise VMError(f"invalid value '{text}' for {entry.path}: {exc}") from None
+    if entry.kind == "f":
+        if kind not in ("int", "real"):
+            raise VMError(f"{entry.path} is REAL: '{text}' is not a number")
+        return "f", float(value)
+    if entry.kind in ("s", "w"):
+        raise VMError(f"{entry.path}: string inputs are not supported by the simulator")
+    if kind == "bool" or (entry.kind == "b" and kind == "int" and value in (0, 1)):
+        return "i", int(value)
+    if kind in ("int", "time", "date", "tod", "dt"):
+        if entry.kind == "b":
+            raise VMError(f"{entry.path} is BOOL: '{text}' is not TRUE/FALSE")
+        return "i", int(value)
+    raise VMError(f"invalid value '{text}' for {entry.path}")
+
+
+def read_trace(path: str, table):
+    index = {e.path.upper(): i for i, e in enumerate(table)}
+    events = []
+    try:
+        with open(path, newline="") as fh:
+            for n, row in enumerate(csv.reader(fh), 1):
+                if not row or row[0].strip().startswith("#"):
+                    continue
+                if n == 1 and row[0].strip().lower() == "time":
+                    continue
+                if len(row) != 3:
+                    raise VMError(f"{path}:{n}: expected time,variable,value")
+                i = index.get(row[1].strip().upper())
+                if i is None:
+                    raise VMError(f"{path}:{n}: unknown variable '{row[1].strip()}'")
+                e = table[i]
+                if not e.writable:
+                    raise VMError(f"{path}:{n}: '{e.path}' cannot be written")
+                try:
+                    kind, value = value_for(e, row[2])
+                    t = parse_time(row[0])
+                except VMError as exc:
+                    raise VMError(f"{path}:{n}: {exc}") from None
+                if kind == "f" and e.kind != "f":
+                    value = int(value)
+                events.append((t, n, i, value))
+    except OSError as exc:
+        raise VMError(f"{path}: {exc.strerror}") from None
+    events.sort(key=lambda ev: (ev[0], ev[1]))
+    return [(t, i, v) for t, _, i, v in events]
+
+
+_D = struct.Struct("<d")
+
+
+def run(project, end_ns: int, watch=None, inputs=None) -> VMResult:
+    """Runs the configuration from 0 to end_ns (inclusive) of simulated time."""
+    m = Machine(project)
+    table = m.table()
+    index = {e.path.upper(): i for i, e in enumerate(table)}
+    if watch:
+        idx = []
+        for w in watch:
+            i = index.get(w.strip().upper())
+            if i is None:
+                raise VMError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
+            idx.append(i)
+    else:
+        idx = [i for i, e in enumerate(table) if e.owner in ("global", "direct")]
+    events = read_trace(inputs, table) if inputs else []
+    return m.schedule(table, idx, events, end_ns)
+
+
+def _same(kind, a, b):
+    if kind == "f":
+        return _D.pack(a) == _D.pack(b)
+    return a == b and type(a) is type(b)
+
+
+class _Scheduler:
+    pass
+
+
+def _schedule(self, table, idx, events, end):
+    tasks = self.tasks
+    ntasks = len(tasks)
+    rt = self.rt
+    res = VMResult([table[i].path for i in idx], [], end_ns=end)
+    next_release = [0] * ntasks
+    cycles = [0] * ntasks
+    faulted = [False] * ntasks
+    pending = [False] * ntasks
+    prev_single = [False] * ntasks
+    for n, tk in enumerate(tasks):
+        if tk.single is not None:
+            c, k = tk.single
+            prev_single[n] = bool(c[k])
+    last = {}
+    watched = [(k, i, table[i]) for k, i in enumerate(idx)]
+    nev = len(events)
+    ev = 0
+    t = 0
+    while True:
+        while ev < nev and events[ev][0] <= t:
+            _, i, v = events[ev]
+            e = table[i]
+            e.set(_store_as(e, None, v))
+            ev += 1
+        for n, tk in enumerate(tasks):
+            if tk.interval and next_release[n] == t:
+                pending[n] = True
+        while True:
+            for n, tk in enumerate(tasks):
+                if tk.single is None:
+                    continue
+                c, k = tk.single
+                s = bool(c[k])
+                if s and not prev_single[n]:
+                    pending[n] = True
+                prev_single[n] = s
+            best = -1
+            for n in range(ntasks):
+                if pending[n] and (best < 0 or tasks[n].priority < tasks[best].priority):
+                    best = n
+            if best < 0:
+                break
+            pending[best] = False
+            if faulted[best]:
+                continue
+            rt.now = t
+            rt.budget = LOOP_BUDGET
+            fault = self._run_task(tasks[best])
+            cycles[best] += 1
+            if fault is not None:
+                faulted[best] = True
+                res.faults.append((t, tasks[best].name, fault.kind, fault.pou or "?",
+                                   getattr(fault, "file", None) or "?", fault.line or 0))
+        for k, i, e in watched:
+            v = e.get()
+            if i in last and _same(e.kind, v, last[i]):
+                continue
+            last[i] = v
+            res.changes.append((t, k, present(e, v)))
+        for n, tk in enumerate(tasks):
+            if tk.interval and next_release[n] == t:
+                next_release[n] += tk.interval
+        nt = end + 1
+        for n, tk in enumerate(tasks):
+            if tk.interval and next_release[n] < nt:
+                nt = next_release[n]
+        if ev < nev and events[ev][0] < nt:
+            nt = events[ev][0]
+        if nt > end:
+            break
+        t = nt
+    for n, tk in enumerate(tasks):
+        res.cycles[tk.name] = cycles[n]
+    return res
+
+
+def _run_task(self, task):
+    for pr in task.programs:
+        iv = pr.inst.v
+        try:
+            for k, f in pr.inputs:
+                iv[k] = f()
+            pr.body(pr.inst)
+        except Fault as f:
+            return f
+        for k, (c, ck), store in pr.outputs:
+            c[ck] = store(iv[k])
+    return None
+
+
+Machine.schedule = _schedule
+Machine._run_task = _run_task
