@@ -51,6 +51,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--list", action="store_true", help="list the variables and exit")
     s.add_argument("--sanitize", action="store_true",
                    help="build with -fsanitize=undefined,address")
+    s.add_argument("--engine", choices=("c", "vm"), default="c",
+                   help="c: compile the generated C and run it (default); vm: run the "
+                        "reference interpreter (no C compiler needed)")
     return p
 
 
@@ -94,9 +97,16 @@ def cmd_sim(args) -> int:
     if project is None:
         return EXIT_SOURCE
     try:
+        if args.engine == "vm" and args.sanitize:
+            raise sim.SimError("--sanitize applies to the C engine only")
         if args.list:
-            from .codegen.plan import build_plan
-            for e in build_plan(project).table:
+            if args.engine == "vm":
+                from .interp import Machine
+                table = Machine(project).table()
+            else:
+                from .codegen.plan import build_plan
+                table = build_plan(project).table
+            for e in table:
                 access = "rw" if e.writable else "ro"
                 print(f"{e.path:40} {getattr(e.type, 'name', '?'):16} {access}")
             return EXIT_OK
@@ -111,7 +121,15 @@ def cmd_sim(args) -> int:
         else:
             end = sim.parse_time(args.duration)
         watch = [w for w in args.watch.split(",") if w.strip()] if args.watch else None
-        res = sim.run(project, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize)
+        if args.engine == "vm":
+            from . import interp
+            try:
+                machine = interp.Machine(project)
+                res = interp.run(project, end, watch=watch, inputs=args.inputs)
+            except interp.VMError as exc:
+                raise sim.SimError(str(exc)) from None
+        else:
+            res = sim.run(project, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize)
     except sim.SimError as exc:
         print(f"iec2kmod: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
@@ -124,8 +142,12 @@ def cmd_sim(args) -> int:
     if args.csv:
         sim.write_csv(res, args.csv)
     if args.vcd:
-        from .codegen.plan import build_plan
-        sim.write_vcd(res, args.vcd, build_plan(project))
+        if args.engine == "vm":
+            from types import SimpleNamespace
+            sim.write_vcd(res, args.vcd, SimpleNamespace(table=machine.table()))
+        else:
+            from .codegen.plan import build_plan
+            sim.write_vcd(res, args.vcd, build_plan(project))
     final = res.values_at()
     width = max((len(n) for n in res.names), default=10)
     print(f"simulated {res.end_ns / 1e9:g} s; cycles: " +
