@@ -256,6 +256,11 @@ class Machine:
                 self.instances.append((path, inst))
                 pc = PouCompiler(self, pi.pou)
                 inputs = []
+                for conn in pi.node.connections:
+                    param = pi.pou.var(conn.name)
+                    if param is not None and param.section == "VAR_IN_OUT":
+                        # a program's in-out stands for the connected global itself
+                        inst.r[param.key] = self.cells[id(conn.value.symbol)]
                 for param, value in pi.inputs:
                     inputs.append((param.key, self._connection_in(pc, param, value)))
                 outputs = []
