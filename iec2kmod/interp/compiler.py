@@ -430,7 +430,7 @@ class PouCompiler:
         if isinstance(res, LiteralT):
             res = ctx_t if ctx_t is not None and not isinstance(ctx_t, LiteralT) else res
         res = concrete(res) if not isinstance(res, LiteralT) else res
-        if fam in std.COMPARE or fam == "MUX":
+        if fam in std.COMPARE or fam == "MUX" or fam in TIME_FAMILIES:
             # the operands' common type, not the (BOOL) result's
             ptypes = [concrete(pt) for pt in pts]
         else:
@@ -711,6 +711,25 @@ class PouCompiler:
             return None
         return run
 
+    def located(self, f, pos):
+        """f, with a fault in it located at the line of pos (conditions of
+        IF/ELSIF/WHILE/UNTIL: the line of the condition itself)."""
+        line = self.line(pos)
+        name = self.name
+        path = self.src.path
+
+        def at(env):
+            try:
+                return f(env)
+            except Fault as x:
+                if x.pou is None:
+                    x.pou, x.line, x.file = name, line, path
+                raise
+        return at
+
+    def cond(self, e):
+        return self.located(self.expr(e), e.pos)
+
     def stmt(self, s):
         if isinstance(s, ast.Assign):
             val = self.expr(s.value)
@@ -729,7 +748,7 @@ class PouCompiler:
                 f(env)
             return call
         if isinstance(s, ast.If):
-            branches = [(self.expr(cnd), self.block(body)) for cnd, body in s.branches]
+            branches = [(self.cond(cnd), self.block(body)) for cnd, body in s.branches]
             els = self.block(s.else_) if s.else_ else None
             if len(branches) == 1:
                 (c0, b0), = branches
@@ -846,7 +865,7 @@ class PouCompiler:
         return for_
 
     def while_(self, s):
-        cond = self.expr(s.cond)
+        cond = self.cond(s.cond)
         body = self.block(s.body)
         rt = self.rt
 
@@ -864,7 +883,7 @@ class PouCompiler:
         return while_
 
     def repeat(self, s):
-        cond = self.expr(s.cond)
+        cond = self.cond(s.cond)
         body = self.block(s.body)
         rt = self.rt
 

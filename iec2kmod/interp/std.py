@@ -102,6 +102,10 @@ def arith(op, t):
 def expt(base_t, exp_t, res_t):
     """EXPT(IN1, IN2): IN1 ** IN2 (REAL/LREAL base; integer or real exponent)."""
     def f(x, y):
+        if x == 0 and y < 0:
+            # IEEE pow: a pole; -0 to an odd integer power keeps the sign
+            odd = float(y).is_integer() and int(y) % 2 == 1
+            return rnd(math.copysign(math.inf, x) if odd else math.inf, res_t)
         try:
             r = math.pow(x, y)
         except ZeroDivisionError:
