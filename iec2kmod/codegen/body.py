@@ -15,8 +15,8 @@ from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT,
                             LiteralT, StringT, StructT, SubrangeT, concrete)
 from . import analysis
 from . import cnames as N
-from .expr import (CodegenError, CRNode, ExprEmitter, Frame, Raw, _const_int, c_int,
-                   scalar_kind)
+from .expr import (BindingError, CodegenError, CRNode, ExprEmitter, Frame, Raw, _const_int,
+                   c_int, scalar_kind)
 
 UNSIGNED = {8: "iec_u8", 16: "iec_u16", 32: "iec_u32", 64: "iec_u64", 1: "iec_u8"}
 
@@ -446,6 +446,11 @@ class BodyEmitter:
             elif a.name and a.name.upper() == "ENO" and a.kind == "out":
                 eno = a
         bound = c.bound or {}
+        for v in pou.inouts:
+            # the pointer is set by this call, or the body would run with the
+            # previous call's target (or none): the front end requires it
+            if bound.get(v.key) is None or bound[v.key].value is None:
+                raise BindingError(f"call of {inst.name} leaves VAR_IN_OUT {v.name} unbound")
         for key, a in bound.items():
             param = pou.var(key)
             member = f"{base}.{N.member(pou, param.name)}"
@@ -513,6 +518,8 @@ class BodyEmitter:
                 else:
                     args.append(self.by_reference(f, a.value, v.type))
             elif v.section == "VAR_IN_OUT":
+                if a is None or a.value is None:
+                    raise BindingError(f"call of {pou.name} leaves VAR_IN_OUT {v.name} unbound")
                 lv, _, _ = self.expr.lvalue(f, a.value)
                 args.append(lv if isinstance(v.type, ArrayT) else f"&{lv}")
             else:

@@ -24,6 +24,11 @@ class CodegenError(Exception):
     """Something the checker accepted but the emitter cannot lower (a bug)."""
 
 
+class BindingError(CodegenError):
+    """A pointer member (VAR_EXTERNAL, VAR_IN_OUT) left without a binding:
+    a bug of ours, never emitted as code (exit 70)."""
+
+
 class CRNode(_CR):
     """The IL current result at a nesting depth, usable as an expression."""
 

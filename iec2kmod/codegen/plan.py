@@ -13,7 +13,7 @@ from ..checks.types import (ArrayT, Elementary, EnumT, FBType, StringT, StructT,
                             concrete)
 from . import cnames as N
 from .body import BodyEmitter
-from .expr import Frame
+from .expr import BindingError, Frame
 from .pou import InitEmitter, pointer_members
 
 MAX_TABLE_ELEMENTS = 256   # array/struct elements listed per variable
@@ -38,10 +38,6 @@ class InstancePlan:
     outputs: list = field(default_factory=list)   # (global C lvalue, member, IEC type)
     externals: list = field(default_factory=list) # (member, global C name, is array)
     bindings: list = field(default_factory=list)  # [PointerBinding], complete (check_bindings)
-
-
-class BindingError(Exception):
-    """A pointer member of an instance has no binding: a bug of ours."""
 
 
 @dataclass

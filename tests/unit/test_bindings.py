@@ -76,3 +76,58 @@ def test_the_kernel_module_checks_its_pointers_at_init(monkeypatch, tmp_path):
     main = next((tmp_path / "tree").glob("iec_c_r_r/main.c")).read_text()
     assert 'if (!inst_r_i.v_x.v_g)\n\t\treturn "R.I.X.G";' in main
     assert "pointer member %s is not bound; not loading" in main
+
+
+INOUT_CALL = """FUNCTION_BLOCK Acc
+  VAR_IN_OUT x : INT; END_VAR
+  x := x + 1;
+END_FUNCTION_BLOCK
+FUNCTION Inc : INT
+  VAR_IN_OUT x : INT; END_VAR
+  x := x + 1; Inc := x;
+END_FUNCTION
+PROGRAM P
+  VAR a : Acc; n : INT; m : INT; END_VAR
+  a(x := n);
+  m := Inc(x := n);
+END_PROGRAM
+CONFIGURATION C
+  TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+  PROGRAM p WITH t : P;
+END_CONFIGURATION
+"""
+
+
+@pytest.mark.parametrize("callee", ["Acc", "Inc"])
+def test_a_call_that_leaves_a_var_in_out_unbound_is_not_emitted(callee, tmp_path):
+    """A call sets every VAR_IN_OUT pointer of its callee; the front end
+    requires the connection, and the emitter refuses a call without one
+    rather than run the body on the previous call's target (or none)."""
+    from iec2kmod.codegen import generate
+    from iec2kmod.codegen.expr import BindingError
+    src = tmp_path / "inout.st"
+    src.write_text(INOUT_CALL)
+    project = _project(src)
+    body = next(p for p in project.pous.values() if p.name == "P").node.body
+    call = next(s for s in _walk(body) if getattr(s, "bound", None) and
+                s.name.upper() == {"Acc": "A", "Inc": "INC"}[callee])
+    call.bound.clear()
+    with pytest.raises(BindingError, match="leaves VAR_IN_OUT x unbound"):
+        generate(project)
+
+
+def _walk(node, seen=None):
+    seen = set() if seen is None else seen
+    if id(node) in seen or node is None or isinstance(node, (str, int, float, bool)):
+        return
+    seen.add(id(node))
+    yield node
+    if isinstance(node, (list, tuple)):
+        items = node
+    elif hasattr(node, "__slots__"):
+        items = [getattr(node, k, None) for c in type(node).__mro__
+                 for k in getattr(c, "__slots__", ()) if k not in ("target", "symbol", "type")]
+    else:
+        items = []
+    for x in items:
+        yield from _walk(x, seen)
