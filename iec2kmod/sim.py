@@ -77,6 +77,8 @@ def render_sim(project):
     f, init = pe.global_inits()
     for ip in plan.instances:
         init.append(f"{N.pou_prefix(ip.pou)}_init(&{ip.c_name});")
+        for member, t, value in ip.config_inits:   # VAR_CONFIG
+            init += pe.ie.lines(f"{ip.c_name}.{member}", t, value, f)
         for b in ip.bindings:
             init += b.lines(ip.c_name, lambda g: g.c_name)
     tasks = []

@@ -441,6 +441,37 @@ class ConfigChecker:
                     self.note_direct(d.location, None, src, d.pos, f"VAR_CONFIG {d.path}")
             if d.init is not None and t is not ERROR:
                 self.decl.check_initializer(d.init, t, src)
+                chain = self.instance_chain(d.path, cfg)
+                if chain is None:
+                    self.error(src, d.pos, f"'{d.path}' is a global: VAR_CONFIG gives initial "
+                                           "values to variables of program instances; write "
+                                           "the global's initial value in its VAR_GLOBAL")
+                elif target.constant:
+                    self.error(src, d.pos, f"'{d.path}' is CONSTANT: VAR_CONFIG cannot change "
+                                           "its value")
+                else:
+                    cfg.config_inits.append((*chain, d.init))
+
+    @staticmethod
+    def instance_chain(path, cfg):
+        """(resource, program instance, [Var ...]) of a path that resolve_path
+        accepted and that names a variable of a program instance; None for a
+        global."""
+        parts = path.split(".")
+        res = {r.name.upper(): r for r in cfg.resources}
+        r = res.get(parts[0].upper())
+        rest = parts[1:]
+        if r is None:
+            r, rest = cfg.resources[0], parts
+        if len(rest) < 2:
+            return None
+        inst = next(i for i in r.programs if i.name.upper() == rest[0].upper())
+        pou, chain = inst.pou, []
+        for part in rest[1:]:
+            v = pou.var(part)
+            chain.append(v)
+            pou = v.type.pou if isinstance(v.type, FBType) else None
+        return r, inst, chain
 
     # -------------------------------------------------- located rules
     def note_address(self, v: Var, resource, src):

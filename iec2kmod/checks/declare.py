@@ -463,8 +463,15 @@ class Declarer:
                         (isinstance(owner, POUInfo) and owner.kind == "FUNCTION"):
                     where = ("a function" if isinstance(owner, POUInfo) and
                              owner.kind == "FUNCTION" else block.kind)
+                    hint = ""
+                    if block.kind in ("VAR_GLOBAL", "VAR_EXTERNAL"):
+                        names = ", ".join(f"'{n}'" for n, _ in decl.names)
+                        hint = (f" ({names}): iec2kmod does not share function block "
+                                "instances between programs; declare the instance in the VAR "
+                                "of the program that calls it and share its inputs and "
+                                "outputs through global variables")
                     self.error(src, decl.spec.pos,
-                               f"function block instances cannot be declared in {where}")
+                               f"function block instances cannot be declared in {where}{hint}")
             if decl.location:
                 self.check_location_decl(decl, block, owner, src, t, allow_located)
             if constant and decl.init is None and block.kind != "VAR_EXTERNAL":

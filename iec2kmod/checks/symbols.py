@@ -115,6 +115,9 @@ class ConfigInfo:
     globals: dict = field(default_factory=dict)
     resources: list = field(default_factory=list)
     access: list = field(default_factory=list)
+    # VAR_CONFIG initial values: [(ResourceInfo, ProgramInstance, [Var, ...], init)],
+    # the Vars leading from the program instance to the variable (FB instances first)
+    config_inits: list = field(default_factory=list)
 
 
 @dataclass(eq=False)

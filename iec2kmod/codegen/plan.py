@@ -38,6 +38,7 @@ class InstancePlan:
     outputs: list = field(default_factory=list)   # (global C lvalue, member, IEC type)
     externals: list = field(default_factory=list) # (member, global C name, is array)
     bindings: list = field(default_factory=list)  # [PointerBinding], complete (check_bindings)
+    config_inits: list = field(default_factory=list)  # (member path, IEC type, init AST)
 
 
 @dataclass
@@ -156,6 +157,13 @@ def build_plan(project) -> Plan:
             instances.append(ip)
             if inst.task is not None:
                 rtasks[inst.task.name.upper()].instances.append(ip)
+    by_inst = {(ip.resource, ip.path): ip for ip in instances}
+    for r, inst, chain, init in cfg.config_inits:
+        member = N.var(chain[0].name)
+        for outer, v in zip(chain, chain[1:]):
+            member += "." + N.member(outer.type.pou, v.name)
+        by_inst[(r.name, _qual(r, inst.name))].config_inits.append(
+            (member, chain[-1].type, init))
     located = [(g.var.location, g) for g in globals_ if g.var.location]
     table = variable_table(globals_, instances)
     for address, (c_name, t) in sorted(directs.items()):

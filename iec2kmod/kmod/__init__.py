@@ -287,6 +287,8 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
         init += ie.lines(f"res_image.{g.c_name}", g.var.type, g.var.init, f)
     for ip in instances:
         init.append(f"{N.pou_prefix(ip.pou)}_init(&{ip.c_name});")
+        for member, t, value in ip.config_inits:   # VAR_CONFIG
+            init += ie.lines(f"{ip.c_name}.{member}", t, value, f)
     tasks = []
     pe = PlanEmitter(project, plan)
     by_c = {g.c_name: g for g in plan.globals}
