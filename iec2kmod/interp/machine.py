@@ -253,6 +253,12 @@ class Machine:
             for pi in r.programs:
                 path = self._qual(r, pi.name)
                 inst = self.new_instance(pi.pou, scope)
+                for _, target, chain, init in cfg.config_inits:
+                    if target is pi:        # VAR_CONFIG: an instance-specific initial value
+                        holder = inst
+                        for v in chain[:-1]:
+                            holder = holder.v[v.key]
+                        holder.v[chain[-1].key] = self.init.value(chain[-1].type, init)
                 self.instances.append((path, inst))
                 pc = PouCompiler(self, pi.pou)
                 inputs = []
