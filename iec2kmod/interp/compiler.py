@@ -659,6 +659,14 @@ class PouCompiler:
             def get_inst(env):
                 return env.v[k_inst]
 
+        # a block that declares EN sees it TRUE whenever it runs; one that
+        # declares ENO starts each call with ENO = TRUE and hands its ENO on
+        v_en = pou.var("EN")
+        en_key = v_en.key if v_en is not None and v_en.section == "VAR_INPUT" and \
+            en is not None else None
+        v_eno = pou.var("ENO")
+        eno_key = v_eno.key if v_eno is not None and v_eno.section == "VAR_OUTPUT" else None
+
         def call(env):
             inst = get_inst(env)
             if en is not None and not en(env):
@@ -670,11 +678,15 @@ class PouCompiler:
                 iv[k] = f(env)
             for k, f in inouts:
                 inst.r[k] = f(env)
+            if en_key is not None:
+                iv[en_key] = True
+            if eno_key is not None:
+                iv[eno_key] = True
             run(inst)
             for k, w in outs:
                 w(env, iv[k])
             if eno is not None:
-                eno(env, True)
+                eno(env, iv[eno_key] if eno_key is not None else True)
             return None
         return call
 
