@@ -504,6 +504,12 @@ def run_group(name: str, cases, sanitize=False, engine="c") -> GroupRun:
             for c in cases:
                 run.task_of[c.name] = f"t_{c.program}"
         run.types = {e.path.upper(): e.type for e in build_plan(project).table}
+        for c in cases:         # INPUT values are typed like EXPECT values
+            for cycle, p, v in c.inputs:
+                vtype = run.types.get(c.full_path(p).upper())
+                why = f"no variable {p}" if vtype is None else type_problem(Check(p, v), vtype)
+                if why:
+                    raise CaseError(f"{c.path}: INPUT at cycle {cycle}: {why}")
         end = max((c.last_cycle - 1) * c.interval_ns for c in cases)
         watch, events = [], []
         for c in cases:

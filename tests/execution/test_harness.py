@@ -224,3 +224,17 @@ def test_unknown_path_fails(verify_run):
     case = runner.Case(cases["right_types"].path, "harness", "right_types",
                        checkpoints=[(1, [runner.Check("no_such_var", "TRUE")])])
     assert runner.verify(case, run) == ["after 1 cycles: no variable no_such_var"]
+
+
+@pytest.mark.parametrize("value, message", [
+    ("1", "start is BOOL: the expected value 1 is not a literal of that type"),
+    ("TRUE; nothing = 3", "INPUT at cycle 2: no variable nothing"),
+])
+def test_mistyped_input_is_rejected(tmp_path, value, message):
+    """An INPUT of 1 for a BOOL was written as TRUE by the simulator."""
+    f = tmp_path / "typed_input.st"
+    f.write_text("PROGRAM typed_input\nVAR start : BOOL; n : INT; END_VAR\n"
+                 "    IF start THEN n := n + 1; END_IF;\nEND_PROGRAM\n"
+                 f"(* INPUT at cycle 2: start = {value} *)\n(* EXPECT after 3 cycles: n = 2 *)\n")
+    run = runner.run_group("harness_typed_input", [runner.load_case(f, "harness")])
+    assert run.error and message in run.error, run.error

@@ -27,6 +27,9 @@ pytestmark = pytest.mark.execution
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted(p for p in (ROOT / "examples").iterdir() if p.is_dir())
 PAIRS = runner.discover_pairs()
+# an empty or shrunken list would pass as "skipped": fail at collection instead
+assert len(EXAMPLES) >= 12, f"only {len(EXAMPLES)} example projects under {ROOT / 'examples'}"
+assert len(PAIRS) >= 10, f"only {len(PAIRS)} ST/IL pairs under {runner.PAIRS}"
 ULP_TOLERANCE = 4
 DURATION = 2_000_000_000
 _RUNS: dict = {}
