@@ -251,16 +251,15 @@ class BodyEmitter:
 
     def while_(self, s):
         f = Frame(self)
-        c = self.checked_value(f, self.cond(f, s.cond), "iec_bool", s.pos)
+        c = self.checked_value(f, self.cond(f, s.cond), "iec_bool", s.cond.pos)
         head = f.pre + [f"if (!({c}))", self.ind + "break;"]
         lines = self.loop(s.pos, head, s.body)
         return (["{"] + self.indent(f.decls + lines) + ["}"]) if f.decls else lines
 
     def repeat(self, s):
         f = Frame(self)
-        c = self.cond(f, s.cond)
-        tail = f.pre + ([self.fault_check(s.pos)] if f.may_fault else []) + \
-            [f"if ({c})", self.ind + "break;"]
+        c = self.checked_value(f, self.cond(f, s.cond), "iec_bool", s.cond.pos)
+        tail = f.pre + [f"if ({c})", self.ind + "break;"]
         lines = self.loop(s.pos, [], s.body, tail)
         return (["{"] + self.indent(f.decls + lines) + ["}"]) if f.decls else lines
 
@@ -574,7 +573,10 @@ class BodyEmitter:
     # --------------------------------------------------------------- IL
     def il_body(self, instrs) -> list[str]:
         lines = []
+        self.il_labels_seen = set()
         for i in instrs:
+            if i.label:
+                self.il_labels_seen.add(i.label.upper())
             lines += self.il(i, 0)
         return lines
 
@@ -639,12 +641,17 @@ class BodyEmitter:
         elif op in IL_LOGIC or op in IL_ARITH or op in IL_COMPARE:
             lines += self.il_apply(f, i, op, cr_in, i.operand, depth)
         elif op in ("JMP", "JMPC", "JMPCN"):
-            goto = f"goto L_{i.operand.name.lower()};"
+            jump = [f"goto L_{i.operand.name.lower()};"]
+            if i.operand.name.upper() in self.il_labels_seen:
+                # a backward jump closes a loop: it ticks the loop budget like
+                # every iteration of an ST loop, so an endless IL loop faults
+                jump.insert(0, self.loop_tick(i.pos))
             if op == "JMP":
-                lines.append(goto)
+                lines += jump
             else:
                 neg = "!" if op == "JMPCN" else ""
-                lines += [f"if ({neg}{self.cr_var(cr_in, depth)})", self.ind + goto]
+                lines += [f"if ({neg}{self.cr_var(cr_in, depth)}) {{"] + self.indent(jump) + \
+                    ["}"]
         elif op in ("RET", "RETC", "RETCN"):
             ret = self.return_stmt()
             if op == "RET":

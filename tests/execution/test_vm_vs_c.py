@@ -178,17 +178,6 @@ def _cfg(programs):
 
 
 KNOWN = {
-    "repeat_until_fault": (
-        "C checks for a fault before evaluating the UNTIL condition, not after it: after a "
-        "division by zero in UNTIL the body runs once more (x = 3, not 2) and the fault is "
-        "located at the REPEAT line instead of the condition's",
-        "PROGRAM P\nVAR d : INT := 2; x : INT; END_VAR\n  d := d - 1;\n  REPEAT\n"
-        "    x := x + 1;\n  UNTIL\n    10 / d > 0\n  END_REPEAT;\nEND_PROGRAM\n", ["P"], 3),
-    "il_backward_jump_budget": (
-        "C gives IL jumps no loop budget: an endless IL loop (L: ... JMP L) never faults; the "
-        "simulator hangs, and in the kernel the real-time task thread spins for ever",
-        "PROGRAM P\nVAR n : INT; END_VAR\nloop:   LD   n\n        ADD  1\n        ST   n\n"
-        "        JMP  loop\nEND_PROGRAM\n", ["P"], 2),
     "en_eno_functions": (
         "C ignores EN and ENO on function calls (standard and user functions): with EN = FALSE "
         "the function still runs and ENO is never written (IEC 61131-3 ed.3 6.6.1.5: EN = "
