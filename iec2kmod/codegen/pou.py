@@ -137,7 +137,7 @@ class InitEmitter:
         name = getattr(t, "name", "").upper()
         if name in self.type_inits and not isinstance(t, (Elementary, StringT)):
             return self.lines(code, t, self.type_inits[name], f)
-        if isinstance(t, SubrangeT) and t.low > 0 or isinstance(t, SubrangeT) and t.high < 0:
+        if isinstance(t, SubrangeT) and t.low != 0:   # the lower limit (IEC 61131-3 ed.3 6.4.2)
             return [f"{code} = {c_int(t.low, t.elem)};"]
         if isinstance(t, EnumT):
             first_name, first_val = next(iter(t.values.values()))

@@ -187,11 +187,6 @@ KNOWN = {
         "  n := n + 1;\n  en := n MOD 2 = 0;\n"
         "  a := ADD(EN := en, IN1 := n, IN2 := 1, ENO => ok1);\n"
         "  b := Twice(EN := en, x := n, ENO => ok2);\nEND_PROGRAM\n", ["P"], 3),
-    "subrange_default": (
-        "C starts a subrange variable at 0 when 0 is in the subrange; the standard's default "
-        "initial value of a subrange is its lower limit (ed.3 6.4.2, table 11)",
-        "TYPE Small : SINT (-5..5); END_TYPE\nPROGRAM P\nVAR s : Small; END_VAR\n"
-        "  s := s;\nEND_PROGRAM\n", ["P"], 1),
     "fault_substitute_store": (
         "C completes a faulting statement with a substitute value: an out-of-range index "
         "writes element [low] (a[0] := 14 here), a division stores 0, a subrange store "
