@@ -327,6 +327,55 @@ class ExprEmitter:
 
     # ------------------------------------------------------------ calls
     def call(self, f, c: ast.Call, t):
+        en = next((a for a in c.args if a.kind == "in" and a.name and
+                   a.name.upper() == "EN" and a.value is not None), None)
+        eno = next((a for a in c.args if a.kind == "out" and a.name and
+                    a.name.upper() == "ENO" and a.value is not None), None)
+        if en is None and eno is None:
+            return self.plain_call(f, c, t)
+        return self.guarded_call(f, c, t, en, eno)
+
+    def guarded_call(self, f, c: ast.Call, t, en, eno):
+        """A function call with EN/ENO (IEC 61131-3 ed.3 6.6.1.5): with EN =
+        FALSE the function does not run (its arguments are not evaluated),
+        ENO is FALSE and the call's value is its type's default; otherwise
+        ENO is TRUE after the call."""
+        if isinstance(c.target, stdlib.StdFunc):
+            rt = c.type if not isinstance(c.type, LiteralT) else (t if t is not None else c.type)
+        else:
+            rt = c.target.vars[c.target.key].type
+        rt = concrete(rt)
+        en_code = self.emit(f, en.value, BOOL) if en is not None else None
+        inner = Frame(self.body)
+        inner.pooled = f.pooled          # one pool of temporaries per statement
+        code = self.plain_call(inner, c, rt)
+        res = f.temp(rt, "en")
+        if N.is_scalar(rt):
+            run = inner.pre + [f"{res} = {code};"]
+            if isinstance(rt, EnumT):
+                first = next(iter(rt.values))
+                skip = [f"{res} = {N.enum_const(rt, rt.values[first][0])};"]
+            elif isinstance(rt, SubrangeT):
+                skip = [f"{res} = {c_int(rt.low, rt.elem)};"]
+            else:
+                skip = [f"{res} = 0;"]
+        else:
+            run = inner.pre + self.body.assign_code(inner, res, rt, Raw(code, rt))
+            addr = res if isinstance(rt, ArrayT) else f"&{res}"
+            skip = [f"iec_memset({addr}, 0, sizeof({res}));"]
+        if eno is not None:
+            run += self.body.assign_ref(inner, eno.value, Raw("1", BOOL))
+            skip += self.body.assign_ref(inner, eno.value, Raw("0", BOOL))
+        f.decls += inner.decls
+        f.may_fault = f.may_fault or inner.may_fault
+        if en_code is None:
+            f.pre += run
+        else:
+            f.pre += [f"if ({en_code}) {{"] + ["\t" + ln for ln in run] + ["} else {"] + \
+                ["\t" + ln for ln in skip] + ["}"]
+        return res
+
+    def plain_call(self, f, c: ast.Call, t):
         target = c.target
         if isinstance(target, stdlib.StdFunc):
             args = [a.value for a in c.args if a.kind == "pos" or a.name.upper() not in
@@ -638,8 +687,12 @@ _TIME_CONV = {("time", "ltime"), ("ltime", "time"), ("dt", "date"), ("dt", "tod"
 
 
 def std_target(e):
-    """The resolved standard function of a call expression, or None."""
-    if isinstance(e, ast.Call) and isinstance(getattr(e, "target", None), stdlib.StdFunc):
+    """The resolved standard function of a call expression, or None; None
+    too for a call with EN/ENO, which only ExprEmitter.call emits (no fast
+    path may skip its EN test)."""
+    if isinstance(e, ast.Call) and isinstance(getattr(e, "target", None), stdlib.StdFunc) \
+            and not any(a.kind != "pos" and a.name and a.name.upper() in ("EN", "ENO")
+                        for a in e.args):
         return e.target
     return None
 

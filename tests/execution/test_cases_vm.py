@@ -23,10 +23,6 @@ XFAIL: dict = {
         "C difference: the C runtime completes a faulting statement with a substitute value "
         "(q := 12 / 0 stores 0) before the task stops; the interpreter stops the task at the "
         "faulting operation, as IEC 61131-3 defines no result for it, so q keeps 12",
-    "user/init_enum_subrange.st":
-        "C difference: the C runtime starts a subrange variable at 0 when 0 is inside the "
-        "subrange (SINT(-5..5) starts at 0); IEC 61131-3 (ed.3 6.4.2, table 11) makes the "
-        "default initial value of a subrange its lower limit, -5",
 }
 
 

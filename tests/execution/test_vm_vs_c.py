@@ -178,15 +178,6 @@ def _cfg(programs):
 
 
 KNOWN = {
-    "en_eno_functions": (
-        "C ignores EN and ENO on function calls (standard and user functions): with EN = FALSE "
-        "the function still runs and ENO is never written (IEC 61131-3 ed.3 6.6.1.5: EN = "
-        "FALSE means the function is not executed and ENO = FALSE)",
-        "FUNCTION Twice : INT\n  VAR_INPUT x : INT; END_VAR\n  Twice := 2 * x;\nEND_FUNCTION\n"
-        "PROGRAM P\nVAR n : INT; en : BOOL; a, b : INT; ok1, ok2 : BOOL := TRUE; END_VAR\n"
-        "  n := n + 1;\n  en := n MOD 2 = 0;\n"
-        "  a := ADD(EN := en, IN1 := n, IN2 := 1, ENO => ok1);\n"
-        "  b := Twice(EN := en, x := n, ENO => ok2);\nEND_PROGRAM\n", ["P"], 3),
     "fault_substitute_store": (
         "C completes a faulting statement with a substitute value: an out-of-range index "
         "writes element [low] (a[0] := 14 here), a division stores 0, a subrange store "
