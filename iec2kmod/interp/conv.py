@@ -231,7 +231,7 @@ def _parse_int(s: str):
     if m:
         s = s[m.end():]
     sign = 1
-    if s[:1] in "+-":
+    if s and s[0] in "+-":
         sign = -1 if s[0] == "-" else 1
         s = s[1:]
     base = 10
