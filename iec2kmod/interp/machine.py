@@ -281,43 +281,6 @@ class Machine:
                 run = ProgramRun(path, inst, self.bodies[pi.pou.key], inputs, outputs)
                 if pi.task is not None:
                     rtasks[pi.task.name.upper()].programs.append(run)
-        self._var_config()
-
-    def _var_config(self):
-        """VAR_CONFIG initial values: instance-specific initial values of
-        variables of program instances (and of the FBs inside them), which
-        replace the declared ones (IEC 61131-3 ed.3, 6.8.2)."""
-        cfg = self.cfg
-        res = {r.name.upper(): r for r in cfg.resources}
-        by_path = {path.upper(): inst for path, inst in self.instances}
-        for block in cfg.node.access:
-            if block.kind != "VAR_CONFIG":
-                continue
-            for d in block.decls:
-                if d.init is None:
-                    continue
-                parts = d.path.split(".")
-                r = res.get(parts[0].upper())
-                if r is not None and r.node.name:
-                    inst_path, rest = f"{parts[0]}.{parts[1]}", parts[2:]
-                else:
-                    inst_path, rest = parts[0], parts[1:]
-                inst = by_path.get(inst_path.upper())
-                if inst is None or not rest:
-                    continue
-                container, pou = inst.v, inst.pou
-                for part in rest[:-1]:
-                    nxt = container.get(part.upper())
-                    if not isinstance(nxt, Instance):
-                        container = None
-                        break
-                    container, pou = nxt.v, nxt.pou
-                if container is None:
-                    continue
-                v = pou.var(rest[-1])
-                if v is None:
-                    continue
-                container[v.key] = self.init.value(v.type, d.init)
 
     def _qual(self, r, name):
         return f"{r.name}.{name}" if r.node.name else name

@@ -185,14 +185,6 @@ KNOWN = {
         "operation and stores nothing",
         "PROGRAM P\nVAR a : ARRAY[0..3] OF INT; i : INT := 2; END_VAR\n"
         "  a[i] := 10 + i;\n  i := i + 1;\nEND_PROGRAM\n", ["P"], 4),
-    "var_config_init": (
-        "C ignores the initial values of VAR_CONFIG (instance-specific initial values, IEC "
-        "61131-3 ed.3 6.8.2): R.p.x starts at its declared 1 instead of 42, R.p.t.PT at 0",
-        "PROGRAM P\nVAR x : INT := 1; t : TON; y : INT; END_VAR\n  y := x + 1;\n"
-        "  t(IN := TRUE);\nEND_PROGRAM\nCONFIGURATION C\n  RESOURCE R ON PLC\n"
-        "    TASK T (INTERVAL := T#10ms, PRIORITY := 1);\n    PROGRAM p WITH T : P;\n"
-        "  END_RESOURCE\n  VAR_CONFIG\n    R.p.x : INT := 42;\n    R.p.t.PT : TIME := T#5s;\n"
-        "  END_VAR\nEND_CONFIGURATION\n", None, 2),
 }
 
 
