@@ -185,6 +185,14 @@ KNOWN = {
         "operation and stores nothing",
         "PROGRAM P\nVAR a : ARRAY[0..3] OF INT; i : INT := 2; END_VAR\n"
         "  a[i] := 10 + i;\n  i := i + 1;\nEND_PROGRAM\n", ["P"], 4),
+    "for_loop_charge": (
+        "C charges a constant-bound FOR loop's whole trip count to the loop budget before "
+        "its first iteration, so when the budget is short it faults before running the "
+        "iterations the budget still allows (work = 998994, j = 1); the interpreter counts "
+        "each iteration as it runs (work = 998997, j = 4) -- same fault, different state",
+        "PROGRAM P\nVAR j : DINT; work : DINT; END_VAR\n  WHILE TRUE DO\n"
+        "    FOR j := 1 TO 997 DO\n      work := work + 1;\n    END_FOR;\n  END_WHILE;\n"
+        "END_PROGRAM\n", ["P"], 1),
 }
 
 
