@@ -1139,16 +1139,24 @@ class PouCompiler:
         edges = [(v.key, v.edge) for v in pou.inputs if v.edge]
         temps = []
         if not self.is_function:
+            m = self.m
             for v in pou.vars.values():
-                if v.section == "VAR_TEMP":
-                    temps.append((v.key, self.m.maker(v)))
+                if v.section != "VAR_TEMP":
+                    continue
+                t = concrete(v.type)
+                if isinstance(t, FBType):
+                    # a fresh instance per call, its externals bound in the caller's scope
+                    temps.append((v.key, None, (t.pou, v.init)))
+                else:
+                    temps.append((v.key, m.maker(v), None))
         if not edges and not temps:
             return run
+        m = self.m
 
         def body(env):
             iv = env.v
-            for k, mk in temps:
-                iv[k] = mk()
+            for k, mk, fb in temps:
+                iv[k] = mk() if mk is not None else m.new_instance(fb[0], env.s, fb[1])
             e = env.e
             for k, kind in edges:
                 cur = bool(iv[k])

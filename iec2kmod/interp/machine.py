@@ -198,6 +198,7 @@ class Machine:
         for v in pou.vars.values():
             if v.section == "VAR_GLOBAL":
                 inner[v.key] = (inst.v, v.key)
+        inst.s = inner
         for v in pou.vars.values():
             if v.section == "VAR_EXTERNAL":
                 if v.key not in scope:

@@ -19,10 +19,11 @@ from .values import base_of, convert_implicit, f32_safe
 class Instance:
     """A program or FB instance, or a function's activation."""
 
-    __slots__ = ("pou", "v", "r", "e", "cr")
+    __slots__ = ("pou", "v", "r", "e", "cr", "s")
 
     def __init__(self, pou):
         self.pou = pou
+        self.s = {}      # the globals in scope of the FBs inside (for VAR_TEMP instances)
         self.v = {}
         self.r = {}
         self.e = {}      # R_EDGE/F_EDGE inputs: the edge seen by this call, and memory
