@@ -1,0 +1,75 @@
+"""`iec2kmod sim --engine vm` is a drop-in for the C engine on the command
+line: the same stdout, --csv, --vcd and --list bytes, the same runtime fault
+message and exit code, the same usage errors."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.execution
+
+ROOT = Path(__file__).resolve().parents[2]
+CASES = ROOT / "tests" / "execution" / "cases"
+
+
+def sim(tmp_path, engine, *args):
+    out = tmp_path / engine
+    out.mkdir(exist_ok=True)
+    p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "sim", *args,
+                        "--csv", str(out / "o.csv"), "--vcd", str(out / "o.vcd"),
+                        *(["--engine", "vm"] if engine == "vm" else [])],
+                       cwd=ROOT, capture_output=True, text=True, timeout=600)
+    return p, (out / "o.csv"), (out / "o.vcd")
+
+
+TRACES = {
+    "traffic_light": "0,%IX0.0,TRUE\n700ms,%IX0.0,FALSE\n1500ms,plc.night_switch,TRUE\n",
+    "watchdog_event": "".join(f"{t * 100}ms,plc.heartbeat_in,{'TRUE' if t % 2 else 'FALSE'}\n"
+                              for t in range(1, 14)),
+    "pid_loop": "0,%IX0.0,TRUE\n1s,%IW2,300\n",
+}
+
+
+@pytest.mark.parametrize("example", sorted(TRACES))
+def test_same_output_files(example, tmp_path):
+    trace = tmp_path / "in.csv"
+    trace.write_text("time,variable,value\n" + TRACES[example])
+    args = [f"examples/{example}", "--duration", "3s", "--inputs", str(trace)]
+    c, c_csv, c_vcd = sim(tmp_path, "c", *args)
+    v, v_csv, v_vcd = sim(tmp_path, "vm", *args)
+    assert c.returncode == 0, c.stderr
+    assert (v.returncode, v.stdout, v.stderr) == (c.returncode, c.stdout, c.stderr)
+    assert v_csv.read_bytes() == c_csv.read_bytes()
+    assert v_vcd.read_bytes() == c_vcd.read_bytes()
+    assert c_csv.read_text().count("\n") > 5
+
+
+def test_same_list(tmp_path):
+    run = [sys.executable, "-m", "iec2kmod.cli", "sim", "examples/batch_mixer", "--list",
+           "--cycles", "1"]
+    c = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    v = subprocess.run(run + ["--engine", "vm"], cwd=ROOT, capture_output=True, text=True,
+                       timeout=600)
+    assert c.returncode == v.returncode == 0
+    assert v.stdout == c.stdout and len(c.stdout.splitlines()) > 10
+
+
+def test_same_fault_report(tmp_path):
+    case = CASES / "faults" / "fault_other_task.st"
+    c, _, _ = sim(tmp_path, "c", str(case), "--cycles", "6")
+    v, _, _ = sim(tmp_path, "vm", str(case), "--cycles", "6")
+    assert c.returncode == 1 and "runtime error:" in c.stderr
+    assert (v.returncode, v.stdout, v.stderr) == (c.returncode, c.stdout, c.stderr)
+
+
+def test_same_usage_errors(tmp_path):
+    for args in (["examples/traffic_light", "--cycles", "3", "--watch", "no_such_var"],
+                 ["examples/traffic_light", "--duration", "forever"]):
+        c, _, _ = sim(tmp_path, "c", *args)
+        v, _, _ = sim(tmp_path, "vm", *args)
+        assert c.returncode == 2
+        assert (v.returncode, v.stderr) == (c.returncode, c.stderr)
