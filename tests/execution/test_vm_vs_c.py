@@ -193,6 +193,12 @@ KNOWN = {
         "PROGRAM P\nVAR j : DINT; work : DINT; END_VAR\n  WHILE TRUE DO\n"
         "    FOR j := 1 TO 997 DO\n      work := work + 1;\n    END_FOR;\n  END_WHILE;\n"
         "END_PROGRAM\n", ["P"], 1),
+    "compare_with_type_limit": (
+        "C cannot build a comparison of a variable with its type's limit (u <= 255 for a "
+        "USINT): gcc's -Werror=type-limits rejects the generated 'comparison is always true', "
+        "an internal error for a valid program",
+        "PROGRAM P\nVAR u : USINT; b : BOOL; END_VAR\n  b := u <= 255;\nEND_PROGRAM\n",
+        ["P"], 1),
     "fb_instance_in_var_temp": (
         "C cannot build an FB instance declared in VAR_TEMP whose block has a VAR_EXTERNAL: "
         "the binding code names a struct member (v_tmp) that a temporary does not have, so "
