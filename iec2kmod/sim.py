@@ -23,6 +23,7 @@ from . import __version__
 from .checks.types import EnumT, concrete
 from .codegen import generate, source_list
 from .codegen import cnames as N
+from .codegen.body import copy_value
 from .codegen.plan import BindingError, PlanEmitter, build_plan, unbound_pointer_check
 from .literals import LiteralError, classify, parse_duration
 
@@ -119,7 +120,11 @@ def render_sim(project):
         sources=source_list(project),
         init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init),
         init=f.pre + init, tasks=tasks, vars=vars_, pou_files=pou_files,
-        unbound_check=unbound_pointer_check(plan.instances))
+        unbound_check=unbound_pointer_check(plan.instances),
+        backup=[N.declare(g.var.type, g.c_name) for g in plan.globals],
+        save=[copy_value(f"sim_backup.{g.c_name}", g.c_name, g.var.type) for g in plan.globals],
+        restore=[copy_value(g.c_name, f"sim_backup.{g.c_name}", g.var.type)
+                 for g in plan.globals])
     files = {gen.header_name: gen.header, "sim_project.c": text}
     for key in gen.order:
         name, body = gen.bodies[key]

@@ -13,7 +13,9 @@ Cycle model (IEC 61131-3 ed.3, 6.8.2 and the simulator's contract):
     copy the connected inputs in, run the body, copy the connected outputs
     out;
   * a runtime fault stops the task (the programs after it in that cycle
-    do not run, its outputs are not copied); the other tasks go on;
+    do not run, its outputs are not copied, and every global it wrote in
+    that cycle is put back: the kernel does not copy a faulting cycle's
+    image out); the other tasks go on;
   * every loop iteration (WHILE, REPEAT, FOR, and IL backward jumps)
     costs one unit of a per-cycle budget; a cycle that exceeds it faults
     ("endless loop")."""
@@ -30,7 +32,7 @@ from ..literals import LiteralError, classify, parse_duration
 from .compiler import PouCompiler
 from .errors import Fault, VMError
 from .fbs import body_of
-from .model import Initializer, Instance, copier
+from .model import Initializer, Instance, copier, copy_of
 from .values import base_of, f32, wrap, wrap64
 
 # the kernel's per-cycle loop budget (iec2kmod.kmod.DEFAULT_LOOP_BUDGET; a
@@ -598,6 +600,10 @@ def _schedule(self, table, idx, events, end):
 
 
 def _run_task(self, task):
+    """One cycle of *task*.  The kernel publishes a task's results at the end
+    of its cycle, and not at all when the cycle faults (the task's image is
+    not copied out): a faulting cycle leaves every global as it was."""
+    saved = self._save_globals()
     for pr in task.programs:
         iv = pr.inst.v
         try:
@@ -605,11 +611,33 @@ def _run_task(self, task):
                 iv[k] = f()
             pr.body(pr.inst)
         except Fault as f:
+            self._restore_globals(saved)
             return f
         for k, (c, ck), store in pr.outputs:
             c[ck] = store(iv[k])
     return None
 
 
+def _save_globals(self):
+    out = []
+    for _path, v, container in self.global_paths:
+        out.append((container, v.key, copy_of(v.type)(container[v.key])))
+    return out
+
+
+def _restore_globals(self, saved):
+    for container, key, value in saved:
+        cur = container[key]
+        if isinstance(cur, list):
+            cur[:] = value          # in place: references to the array stay valid
+        elif isinstance(cur, dict):
+            cur.clear()
+            cur.update(value)
+        else:
+            container[key] = value
+
+
 Machine.schedule = _schedule
 Machine._run_task = _run_task
+Machine._save_globals = _save_globals
+Machine._restore_globals = _restore_globals

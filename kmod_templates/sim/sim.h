@@ -35,6 +35,9 @@ extern const int sim_ntasks;
 extern const struct sim_pou_file sim_pou_files[];
 extern const int sim_npou_files;
 void sim_init(void);
+/* the globals before a task cycle, put back when the cycle faults */
+void sim_globals_save(void);
+void sim_globals_restore(void);
 /* the IEC path of a pointer member left NULL by sim_init(), or NULL */
 const char *sim_unbound_pointer(void);
 

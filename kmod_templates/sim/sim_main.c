@@ -304,9 +304,12 @@ int main(int argc, char **argv)
 			if (faulted[best])
 				continue;
 			iec_ctx_cycle_begin(&ctx[best], t);
+			sim_globals_save();
 			sim_tasks[best].run(&ctx[best]);
 			cycles[best]++;
 			if (ctx[best].fault != IEC_FAULT_NONE) {
+				/* as in the kernel: a faulting cycle writes no global */
+				sim_globals_restore();
 				faulted[best] = 1;
 				printf("f %lld %s %s|%s|%s|%d\n", t, sim_tasks[best].name,
 				       iec_fault_name(ctx[best].fault),
