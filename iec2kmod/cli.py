@@ -50,7 +50,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--watch", metavar="A,B,C", help="variables to record (default: globals)")
     s.add_argument("--list", action="store_true", help="list the variables and exit")
     s.add_argument("--sanitize", action="store_true",
-                   help="build with -fsanitize=undefined,address")
+                   help="build with -fsanitize=undefined,address,float-cast-overflow "
+                        "(the first report ends the run)")
     s.add_argument("--engine", choices=("c", "vm"), default="c",
                    help="c: compile the generated C and run it (default); vm: run the "
                         "reference interpreter (no C compiler needed)")
