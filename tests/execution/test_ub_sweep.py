@@ -155,3 +155,96 @@ def test_sanitized_simulator_has_the_sanitizers(tmp_path):
     assert runner.SANITIZER_REPORT.search(
         "x.c:3:5: runtime error: signed integer overflow: 2147483647 + 1")
     assert runner.SANITIZER_REPORT.search("==123==ERROR: AddressSanitizer: heap-buffer-overflow")
+
+
+FLOAT_CAST_UB = r"""
+#include <stdio.h>
+#include <stdlib.h>
+int main(int argc, char **argv)
+{
+	volatile double big = strtod(argc > 1 ? argv[1] : "1e300", NULL);
+	int i = (int)big;               /* undefined: out of int's range */
+
+	printf("%d\n", i);
+	return 0;
+}
+"""
+
+
+def _is_gcc(cc):
+    import subprocess
+    p = subprocess.run([cc, "--version"], capture_output=True, text=True)
+    return "Free Software Foundation" in p.stdout and "clang" not in p.stdout
+
+
+def test_sanitizer_flags_report_a_float_cast_overflow(tmp_path):
+    """A C cast of 1e300 to int, compiled with the simulator's sanitizer
+    flags, is reported and ends the run; gcc's plain -fsanitize=undefined
+    (the flags before) let it through."""
+    import subprocess
+    cc = sim._compiler()
+    src = tmp_path / "cast.c"
+    src.write_text(FLOAT_CAST_UB)
+    exe = tmp_path / "cast"
+    p = subprocess.run([cc, *sim.CFLAGS, *sim.SANITIZE_FLAGS, str(src), "-o", str(exe)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60)
+    assert r.returncode != 0 and r.stdout == "", (r.returncode, r.stdout)
+    assert "runtime error" in r.stderr and "outside the range of representable values" \
+        in r.stderr, r.stderr
+    assert runner.SANITIZER_REPORT.search(r.stderr)
+    r = subprocess.run([str(exe), "12.0"], capture_output=True, text=True, timeout=60)
+    assert (r.returncode, r.stdout, r.stderr) == (0, "12\n", "")
+    if _is_gcc(cc):                # the blind spot this flag closes
+        old = tmp_path / "cast_old"
+        p = subprocess.run([cc, *sim.CFLAGS, "-fsanitize=undefined,address",
+                            "-fno-sanitize-recover=all", str(src), "-o", str(old)],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        r = subprocess.run([str(old)], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0 and "runtime error" not in r.stderr, r.stderr
+
+
+def test_real_to_int_out_of_range_is_defined_under_the_sanitizers(tmp_path):
+    """REAL/LREAL -> integer of huge values, Inf and NaN, and REAL division by
+    zero, are defined in IEC code (saturation, 0 for NaN, IEEE Inf; see
+    kmod_templates/runtime/iec_real.h): the sanitized simulator reports
+    nothing and gives the documented values."""
+    src = tmp_path / "bigconv.st"
+    src.write_text("""PROGRAM bigconv
+VAR
+    big : ARRAY[0..3] OF LREAL := [1.0E300, -1.0E300, 3.0E38, -3.0E38];
+    zero : LREAL;
+    rzero : REAL;
+    i : INT;
+    d : DINT;
+    l : LINT;
+    u : UDINT;
+    t : DINT;
+    n : INT := 5;
+    inf : REAL;
+    ok : BOOL;
+END_VAR
+    i := LREAL_TO_INT(big[0]);
+    d := LREAL_TO_DINT(big[1]);
+    l := REAL_TO_LINT(LREAL_TO_REAL(big[2]));
+    u := LREAL_TO_UDINT(big[3]);
+    t := LREAL_TRUNC_DINT(big[0]);
+    n := LREAL_TO_INT(zero / zero);
+    inf := 1.0 / rzero;
+    ok := inf > 3.0E38 AND REAL_TO_DINT(inf) = 2147483647;
+END_PROGRAM
+""")
+    case = runner.Case(src, "bigconv", "bigconv")
+    cfg = tmp_path / "config.st"
+    cfg.write_text(runner.wrapper_config("bigconv", [case]))
+    project = runner.check_project([src, cfg])
+    names = ["i", "d", "l", "u", "t", "n", "ok"]
+    res = sim.run(project, 0, watch=[f"bigconv.{v}" for v in names], sanitize=True,
+                  build_dir=runner.build_root() / "sim")
+    assert not runner.SANITIZER_REPORT.search(res.stderr or ""), res.stderr[:4000]
+    assert not res.faults, res.faults
+    got = res.values_at()
+    assert [got[f"bigconv.{v}"] for v in names] == \
+        [32767, -2147483648, 9223372036854775807, 0, 2147483647, 0, True], got

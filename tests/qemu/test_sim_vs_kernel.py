@@ -17,7 +17,7 @@ from kmod_helpers import gen_and_build, loaded_modules, status
 pytestmark = pytest.mark.qemu
 PROJECT = Path(__file__).resolve().parent / "projects" / "sim_vs_kernel"
 GLOBALS = ["i_seed", "i_sum", "i_wrap", "i_hist", "i_mode", "handoff", "r_x", "r_y", "r_i",
-           "r_seen"]
+           "r_seen", "r_big", "r_small", "r_nan"]
 
 
 def manager(guest, *argv, timeout=300):
@@ -51,6 +51,9 @@ def test_kernel_globals_equal_the_simulation(guest, guest_workdir):
         r = manager(guest, "stop")
         assert r.exit_code == 0, r.output
     assert loaded_modules(guest) == []
+    # REAL -> integer out of range saturates, NaN gives 0 (iec_real.h), in both
+    assert (predicted["r_big"], predicted["r_small"], predicted["r_nan"]) \
+        == (2147483647, -9223372036854775808, 0)
     for name in GLOBALS:
         want = predicted[name]
         if isinstance(want, bool):
