@@ -61,7 +61,7 @@ from .kernel import KernelImage, find_busybox, find_kernel, find_qemu, pvh_vmlin
 __all__ = [
     "Guest", "GuestError", "GuestBootError", "GuestDied", "GuestTimeout",
     "GuestCommandTimeout", "CommandFailed", "KernelLogError", "CommandResult",
-    "KERNEL_LOG_PATTERNS", "kernel_log_problems",
+    "KERNEL_LOG_PATTERNS", "kernel_log_problems", "KernelLogRead",
 ]
 
 # Lines of the kernel log that mean something went wrong in the kernel.
@@ -69,7 +69,8 @@ KERNEL_LOG_PATTERNS = (
     r"WARNING:", r"BUG:", r"Oops", r"scheduling while atomic",
     r"sleeping function called from invalid context", r"Call Trace",
     r"general protection fault", r"Kernel panic", r"detected stalls?\b",
-    r"blocked for more than \d+ seconds", r"UBSAN:",
+    r"blocked for more than \d+ seconds", r"UBSAN:", r"kernel BUG at", r"soft lockup",
+    r"hard LOCKUP", r"kthread starved", r"stack-protector:", r"KASAN:", r"KFENCE:",
 )
 _KLOG_RE = re.compile("|".join(KERNEL_LOG_PATTERNS))
 
@@ -77,6 +78,8 @@ _KLOG_RE = re.compile("|".join(KERNEL_LOG_PATTERNS))
 BASE_MODULES = ("virtio_pci", "virtio_console", "9pnet_virtio", "9p")
 
 _MARK = "@@IEC2KMOD"
+_KLOG_FILE = "/run/iec2kmod-kmsg"        # in the guest: every /dev/kmsg record
+_KLOG_SYNC = _MARK + "-KLOG-"
 
 
 class GuestError(RuntimeError):
@@ -116,6 +119,17 @@ class KernelLogError(GuestError):
         super().__init__("kernel log has problems:\n  " + "\n  ".join(lines)
                          + ("\n--- context ---\n" + context if context else ""))
         self.lines = lines
+
+
+class KernelLogRead(NamedTuple):
+    """New kernel log lines from :meth:`Guest.read_kernel_log`."""
+    lines: List[str]          # "[    12.345678] text", one per line of each record
+    lost: List[str]           # a description of each run of records lost before reading
+    last_ts: float            # timestamp of the last record read so far (0.0: none)
+
+    @property
+    def text(self) -> str:
+        return "".join(l + "\n" for l in self.lines)
 
 
 class CommandResult(NamedTuple):
@@ -182,6 +196,11 @@ for p in $KEEP; do
 done
 mkdir -p "/host$WORKDIR" && mount --bind /mnt/work "/host$WORKDIR" || fail "bind /host$WORKDIR"
 hostname iec2kmod-guest
+# Every kernel log record, with its sequence number, appended to $KLOG for
+# Guest.read_kernel_log().  cat ends when the ring buffer overran it (EPIPE);
+# the loop reopens /dev/kmsg and the host drops the records it already has
+# and reports the sequence numbers it never saw.
+(while :; do cat /dev/kmsg; sleep 0.2; done) </dev/null >>"$KLOG" 2>/dev/null &
 for p in /sys/class/virtio-ports/*; do
     n=$(cat $p/name 2>/dev/null)
     case "$n" in iec2kmod.*) ln -s ${p##*/} /dev/iec2kmod-${n#iec2kmod.} ;; esac
@@ -324,7 +343,16 @@ class Guest:
         self._dead_reason: Optional[str] = None
         self.boot_seconds: Optional[float] = None       # host wall time to READY
         self.guest_uptime_at_ready: Optional[float] = None
-        self.baseline: Optional[float] = None          # default 'since' of check_kernel_log
+        self.baseline: Optional[float] = None          # log timestamp at the start of a test
+        # the kernel log cursor (read_kernel_log): byte offset in the guest's
+        # record file, last sequence number read, its timestamp; the console
+        # log's size when the last read began (console_problems scans from it)
+        self._klog_off = 0
+        self._klog_seq = -1
+        self._klog_ts = 0.0
+        self._klog_syncs = 0
+        self._console_bytes = 0
+        self._console_mark = 0
         self.qemu_cmdline: List[str] = []
 
     # ------------------------------------------------------------ boot ----
@@ -344,7 +372,7 @@ class Guest:
         keep = " ".join(sorted(_keep_paths(self.python_exe)))
         conf = (f"WORKDIR='{self.workdir}'\nKEEP='{keep}'\n"
                 f"MODULES='{' '.join(order)}'\n"
-                f"MSIZE=512000\nHOSTCACHE={self.host_cache}\n"
+                f"MSIZE=512000\nHOSTCACHE={self.host_cache}\nKLOG={_KLOG_FILE}\n"
                 f"CHROOT_ENV='{' '.join(f'{k}={v}' for k, v in env.items())}'\n"
                 f"export WORKDIR CHROOT_ENV\n")
         w = CpioWriter()
@@ -445,6 +473,7 @@ class Guest:
                     break
                 logf.write(chunk)
                 logf.flush()
+                self._console_bytes += len(chunk)
                 pending += chunk
                 *lines, pending = pending.split(b"\n")
                 for l in lines:
@@ -791,6 +820,7 @@ class Guest:
         """The kernel log (``dmesg``); with *since*, only lines whose timestamp
         is later than that (a value from :meth:`log_mark`)."""
         out = self.check_call("dmesg", timeout=60)
+        out = "".join(l for l in out.splitlines(True) if _KLOG_SYNC not in l)
         if since is None:
             return out
         keep = []
@@ -810,22 +840,143 @@ class Guest:
         m = re.match(r"\[\s*(\d+\.\d+)\]", out)
         return float(m.group(1)) if m else 0.0
 
+    def read_kernel_log(self, timeout: float = 60.0) -> KernelLogRead:
+        """The kernel log lines logged since the previous call (from boot on
+        the first call), each line exactly once over the guest's life.
+
+        A reader started at boot copies every ``/dev/kmsg`` record, with its
+        sequence number, to a file in the guest; this call writes a marker
+        record to ``/dev/kmsg``, waits until the reader has copied it (so
+        everything logged before the call is included) and returns the
+        records past the cursor.  Sequence numbers make the cursor exact: no
+        record is returned twice, and records the ring buffer overwrote before
+        the reader got them are listed in ``lost`` (a problem for
+        :meth:`check_kernel_log`).  Raises :class:`GuestError` if the reader
+        does not deliver, :class:`GuestDied` if the guest is gone."""
+        self._klog_syncs += 1
+        marker = f"{_KLOG_SYNC}{self._tokbase}-{self._klog_syncs}@"
+        console_mark = self._console_bytes
+        off = self._klog_off + 1
+        cmd = (f"echo '<7>{marker}' >/dev/kmsg || exit 90; i=0; "
+               f"until tail -c +{off} {_KLOG_FILE} | grep -qF ';{marker}'; do "
+               f"i=$((i+1)); [ $i -gt 400 ] && exit 91; sleep 0.05; done; "
+               f"tail -c +{off} {_KLOG_FILE}")
+        res = self.run(cmd, timeout)
+        if res.exit_code != 0:
+            raise GuestError(
+                "the guest's kernel log reader did not deliver a marker record within 20 s "
+                f"(exit {res.exit_code}; is the 'cat /dev/kmsg' loop started by the guest's "
+                f"init still running?): {res.output[-1000:]}")
+        self._console_mark = console_mark
+        return self._consume_kmsg(res.output)
+
+    def _consume_kmsg(self, data: str) -> KernelLogRead:
+        """Advance the cursor over the complete records in *data* (the
+        reader's file from the cursor's byte offset on)."""
+        lines: List[str] = []
+        lost: List[str] = []
+        end = data.rfind("\n") + 1             # a record still being written waits
+        for rec in data[:end].split("\n")[:-1]:
+            if rec.startswith(" ") or ";" not in rec:
+                continue                         # " KEY=value" dictionary lines
+            head, msg = rec.split(";", 1)
+            fields = head.split(",")
+            try:
+                seq, usec = int(fields[1]), int(fields[2])
+            except (IndexError, ValueError):
+                lines.append(f"[unparsed kernel log record] {rec}")
+                continue
+            if seq <= self._klog_seq:
+                continue                         # copied again after a reader restart
+            if seq > self._klog_seq + 1:
+                lost.append(f"kernel log records {self._klog_seq + 1}..{seq - 1} were lost "
+                            "(the ring buffer overran before they were read)")
+            self._klog_seq = seq
+            stamp = f"{usec // 1000000}.{usec % 1000000:06d}"
+            self._klog_ts = float(stamp)
+            if msg.startswith(_KLOG_SYNC):
+                continue
+            msg = re.sub(r"\\x([0-9a-fA-F]{2})", lambda m: chr(int(m.group(1), 16)), msg)
+            lines += [f"[{stamp:>12}] {l}" for l in msg.split("\n")]
+        self._klog_off += len(data[:end].encode("utf-8", "surrogateescape"))
+        return KernelLogRead(lines, lost, self._klog_ts)
+
+    @property
+    def klog_last_ts(self) -> float:
+        """Timestamp of the last kernel log record :meth:`read_kernel_log`
+        returned (a *since* for :meth:`dmesg`)."""
+        return self._klog_ts
+
     def check_kernel_log(self, since: Optional[float] = None,
                          allow: Iterable[str] = ()) -> None:
         """Raise :class:`KernelLogError` listing every kernel log line with
         ``WARNING:``, ``BUG:``, ``Oops``, ``scheduling while atomic``,
-        ``sleeping function called from invalid context``, ``Call Trace`` (and
-        a few more, :data:`KERNEL_LOG_PATTERNS`).  *since* defaults to
-        :attr:`baseline` (set by the pytest fixture at the start of each test),
-        else the whole log.  *allow*: regexes of lines to tolerate."""
+        ``sleeping function called from invalid context``, ``Call Trace``,
+        panics, stalls, hung tasks (:data:`KERNEL_LOG_PATTERNS`).
+
+        Without *since* it checks the lines :meth:`read_kernel_log` returns,
+        i.e. everything logged since the previous check, and consumes them
+        (also when it raises): every line is checked once, and a test that
+        provokes a WARN on purpose checks it with ``pytest.raises`` or passes
+        *allow* (regexes of lines to tolerate).  Lost records are always a
+        problem.  With *since* (a :meth:`log_mark`) it checks the ``dmesg``
+        lines after that mark and consumes nothing."""
         if since is None:
-            since = self.baseline
-        log = self.dmesg(since)
-        bad = kernel_log_problems(log, allow)
+            r = self.read_kernel_log()
+            log, lost = r.text, r.lost
+        else:
+            log, lost = self.dmesg(since), []
+        bad = lost + kernel_log_problems(log, allow)
         if bad:
             lines = log.splitlines()
-            first = next(i for i, l in enumerate(lines) if l in bad)
+            first = next((i for i, l in enumerate(lines) if l in bad), 0)
             raise KernelLogError(bad, "\n".join(lines[max(0, first - 5):first + 40]))
+
+    # ------------------------------------------------------- after death ----
+    @property
+    def dead_reason(self) -> Optional[str]:
+        """Why the guest is unusable, once a call has reported it (raised
+        :class:`GuestDied`, :class:`GuestTimeout` ...); None while nobody has
+        noticed, even if QEMU has already exited."""
+        return self._dead_reason
+
+    def console_problems(self, allow: Iterable[str] = ()) -> List[str]:
+        """Console (ttyS0) lines matching :data:`KERNEL_LOG_PATTERNS`, from
+        where the last :meth:`read_kernel_log` began to the end: what a dead
+        guest logged after its last check.  The console carries messages of
+        level warning and above (``loglevel=5``), which all those patterns
+        are; a line may also have been returned by that last read."""
+        if self._proc is not None and self._proc.poll() is not None:
+            self._wait_console()
+        try:
+            with open(self.console_log, "rb") as f:
+                f.seek(self._console_mark)
+                text = f.read().decode("utf-8", "replace")
+        except OSError as e:
+            return [f"the console log {self.console_log} cannot be read: {e}"]
+        return kernel_log_problems(text.replace("\r", ""), allow)
+
+    def death_report(self) -> str:
+        """What to say about a guest that is no longer alive: how it ended,
+        the console's problem lines since the last kernel log check, the
+        console tail."""
+        if self._proc is None:
+            return "the guest was never started"
+        rc = self._proc.poll()
+        how = (self._dead_reason.splitlines()[0] if self._dead_reason else
+               "QEMU exited" if rc is not None else "the guest stopped answering")
+        if rc is not None:
+            how += f" (QEMU exit status {rc})"
+        bad = self.console_problems()
+        parts = [how]
+        if bad:
+            parts.append("kernel console since the last kernel log check:\n  "
+                         + "\n  ".join(bad))
+        else:
+            parts.append("no WARNING/BUG/Oops/panic line on the console since the last "
+                         "kernel log check")
+        parts.append(f"last console lines ({self.console_log}):\n" + self.console_tail(30))
+        return "\n".join(parts)
 
     # ------------------------------------------------------------ shutdown ----
     def close(self, timeout: float = 15.0) -> None:

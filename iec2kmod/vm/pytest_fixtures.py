@@ -8,17 +8,40 @@ Use them from a conftest.py::
 
 * ``guest`` (per test): the session's running guest.  One guest boots for the
   whole pytest session, shared by every conftest that imports these fixtures.
-  If an earlier test killed it (panic, hang), a fresh one boots.  At the start
-  of the test it records a kernel-log mark (``guest.baseline``); at the end it
-  fails the test (teardown error) if the kernel logged ``WARNING:``, ``BUG:``,
-  ``Oops``, ``Call Trace`` etc. meanwhile.  A test that provokes such lines on
-  purpose moves ``guest.baseline = guest.log_mark()`` past them.
+  Its kernel log is read with a cursor (:meth:`Guest.read_kernel_log`), so
+  every line is checked exactly once, and failures are attributed so:
+
+  - at the end of a test (teardown): what was logged during the test; a
+    ``WARNING:``, ``BUG:``, ``Oops``, ``Call Trace``, panic, stall, hung-task
+    line (:data:`KERNEL_LOG_PATTERNS`) fails the test, and so does a guest
+    that died during the test (QEMU exited: with ``oops=panic`` every Oops
+    does), whether or not a command noticed: then the console output up to
+    the death is scanned and listed;
+  - at the start of a test (setup): what was logged *between* the previous
+    test's final check and now (delayed work after ``rmmod``, a hung task
+    report, an RCU stall) and a death in that gap, or, for a freshly booted
+    guest, its boot log.  They fail this test's setup (an ERROR naming the
+    previous test, which most likely caused it) rather than the previous
+    test, whose result is already reported; this test does not run on a
+    kernel that has just misbehaved.  After a death the next test boots a
+    new guest;
+  - at the end of the session: after a settling second, the tail after the
+    last test's check (or a death since); a problem fails the run (an ERROR
+    at the teardown of the last test).
+
+  A test that provokes such lines on purpose consumes them itself, with
+  ``pytest.raises(KernelLogError): guest.check_kernel_log()`` or
+  ``guest.check_kernel_log(allow=[...])``.  ``guest.baseline`` is the log
+  timestamp at the start of the test (``guest.dmesg(guest.baseline)``).
 * ``guest_session``: the same guest without the per-test log check.
 * ``guest_workdir``: the read-write directory shared with the guest (same
   absolute path inside the guest); ``guest_tmp_path``: a fresh subdirectory of
   it per test.  Build ``.ko`` files there, then ``guest.insmod(path)``.
 * ``guest_factory(**Guest kwargs)``: boot an extra, private guest (e.g.
-  ``icount=True``) that is closed at the end of the test.
+  ``icount=True``) that is closed at the end of the test.  At the end its
+  unread kernel log is checked like the session guest's, and the test fails
+  if the guest died without the test having seen it (no command raised
+  :class:`GuestDied`/:class:`GuestTimeout`).
 * ``kdir``: the PREEMPT_RT kbuild directory.
 
 A missing prerequisite (qemu, busybox-static, headers, the extracted kernel
@@ -34,20 +57,56 @@ from __future__ import annotations
 
 import os
 import re
+import time
 from pathlib import Path
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Optional
 
 import pytest
 
 from .. import kbuild
-from .guest import Guest, GuestError
+from .guest import Guest, GuestError, KernelLogError
 from .kernel import check_prerequisites
 
 __all__ = ["guest", "guest_session", "guest_workdir", "guest_tmp_path", "guest_factory",
-           "kdir"]
+           "kdir", "log_report", "factory_report"]
 
 _STATE: Dict[str, Any] = {"guest": None, "workdir": None, "logdir": None, "boots": 0,
-                          "users": 0}
+                          "users": 0, "last_test": None}
+
+SETTLE_SECONDS = 1.0          # the session guest's wait before its last log read
+
+
+def log_report(g: Guest, window: str) -> Optional[str]:
+    """Read *g*'s kernel log up to now (each line once, see
+    :meth:`Guest.read_kernel_log`) and return why the window named *window*
+    fails, or None if it is clean: problem lines, lost records, or a dead
+    guest (then the console output since the last read is scanned)."""
+    if g.alive:
+        try:
+            g.check_kernel_log()
+            return None
+        except KernelLogError as e:
+            return f"kernel log {window}: {e}"
+        except GuestError as e:
+            if g.alive:
+                return f"the kernel log {window} could not be read: {e}"
+    return f"the guest died {window}: {g.death_report()}"
+
+
+def factory_report(g: Guest, window: str) -> Optional[str]:
+    """:func:`log_report` for a private guest: a death the test has seen
+    (a command raised :class:`GuestDied`/:class:`GuestTimeout`, so
+    ``dead_reason`` is set) is the test's business, not a failure."""
+    if not g.alive and g.dead_reason is not None:
+        return None
+    return log_report(g, window)
+
+
+def _retire_dead_guest() -> None:
+    g = _STATE["guest"]
+    if g is not None and not g.alive:
+        g.kill()
+        _STATE["guest"] = None
 
 
 def _env_options() -> Dict[str, Any]:
@@ -110,24 +169,48 @@ def guest_session(guest_workdir):
     finally:
         _STATE["users"] -= 1
         if _STATE["users"] == 0 and _STATE["guest"] is not None:
-            _STATE["guest"].close()
-            _STATE["guest"] = None
+            _end_of_session()
+
+
+def _end_of_session() -> None:
+    """The session guest's tail: what was logged after the last test's check
+    (after a settling second for delayed work), or its death since.  Fails
+    the run if anything is wrong."""
+    g = _STATE["guest"]
+    if g.alive:
+        time.sleep(SETTLE_SECONDS)
+    msg = log_report(g, f"after {_STATE['last_test'] or 'boot'} ended (end of the session)")
+    g.close()
+    _STATE["guest"] = None
+    if msg is not None:
+        pytest.fail(msg, pytrace=False)
 
 
 @pytest.fixture
-def guest(guest_session):
+def guest(guest_session, request):
+    prev = _STATE["last_test"]
+    _STATE["last_test"] = request.node.nodeid
+    g = _STATE["guest"]
+    if g is not None:
+        msg = log_report(g, f"after {prev or 'boot'} ended and before this test started "
+                            "(most likely caused by that test)")
+        if msg is not None:
+            _retire_dead_guest()
+            pytest.fail(msg, pytrace=False)
+    fresh = _STATE["guest"] is None
     g = _live_guest()
-    try:
-        g.baseline = g.log_mark()
-    except GuestError as e:
-        pytest.fail(f"the QEMU guest does not answer: {e}", pytrace=False)
+    if fresh:
+        msg = log_report(g, "while the guest booted")
+        if msg is not None:
+            _retire_dead_guest()
+            pytest.fail(msg, pytrace=False)
+    g.baseline = g.klog_last_ts
     yield g
-    if g.alive:
-        try:
-            g.check_kernel_log(since=g.baseline)
-        except GuestError as e:
-            pytest.fail(str(e), pytrace=False)
+    msg = log_report(g, "during this test")
     g.baseline = None
+    if msg is not None:
+        _retire_dead_guest()
+        pytest.fail(msg, pytrace=False)
 
 
 @pytest.fixture
@@ -155,8 +238,14 @@ def guest_factory(guest_workdir):
         return g
 
     yield make
-    for g in made:
+    problems = []
+    for i, g in enumerate(made, 1):
+        msg = factory_report(g, f"in the test's guest #{i}")
         g.close()
+        if msg is not None:
+            problems.append(msg)
+    if problems:
+        pytest.fail("\n\n".join(problems), pytrace=False)
 
 
 @pytest.fixture(scope="session")

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from iec2kmod import kbuild
+from iec2kmod.vm import pytest_fixtures as fx
 from iec2kmod.vm import (GuestCommandTimeout, GuestDied, GuestTimeout, KernelLogError,
                          CommandFailed)
 
@@ -48,7 +49,7 @@ def test_hello_module_built_after_boot_inserts_and_removes(guest, guest_tmp_path
     guest.rmmod("iec2kmod_hello")
     assert "iec2kmod_hello" not in guest.loaded_modules()
     assert "iec2kmod_hello: goodbye" in guest.dmesg(guest.baseline)
-    guest.check_kernel_log()                      # the teardown checks again
+    guest.check_kernel_log()                      # the teardown checks what follows
 
 
 def test_host_kmod_tools_work_in_chroot(guest, guest_tmp_path, kdir):
@@ -160,21 +161,51 @@ def test_check_kernel_log_reports_warnings(guest):
     with pytest.raises(KernelLogError) as ei:
         guest.check_kernel_log()
     assert "provoked by the test" in str(ei.value)
-    guest.check_kernel_log(allow=[r"provoked by the test"])
-    guest.baseline = guest.log_mark()            # keep the teardown check clean
-    guest.check_kernel_log()
+    guest.check_kernel_log()                     # reported once: consumed by the check
+    guest.check_call("echo 'BUG: allowed by the test' > /dev/kmsg")
+    guest.check_kernel_log(allow=[r"allowed by the test"])
+    guest.check_kernel_log()                     # the teardown check is clean too
+
+
+def test_kernel_warnings_between_two_tests_are_reported(guest, guest_tmp_path, kdir):
+    """What the kernel logs after a test's final check (here: a real WARN in
+    a module's exit path, and a line written to /dev/kmsg) fails the next
+    test's setup; the old per-test mark skipped it.  The fixture's own check
+    function is called for the two windows."""
+    ko = build_hello(guest_tmp_path, kdir)
+    guest.insmod(str(ko), "warn_on_exit=1")
+    assert fx.log_report(guest, "during test A") is None       # A's teardown: clean
+    guest.rmmod("iec2kmod_hello")                                # between A and B
+    guest.check_call("echo 'BUG: injected between two tests' > /dev/kmsg")
+    msg = fx.log_report(guest, "before test B")                  # B's setup
+    assert msg is not None and msg.startswith("kernel log before test B:"), msg
+    assert "WARNING:" in msg and "iec2kmod_hello_exit" in msg, msg
+    assert "BUG: injected between two tests" in msg, msg
+    assert fx.log_report(guest, "again") is None                # each line once
+    assert "iec2kmod_hello: goodbye" in guest.dmesg(guest.baseline)
 
 
 def test_guest_death_and_hang_are_reported(guest_factory):
     g = guest_factory(smp=1)
     assert g.run("echo up") == (0, "up\n")
+    # the guest panics after the test's last command returned: nobody sees
+    # it, yet the fixture's check reports the death and the console's lines
+    g.run("(sleep 1; echo c > /proc/sysrq-trigger) >/dev/null 2>&1 &")
+    deadline = time.monotonic() + 120
+    while g.alive and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not g.alive and g.dead_reason is None
+    msg = fx.factory_report(g, "in guest #1")
+    assert msg is not None and msg.startswith("the guest died in guest #1: QEMU exited"), msg
+    assert "Kernel panic - not syncing" in msg.split("last console lines")[0], msg
     with pytest.raises(GuestDied) as ei:
-        g.run("echo c > /proc/sysrq-trigger", timeout=60)
+        g.run("true", timeout=60)
     msg = str(ei.value)
     assert "last console lines" in msg and "sysrq" in msg.lower()
     assert not g.alive
     with pytest.raises(GuestDied):
         g.run("true")
+    assert fx.factory_report(g, "in guest #1") is None         # the test has seen it
 
     g2 = guest_factory(smp=1)
     os.kill(g2._proc.pid, signal.SIGSTOP)         # freeze the whole VM
