@@ -7,13 +7,13 @@ See :mod:`iec2kmod.vm.guest` and, for pytest, :mod:`iec2kmod.vm.pytest_fixtures`
 
 from .guest import (KERNEL_LOG_PATTERNS, CommandFailed, CommandResult, Guest,
                     GuestBootError, GuestCommandTimeout, GuestDied, GuestError,
-                    GuestTimeout, KernelLogError, kernel_log_problems)
+                    GuestTimeout, KernelLogError, KernelLogRead, kernel_log_problems)
 from .kernel import (KernelImage, VMSetupError, check_prerequisites, find_kernel,
                      pvh_vmlinux)
 
 __all__ = [
     "Guest", "GuestError", "GuestBootError", "GuestDied", "GuestTimeout",
-    "GuestCommandTimeout", "CommandFailed", "KernelLogError", "CommandResult",
+    "GuestCommandTimeout", "CommandFailed", "KernelLogError", "KernelLogRead", "CommandResult",
     "KERNEL_LOG_PATTERNS", "kernel_log_problems", "KernelImage", "VMSetupError",
     "check_prerequisites", "find_kernel", "pvh_vmlinux",
 ]

@@ -18,7 +18,14 @@ path as on the host, both in the initramfs and in a chroot of ``/host``.  So:
 The kernel is booted through its PVH entry (uncompressed ELF extracted from
 the bzImage once), which saves the firmware and decompression time.  An Oops
 panics the guest (``oops=panic``): the next use raises :class:`GuestDied` with
-the console tail, and the pytest fixture boots a fresh guest for the next test.
+the console tail; :meth:`Guest.death_report` lists the console's problem lines
+up to the death.  The pytest fixtures fail the test and boot a fresh guest for
+the next one.
+
+The kernel log is read with a cursor (:meth:`Guest.read_kernel_log`): a reader
+started at boot copies every ``/dev/kmsg`` record to a file in the guest, and
+each read returns the records past the last one, by sequence number, so every
+line is seen exactly once and records lost to a ring-buffer overrun are named.
 
 Commands travel over a virtio-serial port (binary clean, no tty line
 discipline) driven by a tiny shell agent; the kernel console (ttyS0) is logged
