@@ -26,7 +26,34 @@ A pipeline a person can read, one module per stage:
 
 Where the interpreter's results may legitimately differ from the C
 simulator's: the transcendental REAL/LREAL functions listed in
-std.ULP_TOLERANT (libm differences in the last ULP or two)."""
+std.ULP_TOLERANT -- LN LOG EXP SIN COS TAN ASIN ACOS ATAN ATAN2 EXPT --
+computed with Python's math module (the platform libm), where the C runtime
+has its own libm within 1-2 ULP of correctly rounded: they may differ in the
+last ULP or two.  + - * / and SQRT are exact IEEE operations in both.
+
+Readings of the standard where it leaves room (each one a decision, so the
+oracle is explicit about what it checks):
+
+  * A runtime error (division by zero, index or subrange violation, MUX
+    selector, loop budget) stops the task at the faulting operation: the
+    statement does not complete and nothing is stored; the fault names the
+    innermost POU and the line of the statement (of the condition, for
+    IF/ELSIF/WHILE/UNTIL).  The programs after it in the task's cycle do not
+    run, the other tasks go on.
+  * Every loop iteration -- WHILE, REPEAT, FOR, and an IL jump backwards --
+    costs one unit of the per-cycle loop budget (the kernel's,
+    LOOP_BUDGET), counted as the iteration starts.
+  * The inputs of a function are all evaluated before it runs (SEL and MUX
+    included), and both operands of AND/OR/XOR.
+  * EN = FALSE: the function or FB does not run, ENO is FALSE, a function
+    gives its result type's default value.
+  * Default initial values: 0, FALSE, '', T#0s, D#1970-01-01, an
+    enumeration's first value (or its declared initial value), a subrange's
+    lower limit.
+  * F_TRIG's memory starts as "CLK was FALSE" (M := 1), so a FALSE CLK on
+    the first call is no edge; R_EDGE/F_EDGE inputs of user blocks likewise.
+  * Conversions between time types and numbers count TIME and TOD in
+    milliseconds, DATE and DT in seconds, the L forms in nanoseconds."""
 
 from .errors import Fault, VMError
 from .machine import LOOP_BUDGET, Machine, VMResult, run
