@@ -182,8 +182,11 @@ from fakeguest import FakeGuest
 
 def _boot(workdir, logdir, **kw):
     fx._STATE["boots"] += 1
-    return FakeGuest(workdir, console_log=os.path.join(
+    g = FakeGuest(workdir, console_log=os.path.join(
         logdir, f"console-{fx._STATE['boots']}.log")).start()
+    if fx._STATE["boots"] == 2:         # the second session guest warns while booting
+        g.emit("WARNING: CPU: 0 PID: 1 at init/fake.c:7 boot_warning")
+    return g
 
 
 fx._boot = _boot
@@ -223,7 +226,11 @@ def test_e_dies_after_its_last_command(guest):
               "[    9.200000] Kernel panic - not syncing: Fatal exception")
 
 
-def test_f_runs_on_a_fresh_guest(guest):
+def test_f_runs_on_a_fresh_guest_that_warned_at_boot(guest):
+    pass
+
+
+def test_f2_same_fresh_guest(guest):
     assert fx._STATE["boots"] == 2 and guest.alive
 
 
@@ -282,7 +289,8 @@ def test_fixtures_fail_every_blind_spot_of_the_kernel_log(tmp_path):
     it; one logged after its final check fails the next test's setup, naming
     the test before; a guest that dies after a test's last command fails that
     test with the console's panic lines, and the next test gets a fresh
-    guest; a death between tests fails the next setup; a private guest's
+    guest, whose boot log is checked; a death between tests fails the next
+    setup; a private guest's
     unseen death and its warnings fail its test; the tail after the last test
     fails the run."""
     import subprocess
@@ -313,7 +321,11 @@ def test_fixtures_fail_every_blind_spot_of_the_kernel_log(tmp_path):
     assert "the guest died during this test: QEMU exited" in t
     scanned = t.split("last console lines")[0]
     assert "BUG: kernel NULL pointer dereference" in scanned and "Kernel panic" in scanned, t
-    assert kinds["test_f_runs_on_a_fresh_guest"] == [], text["test_f_runs_on_a_fresh_guest"]
+    t = text["test_f_runs_on_a_fresh_guest_that_warned_at_boot"]
+    assert kinds["test_f_runs_on_a_fresh_guest_that_warned_at_boot"] == ["error"], t
+    assert "failed on setup" in t and "kernel log while the guest booted" in t, t
+    assert "boot_warning" in t, t
+    assert kinds["test_f2_same_fresh_guest"] == [], text["test_f2_same_fresh_guest"]
     assert kinds["test_g_guest_dies_after_its_check"] == []
     t = text["test_h_innocent"]
     assert kinds["test_h_innocent"] == ["error"] and "failed on setup" in t, t
@@ -329,7 +341,7 @@ def test_fixtures_fail_every_blind_spot_of_the_kernel_log(tmp_path):
     t = text["test_z_last_test_leaves_a_tail"]
     assert kinds["test_z_last_test_leaves_a_tail"] == ["error"], t
     assert "end of the session" in t and "detected stalls" in t, t
-    assert "11 passed, 7 errors" in p.stdout, p.stdout
+    assert "11 passed, 8 errors" in p.stdout, p.stdout
 
 
 def _reader_guest(tmp_path):
