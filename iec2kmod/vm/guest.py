@@ -358,6 +358,7 @@ class Guest:
         self._klog_seq = -1
         self._klog_ts = 0.0
         self._klog_syncs = 0
+        self._klog_reads = 0
         self._console_bytes = 0
         self._console_mark = 0
         self.qemu_cmdline: List[str] = []
@@ -875,6 +876,7 @@ class Guest:
                 f"(exit {res.exit_code}; is the 'cat /dev/kmsg' loop started by the guest's "
                 f"init still running?): {res.output[-1000:]}")
         self._console_mark = console_mark
+        self._klog_reads += 1
         return self._consume_kmsg(res.output)
 
     def _consume_kmsg(self, data: str) -> KernelLogRead:
@@ -907,6 +909,12 @@ class Guest:
             lines += [f"[{stamp:>12}] {l}" for l in msg.split("\n")]
         self._klog_off += len(data[:end].encode("utf-8", "surrogateescape"))
         return KernelLogRead(lines, lost, self._klog_ts)
+
+    @property
+    def klog_reads(self) -> int:
+        """How many :meth:`read_kernel_log` calls have returned (0: the log
+        since boot is still unread)."""
+        return self._klog_reads
 
     @property
     def klog_last_ts(self) -> float:

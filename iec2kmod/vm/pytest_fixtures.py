@@ -191,19 +191,20 @@ def guest(guest_session, request):
     prev = _STATE["last_test"]
     _STATE["last_test"] = request.node.nodeid
     g = _STATE["guest"]
-    if g is not None:
-        msg = log_report(g, f"after {prev or 'boot'} ended and before this test started "
-                            "(most likely caused by that test)")
-        if msg is not None:
-            _retire_dead_guest()
-            pytest.fail(msg, pytrace=False)
-    fresh = _STATE["guest"] is None
+    if g is not None and not g.alive:
+        msg = log_report(g, f"after {prev or 'its boot'} ended and before this test started")
+        _retire_dead_guest()
+        pytest.fail(msg, pytrace=False)
     g = _live_guest()
-    if fresh:
-        msg = log_report(g, "while the guest booted")
-        if msg is not None:
-            _retire_dead_guest()
-            pytest.fail(msg, pytrace=False)
+    if g.klog_reads == 0:
+        window = "while the guest booted"
+    else:
+        window = (f"after {prev} ended and before this test started (most likely caused "
+                  "by that test)")
+    msg = log_report(g, window)
+    if msg is not None:
+        _retire_dead_guest()
+        pytest.fail(msg, pytrace=False)
     g.baseline = g.klog_last_ts
     yield g
     msg = log_report(g, "during this test")
