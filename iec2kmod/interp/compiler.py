@@ -430,6 +430,10 @@ class PouCompiler:
         if isinstance(res, LiteralT):
             res = ctx_t if ctx_t is not None and not isinstance(ctx_t, LiteralT) else res
         res = concrete(res) if not isinstance(res, LiteralT) else res
+        if isinstance(res, LiteralT) and fam not in ("ADD", "SUB", "MUL", "DIV", "MOD", "EXPT"):
+            # ABS(-3), MAX(1, 2) ... of untyped literals where nothing gives a
+            # type: the literal's own type (DINT, LINT or LREAL)
+            res = concrete(res)
         if fam in std.COMPARE or fam == "MUX" or fam in TIME_FAMILIES:
             # the operands' common type, not the (BOOL) result's
             ptypes = [concrete(pt) for pt in pts]
