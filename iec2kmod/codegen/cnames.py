@@ -23,6 +23,12 @@ def var(name: str) -> str:
     return "v_" + name.lower()
 
 
+def temp_proto(name: str) -> str:
+    """Member holding a fresh, bound copy of a VAR_TEMP that contains FB
+    instances: each call starts its temporary from it (pou.has_fb)."""
+    return "h_" + name.lower() + "_proto"
+
+
 def fn(name: str) -> str:
     return "fn_" + name.lower()
 

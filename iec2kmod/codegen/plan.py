@@ -183,7 +183,8 @@ def _pointer_binding(ip, b, by_var) -> PointerBinding:
             member.append("." + N.var(step))
             iec.append("." + step)
         else:
-            member.append(("." if member else "") + N.var(step.name))
+            name = N.temp_proto(step.name) if step.section == "VAR_TEMP" else N.var(step.name)
+            member.append(("." if member else "") + name)
             iec.append("." + step.name)
     pointer = b.steps[-1]
     target = None if b.in_program else by_var[id(b.target)]

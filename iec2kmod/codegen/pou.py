@@ -24,6 +24,19 @@ def member_decl(v) -> str:
     return N.declare(v.type, name) + ";"
 
 
+def has_fb(t) -> bool:
+    """Whether a value of type t contains a user FB instance (a VAR_TEMP of
+    such a type starts every call from a prototype member of the instance,
+    N.temp_proto, initialised and bound with it)."""
+    if isinstance(t, FBType):
+        return not t.pou.standard
+    if isinstance(t, ArrayT):
+        return has_fb(N.array_flat(t)[0])
+    if isinstance(t, StructT):
+        return any(has_fb(ft) for _, ft, _ in t.fields.values())
+    return False
+
+
 def pointer_members(pou, c_prefix="", iec_prefix="", counts=()):
     """Every pointer member that must be set when an instance of *pou* is
     initialised, as (C path from the instance with ``[*]`` for every element
@@ -38,6 +51,10 @@ def pointer_members(pou, c_prefix="", iec_prefix="", counts=()):
     out = []
     for v in pou.vars.values():
         c, iec = f"{c_prefix}{N.var(v.name)}", f"{iec_prefix}{v.name}"
+        if v.section == "VAR_TEMP":
+            if not has_fb(v.type):
+                continue
+            c = f"{c_prefix}{N.temp_proto(v.name)}"
         if v.section == "VAR_EXTERNAL" or (v.section == "VAR_IN_OUT" and pou.kind == "PROGRAM"):
             out.append((c, iec, counts))
         elif v.section != "VAR_IN_OUT":
@@ -176,6 +193,10 @@ def pou_struct(pou) -> list[str]:
             continue
         lines.append(f"\t/* {section} */")
         lines += ["\t" + member_decl(v) for v in vs]
+    protos = [v for v in pou.vars.values() if v.section == "VAR_TEMP" and has_fb(v.type)]
+    if protos:
+        lines.append("\t/* fresh copies of VAR_TEMPs holding FB instances, bound at init */")
+        lines += ["\t" + N.declare(v.type, N.temp_proto(v.name)) + ";" for v in protos]
     edges = [v for v in pou.inputs if v.edge]
     if edges:
         lines.append("\t/* edge detection of R_EDGE / F_EDGE inputs */")
@@ -194,6 +215,8 @@ def pou_init(project, pou) -> list[str]:
     f = Frame(ie.body_emitter())
     body = []
     for v in pou.vars.values():
+        if v.section == "VAR_TEMP" and has_fb(v.type):
+            body += ie.lines(f"self->{N.temp_proto(v.name)}", v.type, v.init, f)
         if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
             continue
         body += ie.lines(f"self->{N.var(v.name)}", v.type, v.init, f)
@@ -306,6 +329,13 @@ def pou_body(project, pou) -> list[str]:
     for v in pou.vars.values():
         if v.section == "VAR_TEMP":
             locals_.append(N.declare(v.type, N.var(v.name)) + ";")
+            if has_fb(v.type):
+                # a fresh instance whose externals are bound: the prototype
+                proto = f"self->{N.temp_proto(v.name)}"
+                init.append(f"iec_memcpy({'' if isinstance(v.type, ArrayT) else '&'}"
+                            f"{N.var(v.name)}, {'' if isinstance(v.type, ArrayT) else '&'}"
+                            f"{proto}, sizeof({N.var(v.name)}));")
+                continue
             init.append(f"iec_memset(&{N.var(v.name)}, 0, sizeof({N.var(v.name)}));")
             init += ie.lines(N.var(v.name), v.type, v.init, f)
     if any("for (i = 0;" in ln for ln in init):

@@ -1150,7 +1150,9 @@ class PouCompiler:
                 t = concrete(v.type)
                 if isinstance(t, FBType):
                     # a fresh instance per call, its externals bound in the caller's scope
-                    temps.append((v.key, None, (t.pou, v.init)))
+                    temps.append((v.key, None, (t.pou, v.init, None)))
+                elif isinstance(t, ArrayT) and isinstance(concrete(t.elem), FBType):
+                    temps.append((v.key, None, (concrete(t.elem).pou, None, t.count)))
                 else:
                     temps.append((v.key, m.maker(v), None))
         if not edges and not temps:
@@ -1160,7 +1162,12 @@ class PouCompiler:
         def body(env):
             iv = env.v
             for k, mk, fb in temps:
-                iv[k] = mk() if mk is not None else m.new_instance(fb[0], env.s, fb[1])
+                if mk is not None:
+                    iv[k] = mk()
+                elif fb[2] is None:
+                    iv[k] = m.new_instance(fb[0], env.s, fb[1])
+                else:
+                    iv[k] = [m.new_instance(fb[0], env.s, None) for _ in range(fb[2])]
             e = env.e
             for k, kind in edges:
                 cur = bool(iv[k])

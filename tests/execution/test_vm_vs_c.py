@@ -214,18 +214,6 @@ KNOWN = {
         "(ed.3 6.6.1): the interpreter faults at the line",
         "PROGRAM P\nVAR d : INT; x, y : INT; END_VAR\n  x := SEL(TRUE, 10 / d, 1);\n"
         "  y := MUX(0, 1, 10 / d);\nEND_PROGRAM\n", ["P"], 1),
-    "fb_instance_in_var_temp": (
-        "C cannot build an FB instance declared in VAR_TEMP whose block has a VAR_EXTERNAL: "
-        "the binding code names a struct member (v_tmp) that a temporary does not have, so "
-        "the generated C does not compile (internal error); the interpreter makes a fresh "
-        "instance per call, its externals bound to the globals in scope",
-        "FUNCTION_BLOCK Cnt\n  VAR_EXTERNAL g : INT; END_VAR\n  VAR_OUTPUT n : INT; END_VAR\n"
-        "  n := n + 1;\n  g := g + 1;\nEND_FUNCTION_BLOCK\nFUNCTION_BLOCK User\n"
-        "  VAR_TEMP tmp : Cnt; END_VAR\n  VAR_OUTPUT m : INT; END_VAR\n  tmp();\n"
-        "  m := tmp.n;\nEND_FUNCTION_BLOCK\nPROGRAM P\nVAR u : User; m : INT; END_VAR\n"
-        "  u(m => m);\nEND_PROGRAM\nCONFIGURATION C\n  VAR_GLOBAL g : INT; END_VAR\n"
-        "  RESOURCE R ON PLC\n    TASK T (INTERVAL := T#10ms, PRIORITY := 1);\n"
-        "    PROGRAM p WITH T : P;\n  END_RESOURCE\nEND_CONFIGURATION\n", None, 3),
 }
 
 
@@ -258,13 +246,3 @@ def test_known_c_difference(name, tmp_path):
         pytest.fail(f"the C simulator did not finish: {type(exc).__name__}: {exc}")
     diff = _strict_difference(c_res, vm_res)
     assert diff is None, diff
-
-
-def test_vm_fb_instance_in_var_temp(tmp_path):
-    """The interpreter's side of fb_instance_in_var_temp: a fresh instance
-    per call (n is 1 after every call), its external bound (g counts)."""
-    f = tmp_path / "temp_fb.st"
-    f.write_text(KNOWN["fb_instance_in_var_temp"][1])
-    res = interp.run(runner.check_project([f]), 20_000_000, watch=["g", "R.p.m"])
-    assert res.values_at() == {"g": 3, "R.p.m": 1}
-    assert not res.faults
