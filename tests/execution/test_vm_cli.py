@@ -73,3 +73,13 @@ def test_same_usage_errors(tmp_path):
         v, _, _ = sim(tmp_path, "vm", *args)
         assert c.returncode == 2
         assert (v.returncode, v.stderr) == (c.returncode, c.stderr)
+
+
+def test_vm_needs_no_c_compiler():
+    env = {**__import__("os").environ, "CC": "no-such-compiler"}
+    run = [sys.executable, "-m", "iec2kmod.cli", "sim", "examples/traffic_light", "--cycles", "3"]
+    v = subprocess.run(run + ["--engine", "vm"], cwd=ROOT, capture_output=True, text=True,
+                       timeout=600, env=env)
+    assert v.returncode == 0 and "simulated" in v.stdout, v.stderr
+    c = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=600, env=env)
+    assert c.returncode == 2 and "no C compiler" in c.stderr
