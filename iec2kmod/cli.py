@@ -126,7 +126,8 @@ def cmd_sim(args) -> int:
             from . import interp
             try:
                 machine = interp.Machine(project)
-                res = interp.run(project, end, watch=watch, inputs=args.inputs)
+                table = machine.table()
+                res = interp.run(project, end, watch=watch, inputs=args.inputs, machine=machine)
             except interp.VMError as exc:
                 raise sim.SimError(str(exc)) from None
         else:
@@ -145,7 +146,7 @@ def cmd_sim(args) -> int:
     if args.vcd:
         if args.engine == "vm":
             from types import SimpleNamespace
-            sim.write_vcd(res, args.vcd, SimpleNamespace(table=machine.table()))
+            sim.write_vcd(res, args.vcd, SimpleNamespace(table=table))
         else:
             from .codegen.plan import build_plan
             sim.write_vcd(res, args.vcd, build_plan(project))

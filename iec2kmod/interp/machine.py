@@ -494,9 +494,10 @@ def read_trace(path: str, table):
 _D = struct.Struct("<d")
 
 
-def run(project, end_ns: int, watch=None, inputs=None) -> VMResult:
-    """Runs the configuration from 0 to end_ns (inclusive) of simulated time."""
-    m = Machine(project)
+def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> VMResult:
+    """Runs the configuration from 0 to end_ns (inclusive) of simulated time
+    (on ``machine``, a fresh Machine of the project, when given)."""
+    m = machine if machine is not None else Machine(project)
     table = m.table()
     index = {e.path.upper(): i for i, e in enumerate(table)}
     if watch:
