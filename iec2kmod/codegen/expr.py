@@ -288,7 +288,7 @@ class ExprEmitter:
                 return f"((iec_bool)({fn}({a}, {b}) {_cop(op)} 0))"
             a = self.emit(f, e.left, c)
             b = self.emit(f, e.right, c)
-            return f"((iec_bool)({a} {_cop(op)} {b}))"
+            return compare(a, _cop(op), b, c)
         if op in ("AND", "OR", "XOR"):
             rtype = concrete(t)
             a = self.emit(f, e.left, rtype)
@@ -463,8 +463,8 @@ class ExprEmitter:
         if fam in ("SEL", "MUX", "MAX", "MIN", "LIMIT") and isinstance(res, StringT):
             return self.string_select(f, fam, args, res)
         if fam == "SEL":
-            g = self.emit(f, args[0], BOOL)
-            a, b = self.emit(f, args[1], res), self.emit(f, args[2], res)
+            g = self.eager(f, args[0], BOOL)
+            a, b = self.eager(f, args[1], res), self.eager(f, args[2], res)
             return f"({g} ? {b} : {a})"
         if fam in ("MAX", "MIN"):
             vs = [self.emit(f, a, res) for a in args]
@@ -476,12 +476,14 @@ class ExprEmitter:
             vs = [self.emit(f, a, res) for a in args]
             return f"iec_limit_{tag(res)}({', '.join(vs)})"
         if fam == "MUX":
-            k = self.emit(f, args[0], ELEMENTARY["LINT"])
+            # a function's inputs are all evaluated before it runs (a fault
+            # in one that is not selected is a fault), then K is checked
+            k = self.eager(f, args[0], ELEMENTARY["LINT"])
+            vs = [self.eager(f, a, res) for a in args[1:]]
             n = len(args) - 1
             sel = f.temp(ELEMENTARY["UDINT"], "mux")
             f.pre.append(f"{sel} = iec_mux_index(ctx, {k}, {n});")
             f.may_fault = True
-            vs = [self.emit(f, a, res) for a in args[1:]]
             out = vs[-1]
             for i in range(n - 2, -1, -1):
                 out = f"({sel} == {i} ? {vs[i]} : {out})"
@@ -495,7 +497,7 @@ class ExprEmitter:
                 parts = [f"({cmp}({vs[i]}, {vs[i + 1]}) {sym} 0)" for i in range(len(vs) - 1)]
             else:
                 vs = [self.emit(f, a, c) for a in args]
-                parts = [f"({vs[i]} {sym} {vs[i + 1]})" for i in range(len(vs) - 1)]
+                parts = [compare(vs[i], sym, vs[i + 1], c) for i in range(len(vs) - 1)]
             return "((iec_bool)(" + " && ".join(parts) + "))"
         if fam == "LEN":
             s = self.strv(f, args[0])
@@ -641,6 +643,19 @@ class ExprEmitter:
         f.pre.append(f"iec_{fam.lower()}_{w}({buf}, {', '.join(vals)});")
         return out
 
+    def eager(self, f, e, t):
+        """A scalar input of SEL/MUX: when it can fault it is computed into a
+        temporary before the selection, so that its fault is raised whether
+        or not it is selected (C's ?: would skip it)."""
+        before, f.may_fault = f.may_fault, False
+        code = self.emit(f, e, t)
+        if f.may_fault:
+            tmp = f.temp(t, "in")
+            f.pre.append(f"{tmp} = {code};")
+            code = tmp
+        f.may_fault = f.may_fault or before
+        return code
+
     def string_select(self, f, fam, args, res):
         # the result holds any of the inputs: as long as the longest one
         lens = [concrete(a.type).length for a in args[1 if fam in ("SEL", "MUX") else 0:]
@@ -704,6 +719,25 @@ def std_args(e):
 
 def tag_of(t):
     return N.type_tag(t)
+
+
+_CMP_NAME = {"==": "eq", "!=": "ne", "<": "lt", "<=": "le", ">": "gt", ">=": "ge"}
+
+
+def compare(a, sym, b, t):
+    """C for ``a sym b`` on operands of IEC type t.  Integers (and BOOL,
+    enumerations, times) go through the runtime's typed inline comparisons
+    (iec_int.h), so that a comparison the user may write but C finds
+    always true or false (u <= 255 on a USINT, w >= 0 on a UINT, x = x)
+    is not a -Wtype-limits/-Wtautological-compare error in the generated C;
+    reals keep C's operators (a NaN is not equal to itself)."""
+    if scalar_kind(t) == "real":
+        return f"((iec_bool)({a} {sym} {b}))"
+    t = concrete(t)
+    if isinstance(t, SubrangeT):
+        t = t.elem
+    unsigned = isinstance(t, Elementary) and t.cat in ("uint", "bit", "bool")
+    return f"iec_{_CMP_NAME[sym]}_{'u64' if unsigned else 's64'}({a}, {b})"
 
 
 def _cop(op):

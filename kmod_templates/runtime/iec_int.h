@@ -214,4 +214,28 @@ static inline iec_bool iec_xor_bool(iec_bool a, iec_bool b)
 }
 static inline iec_bool iec_not_bool(iec_bool a) { return !a; }
 
+/*
+ * Comparisons of integers, BOOL, enumerations and times, as the generated
+ * code writes them: the operands of one IEC type converted to 64 bits, so
+ * that a comparison C finds always true or false (u <= 255 on a USINT,
+ * w >= 0 on a UINT, x = x) compiles without -Wtype-limits or
+ * -Wtautological-compare; inlined, the code is the plain comparison.
+ */
+#define IEC__CMP(name, op)						\
+static inline iec_bool iec_##name##_s64(iec_s64 a, iec_s64 b)		\
+{									\
+	return a op b;							\
+}									\
+static inline iec_bool iec_##name##_u64(iec_u64 a, iec_u64 b)		\
+{									\
+	return a op b;							\
+}
+IEC__CMP(eq, ==)
+IEC__CMP(ne, !=)
+IEC__CMP(lt, <)
+IEC__CMP(le, <=)
+IEC__CMP(gt, >)
+IEC__CMP(ge, >=)
+#undef IEC__CMP
+
 #endif /* IEC_INT_H */

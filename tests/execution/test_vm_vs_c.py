@@ -193,27 +193,6 @@ KNOWN = {
         "PROGRAM P\nVAR j : DINT; work : DINT; END_VAR\n  WHILE TRUE DO\n"
         "    FOR j := 1 TO 997 DO\n      work := work + 1;\n    END_FOR;\n  END_WHILE;\n"
         "END_PROGRAM\n", ["P"], 1),
-    "compare_with_type_limit": (
-        "C cannot build a comparison of a variable with its type's limit (u <= 255 for a "
-        "USINT): gcc's -Werror=type-limits rejects the generated 'comparison is always true', "
-        "an internal error for a valid program",
-        "PROGRAM P\nVAR u : USINT; b : BOOL; END_VAR\n  b := u <= 255;\nEND_PROGRAM\n",
-        ["P"], 1),
-    "compare_unsigned_with_zero": (
-        "C cannot build 'w >= 0' on an unsigned variable: gcc's -Werror=type-limits rejects "
-        "the generated 'comparison of unsigned expression >= 0 is always true' (internal error)",
-        "PROGRAM P\nVAR w : UINT; b : BOOL; END_VAR\n  b := w >= 0;\nEND_PROGRAM\n", ["P"], 1),
-    "self_comparison": (
-        "C cannot build a comparison of a variable with itself (x = x, x < x): gcc's "
-        "-Werror=tautological-compare rejects the generated code (internal error)",
-        "PROGRAM P\nVAR x : INT; b : BOOL; END_VAR\n  b := x = x;\nEND_PROGRAM\n", ["P"], 1),
-    "sel_mux_evaluate_every_input": (
-        "C evaluates only the selected input of SEL and MUX (a C conditional), and checks MUX's "
-        "K before its inputs, so a division by zero in an unselected input does not fault; "
-        "SEL and MUX are functions, whose inputs are all evaluated before they run "
-        "(ed.3 6.6.1): the interpreter faults at the line",
-        "PROGRAM P\nVAR d : INT; x, y : INT; END_VAR\n  x := SEL(TRUE, 10 / d, 1);\n"
-        "  y := MUX(0, 1, 10 / d);\nEND_PROGRAM\n", ["P"], 1),
 }
 
 
