@@ -1,0 +1,488 @@
+"""Differential execution of generated projects (progen.py) in several engines.
+
+Engines:
+  c         the compiled C simulator (iec2kmod.sim, in process)
+  sanitize  the same with -fsanitize=undefined,address: any report is a failure
+  vm        the reference interpreter, ``iec2kmod sim --engine vm`` (through the
+            command line, its documented contract: same CSV output, runtime
+            errors on stderr as ``file:line: runtime error: F in POU (task T,
+            t=S s)``); used as soon as the CLI offers ``--engine vm``
+
+Several generated units share one configuration (one front-end run and one
+simulator build per engine for a whole batch); a batch that does not run
+(rejected, does not compile, crashes) is split into its units so that each
+failure is attributed to one project.
+
+Comparison: every watched variable (the whole variable table of the
+simulator: globals, direct addresses, program and FB instance variables)
+as the sequence of its changes over time, and every runtime fault as
+(time, task, fault, POU, line).  REAL/LREAL values may differ by at most
+``ULP_TOLERANCE`` units in the last place of their own width (transcendental
+functions come from different libms; the generator keeps such values out of
+control flow), NaNs are equal to each other, everything else must be equal.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import re
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent.parent
+# this checkout's package first, whatever is installed
+for _p in (str(HERE), str(ROOT)):
+    if _p in sys.path:
+        sys.path.remove(_p)
+    sys.path.insert(0, _p)
+
+import progen  # noqa: E402
+
+from iec2kmod import frontend, sim  # noqa: E402
+from iec2kmod.codegen.plan import build_plan  # noqa: E402
+
+ULP_TOLERANCE = 4
+INTERVAL_NS = 10_000_000
+SANITIZER_REPORT = re.compile(r"runtime error|Sanitizer|^==\d+==|SUMMARY:", re.M)
+FAULT_LINE = re.compile(r"^(.*):(\d+): runtime error: (.*) in (\S+) \(task (\S+), t=([0-9.]+) s\)")
+ALL_ENGINES = ("c", "sanitize", "vm")
+
+
+def cache_root() -> Path:
+    base = os.environ.get("IEC2KMOD_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "iec2kmod")
+    return Path(base)
+
+
+def vm_available() -> bool:
+    """Does `iec2kmod sim` offer --engine vm?"""
+    from iec2kmod.cli import build_parser
+    p = build_parser()
+    sub = next(a for a in p._actions if a.__class__.__name__ == "_SubParsersAction")
+    simp = sub.choices["sim"]
+    for a in simp._actions:
+        if "--engine" in a.option_strings:
+            return a.choices is None or "vm" in a.choices
+    return False
+
+
+def available_engines() -> list:
+    return ["c", "sanitize"] + (["vm"] if vm_available() else [])
+
+
+# ----------------------------------------------------------------- runs
+@dataclass
+class EngineRun:
+    engine: str
+    status: str                      # ok reject compile crash sanitizer error
+    detail: str = ""
+    changes: dict = field(default_factory=dict)    # NAME -> [(t, text)]
+    faults: list = field(default_factory=list)     # (t, task, fault, pou, line)
+    floats: set = field(default_factory=set)       # NAMEs of REAL/LREAL (kind f)
+    widths: dict = field(default_factory=dict)     # NAME -> 32|64 for floats
+
+    @property
+    def ok(self):
+        return self.status == "ok"
+
+
+def _text(v):
+    return sim.format_value(None, v)
+
+
+def _compress(seq):
+    out = []
+    for t, v in seq:
+        if out and out[-1][1] == v:
+            continue
+        out.append((t, v))
+    return out
+
+
+def project_of(paths):
+    """(project, None) or (None, first error message)."""
+    try:
+        res = frontend.run([str(p) for p in paths], use_cache=False)
+    except Exception as exc:  # noqa: BLE001 - a front-end crash is a finding
+        return None, f"front end crashed: {type(exc).__name__}: {exc}"
+    if not res.ok:
+        errs = [d.format() for d in res.diags.sorted() if d.severity == "error"]
+        return None, "\n".join(errs[:3])
+    return res.project, None
+
+
+def write_trace(events, table, path):
+    """The trace rows whose variable exists and is writable (a minimised
+    project may have lost some)."""
+    ok = {e.path.upper() for e in table if e.writable}
+    rows = [f"{t}ns,{p},{v}\n" for t, p, v in events if p.upper() in ok]
+    Path(path).write_text("".join(rows))
+    return len(rows)
+
+
+def run_c(project, plan, end_ns, trace, sanitize):
+    eng = "sanitize" if sanitize else "c"
+    watch = [e.path for e in plan.table]
+    try:
+        res = sim.run(project, end_ns, watch=watch, inputs=str(trace), sanitize=sanitize,
+                      build_dir=cache_root() / "sim", timeout=300)
+    except sim.InternalError as exc:
+        msg = str(exc)
+        if "did not compile" in msg:
+            return EngineRun(eng, "compile", msg[:1500])
+        if sanitize and SANITIZER_REPORT.search(msg):
+            return EngineRun(eng, "sanitizer", msg[:3000])
+        return EngineRun(eng, "crash", msg[:1500])
+    except subprocess.TimeoutExpired:
+        return EngineRun(eng, "crash", "the simulator did not finish in 300 s")
+    except sim.SimError as exc:
+        return EngineRun(eng, "error", str(exc))
+    if sanitize and SANITIZER_REPORT.search(res.stderr or ""):
+        return EngineRun(eng, "sanitizer", res.stderr[:3000])
+    run = EngineRun(eng, "ok")
+    for t, i, v in res.changes:
+        run.changes.setdefault(res.names[i].upper(), []).append((t, _text(v)))
+    run.faults = [(t, task, fault, pou, line) for t, task, fault, pou, _f, line in res.faults]
+    return run
+
+
+def run_vm(files, plan, end_ns, trace, workdir):
+    watch = [e.path for e in plan.table]
+    out = Path(workdir) / f"vm.{os.getpid()}.csv"
+    cmd = [sys.executable, "-m", "iec2kmod.cli", "sim", *map(str, files), "--engine", "vm",
+           "--duration", f"{end_ns}ns", "--inputs", str(trace), "--csv", str(out),
+           "--watch", ",".join(watch)]
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=str(ROOT),
+                           env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    except subprocess.TimeoutExpired:
+        return EngineRun("vm", "crash", "the interpreter did not finish in 900 s")
+    if p.returncode not in (0, 1) or not out.exists():
+        return EngineRun("vm", "crash" if p.returncode == 70 else "error",
+                         f"exit {p.returncode}: {p.stderr.strip()[-1500:]}")
+    run = EngineRun("vm", "ok")
+    with open(out, newline="") as fh:
+        rows = list(csv.reader(fh))
+    out.unlink(missing_ok=True)
+    head = [h.upper() for h in rows[0][1:]]
+    for row in rows[1:]:
+        t = int(row[0])
+        for name, v in zip(head, row[1:]):
+            if v == "":
+                continue
+            run.changes.setdefault(name, []).append((t, v))
+    for line in p.stderr.splitlines():
+        m = FAULT_LINE.match(line)
+        if m:
+            _f, ln, fault, pou, task, secs = m.groups()
+            run.faults.append((round(float(secs) * 1e9), task, fault, pou, int(ln)))
+    return run
+
+
+def _ulps(a: float, b: float, width: int) -> float:
+    if width == 32:
+        ia = struct.unpack("<i", struct.pack("<f", a))[0]
+        ib = struct.unpack("<i", struct.pack("<f", b))[0]
+        big = 1 << 31
+    else:
+        ia = struct.unpack("<q", struct.pack("<d", a))[0]
+        ib = struct.unpack("<q", struct.pack("<d", b))[0]
+        big = 1 << 63
+    # sign-magnitude to a monotonic integer line
+    ia = -(ia & (big - 1)) if ia < 0 else ia
+    ib = -(ib & (big - 1)) if ib < 0 else ib
+    return abs(ia - ib)
+
+
+def values_equal(a: str, b: str, width) -> bool:
+    if a == b:
+        return True
+    if not width:
+        return False
+    try:
+        x, y = float(a), float(b)
+    except ValueError:
+        return False
+    if math.isnan(x) and math.isnan(y):
+        return True
+    if math.isinf(x) or math.isinf(y):
+        return x == y
+    if x == y:
+        return True
+    try:
+        return _ulps(x, y, width) <= ULP_TOLERANCE
+    except (OverflowError, struct.error):
+        return False
+
+
+def compare(a: EngineRun, b: EngineRun, names, widths) -> str | None:
+    """None if the runs agree on names; else the first difference."""
+    fa = sorted(a.faults)
+    fb = sorted(b.faults)
+    if fa != fb:
+        return f"faults differ: {a.engine} {fa[:2]} / {b.engine} {fb[:2]}"
+    first = None
+    for n in names:
+        w = widths.get(n)
+        sa = _compress_tol(a.changes.get(n, []), w)
+        sb = _compress_tol(b.changes.get(n, []), w)
+        for k in range(max(len(sa), len(sb))):
+            x = sa[k] if k < len(sa) else None
+            y = sb[k] if k < len(sb) else None
+            if x is None or y is None or x[0] != y[0] or not values_equal(x[1], y[1], w):
+                t = min(z[0] for z in (x, y) if z is not None)
+                if first is None or t < first[0]:
+                    first = (t, f"t={t}ns {n}: {a.engine} {x} / {b.engine} {y}")
+                break
+    return first[1] if first else None
+
+
+def _compress_tol(seq, width):
+    out = []
+    for t, v in seq:
+        if out and values_equal(out[-1][1], v, width):
+            continue
+        out.append((t, v))
+    return out
+
+
+# ---------------------------------------------------------------- units
+@dataclass
+class UnitResult:
+    seed: int
+    features: set
+    problems: list = field(default_factory=list)   # (kind, engine(s), text)
+    statuses: dict = field(default_factory=dict)   # engine -> status
+
+    @property
+    def ok(self):
+        return not self.problems
+
+
+def unit_names(unit, table):
+    pre = unit.prefix.upper()
+    addrs = {a.upper() for a in unit.addresses}
+    return [e.path.upper() for e in table if e.path.upper().startswith(pre)
+            or e.path.upper() in addrs]
+
+
+def _widths(table):
+    return {e.path.upper(): (32 if e.size == 4 else 64) for e in table if e.kind == "f"}
+
+
+def end_ns(cycles):
+    return (cycles - 1) * INTERVAL_NS
+
+
+def run_units(units, engines, workdir, split_on_failure=True):
+    """Runs units as one batch; {unit seed: UnitResult}."""
+    workdir = Path(workdir)
+    workdir.mkdir(parents=True, exist_ok=True)
+    results = {u.seed: UnitResult(u.seed, u.features) for u in units}
+    files = []
+    for u in units:
+        f = workdir / f"{u.prefix}prog.st"
+        f.write_text(u.decl_text)
+        files.append(f)
+    cfg = workdir / "batch_config.st"
+    cfg.write_text(progen.config_text("fuzz_batch", units))
+    paths = files + [cfg]
+    project, err = project_of(paths)
+    if project is None:
+        if len(units) == 1 or not split_on_failure:
+            for u in units:
+                results[u.seed].problems.append(("reject", "front end", err))
+            return results
+        return _split(units, engines, workdir)
+    plan = build_plan(project)
+    trace = workdir / "trace.csv"
+    events = sorted((ev for u in units for ev in u.trace), key=lambda e: e[0])
+    write_trace(events, plan.table, trace)
+    end = end_ns(max(u.cycles for u in units))
+    runs = {}
+    for eng in engines:
+        if eng == "c":
+            runs[eng] = run_c(project, plan, end, trace, False)
+        elif eng == "sanitize":
+            runs[eng] = run_c(project, plan, end, trace, True)
+        elif eng == "vm":
+            if sum(len(e.path) + 1 for e in plan.table) > 100_000:
+                # too long for one command line argument: one unit at a time
+                return _split(units, engines, workdir)
+            runs[eng] = run_vm(paths, plan, end, trace, workdir)
+    bad = [e for e, r in runs.items() if not r.ok]
+    if bad and len(units) > 1 and split_on_failure:
+        return _split(units, engines, workdir)
+    widths = _widths(plan.table)
+    for u in units:
+        res = results[u.seed]
+        res.statuses = {e: r.status for e, r in runs.items()}
+        for e in bad:
+            r = runs[e]
+            res.problems.append((r.status, e, r.detail))
+        okr = [runs[e] for e in engines if runs[e].ok]
+        if len(okr) < 2:
+            continue
+        names = unit_names(u, plan.table)
+        pre = u.prefix.upper()
+        base = okr[0]
+        for other in okr[1:]:
+            ra = _restrict(base, pre)
+            rb = _restrict(other, pre)
+            d = compare(ra, rb, names, widths)
+            if d:
+                res.problems.append(("diff", f"{base.engine}/{other.engine}", d))
+    return results
+
+
+def _restrict(run, pre):
+    r = EngineRun(run.engine, run.status, run.detail, run.changes,
+                  [f for f in run.faults if f[1].upper().startswith(pre)])
+    return r
+
+
+def _split(units, engines, workdir):
+    out = {}
+    for u in units:
+        sub = Path(workdir) / f"solo_{u.seed}"
+        out.update(run_units([u], engines, sub, split_on_failure=False))
+        shutil.rmtree(sub, ignore_errors=True)
+    return out
+
+
+# ---------------------------------------------------------- standalone
+def run_text(text, events, engines, cycles, workdir):
+    """Runs one standalone project text: (EngineRuns by engine, error) where
+    error is the front end's message if it rejects the text."""
+    workdir = Path(workdir)
+    workdir.mkdir(parents=True, exist_ok=True)
+    f = workdir / "case.st"
+    f.write_text(text)
+    project, err = project_of([f])
+    if project is None:
+        return None, err
+    plan = build_plan(project)
+    trace = workdir / "trace.csv"
+    write_trace(events, plan.table, trace)
+    end = end_ns(cycles)
+    runs = {}
+    for eng in engines:
+        if eng in ("c", "sanitize"):
+            runs[eng] = run_c(project, plan, end, trace, eng == "sanitize")
+        else:
+            runs[eng] = run_vm([f], plan, end, trace, workdir)
+    runs["_names"] = [e.path.upper() for e in plan.table]
+    runs["_widths"] = _widths(plan.table)
+    return runs, None
+
+
+def signature(runs, err, engines):
+    """What kind of failure a standalone run shows (None: none)."""
+    if runs is None:
+        return ("reject", _first_error(err))
+    for e in engines:
+        if not runs[e].ok:
+            return (runs[e].status, e)
+    okr = [runs[e] for e in engines]
+    for other in okr[1:]:
+        if compare(okr[0], other, runs["_names"], runs["_widths"]):
+            return ("diff", f"{okr[0].engine}/{other.engine}")
+    return None
+
+
+def _first_error(err):
+    line = (err or "").splitlines()[0] if err else ""
+    msg = line.split("error: ", 1)[-1]
+    return re.sub(r"'[^']*'|[0-9]+", "_", msg)
+
+
+def first_difference(runs, engines):
+    okr = [runs[e] for e in engines if runs[e].ok]
+    for other in okr[1:]:
+        d = compare(okr[0], other, runs["_names"], runs["_widths"])
+        if d:
+            return d
+    bad = [runs[e] for e in engines if not runs[e].ok]
+    return bad[0].detail.splitlines()[0] if bad else None
+
+
+# ------------------------------------------------------------ minimiser
+def _blocks(lines):
+    """Removable chunks: a line together with the lines indented under it and
+    the closing line at its own indentation (IF ... END_IF, a VAR block, a
+    POU, a TYPE), else the line alone."""
+    out = []
+    i = 0
+    n = len(lines)
+
+    def indent(s):
+        return len(s) - len(s.lstrip())
+    while i < n:
+        s = lines[i]
+        j = i + 1
+        if s.strip() and re.match(r"\s*(IF|CASE|FOR|WHILE|REPEAT|VAR\w*|FUNCTION\w*|PROGRAM|"
+                                  r"RESOURCE|TYPE)\b", s, re.I) and \
+                not re.search(r"END_\w+\s*;?\s*$", s):
+            ind = indent(s)
+            while j < n and (not lines[j].strip() or indent(lines[j]) > ind or
+                             re.match(r"\s*(ELSIF|ELSE|UNTIL)\b", lines[j])):
+                j += 1
+            if j < n and re.match(r"\s*END_", lines[j]):
+                j += 1
+        out.append((i, j))
+        i = j
+    return out
+
+
+def minimise(text, events, cycles, engines, sig, workdir, budget=400, log=None):
+    """Delta debugging over lines and blocks of a standalone project while the
+    failure signature stays the same and the front end accepts the text
+    (except when the signature is a rejection)."""
+    calls = [0]
+
+    def still(lines):
+        if calls[0] >= budget:
+            return False
+        calls[0] += 1
+        runs, err = run_text("\n".join(lines) + "\n", events, engines, cycles, workdir)
+        return signature(runs, err, engines) == sig
+
+    lines = text.splitlines()
+    changed = True
+    while changed and calls[0] < budget:
+        changed = False
+        # whole blocks first, biggest first, then nested lines
+        for gran in (8, 4, 2, 1):
+            blocks = _blocks(lines)
+            k = 0
+            while k < len(blocks) and calls[0] < budget:
+                chunk = blocks[k:k + gran]
+                a, b = chunk[0][0], chunk[-1][1]
+                cand = lines[:a] + lines[b:]
+                if cand and still(cand):
+                    lines = cand
+                    blocks = _blocks(lines)
+                    changed = True
+                    if log:
+                        log(f"  minimise: {len(lines)} lines ({calls[0]} runs)")
+                    continue
+                k += gran
+        # single lines inside blocks
+        k = 0
+        while k < len(lines) and calls[0] < budget:
+            cand = lines[:k] + lines[k + 1:]
+            if still(cand):
+                lines = cand
+                changed = True
+                continue
+            k += 1
+    return "\n".join(lines) + "\n", calls[0]
