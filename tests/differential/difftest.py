@@ -302,7 +302,8 @@ def run_units(units, engines, workdir, split_on_failure=True):
             for u in units:
                 results[u.seed].problems.append(("reject", "front end", err))
             return results
-        return _split(units, engines, workdir)
+        m = re.search(r"u(\d+)_prog\.st", err or "")
+        return _split(units, engines, workdir, f"pou_u{m.group(1)}_" if m else "")
     plan = build_plan(project)
     trace = workdir / "trace.csv"
     events = sorted((ev for u in units for ev in u.trace), key=lambda e: e[0])
@@ -321,7 +322,7 @@ def run_units(units, engines, workdir, split_on_failure=True):
             runs[eng] = run_vm(paths, plan, end, trace, workdir)
     bad = [e for e, r in runs.items() if not r.ok]
     if bad and len(units) > 1 and split_on_failure:
-        return _split(units, engines, workdir)
+        return _split(units, engines, workdir, runs[bad[0]].detail)
     widths = _widths(plan.table)
     for u in units:
         res = results[u.seed]
@@ -350,11 +351,25 @@ def _restrict(run, pre):
     return r
 
 
-def _split(units, engines, workdir):
+def _split(units, engines, workdir, detail=""):
+    """A batch failed: the unit a compile error names runs alone, the others
+    as a batch; otherwise the batch is halved until the failures are single
+    units."""
     out = {}
-    for u in units:
-        sub = Path(workdir) / f"solo_{u.seed}"
-        out.update(run_units([u], engines, sub, split_on_failure=False))
+    workdir = Path(workdir)
+    m = re.search(r"pou_u(\d+)_", detail or "")
+    culprit = [u for u in units if m and u.prefix == f"u{m.group(1)}_"]
+    if culprit:
+        rest = [u for u in units if u is not culprit[0]]
+        parts = [culprit, rest]
+    else:
+        half = len(units) // 2
+        parts = [units[:half], units[half:]]
+    for n, part in enumerate(parts):
+        if not part:
+            continue
+        sub = workdir / f"part{n}"
+        out.update(run_units(part, engines, sub, split_on_failure=True))
         shutil.rmtree(sub, ignore_errors=True)
     return out
 
@@ -368,6 +383,8 @@ def run_text(text, events, engines, cycles, workdir):
     f = workdir / "case.st"
     f.write_text(text)
     project, err = project_of([f])
+    if project is not None and not project.configurations:
+        project, err = None, "error: no configuration"
     if project is None:
         return None, err
     plan = build_plan(project)
@@ -391,12 +408,28 @@ def signature(runs, err, engines):
         return ("reject", _first_error(err))
     for e in engines:
         if not runs[e].ok:
-            return (runs[e].status, e)
+            return (runs[e].status, e, failure_class(runs[e].detail))
     okr = [runs[e] for e in engines]
     for other in okr[1:]:
         if compare(okr[0], other, runs["_names"], runs["_widths"]):
             return ("diff", f"{okr[0].engine}/{other.engine}")
     return None
+
+
+def failure_class(detail):
+    """What stays the same while a failure is minimised: gcc's warning
+    option, the sanitizer's message kind, the exit status of a crash."""
+    m = re.search(r"\[-Werror=([\w-]+)\]", detail or "")
+    if m:
+        return m.group(1)
+    m = re.search(r"error: ([^\n\[]*)", detail or "")
+    if m and "did not compile" in detail:
+        return re.sub(r"[‘'][^’']*[’']|[0-9]+", "_", m.group(1))[:80]
+    m = re.search(r"runtime error: ([^\n]*)", detail or "")
+    if m:
+        return re.sub(r"'[^']*'|0x[0-9a-f]+|-?[0-9]+", "_", m.group(1))[:80]
+    m = re.search(r"failed \((-?\d+)\)", detail or "")
+    return m.group(1) if m else ""
 
 
 def _first_error(err):
@@ -416,30 +449,40 @@ def first_difference(runs, engines):
 
 
 # ------------------------------------------------------------ minimiser
-def _blocks(lines):
-    """Removable chunks: a line together with the lines indented under it and
-    the closing line at its own indentation (IF ... END_IF, a VAR block, a
-    POU, a TYPE), else the line alone."""
-    out = []
-    i = 0
-    n = len(lines)
+_OPEN = re.compile(r"\s*(IF|CASE|FOR|WHILE|REPEAT|VAR\w*|FUNCTION_BLOCK|FUNCTION|PROGRAM|"
+                   r"RESOURCE|CONFIGURATION|TYPE)\b", re.I)
+_CLOSE = {"IF": "END_IF", "CASE": "END_CASE", "FOR": "END_FOR", "WHILE": "END_WHILE",
+          "REPEAT": "END_REPEAT", "FUNCTION_BLOCK": "END_FUNCTION_BLOCK",
+          "FUNCTION": "END_FUNCTION", "PROGRAM": "END_PROGRAM", "RESOURCE": "END_RESOURCE",
+          "CONFIGURATION": "END_CONFIGURATION", "TYPE": "END_TYPE"}
 
-    def indent(s):
-        return len(s) - len(s.lstrip())
-    while i < n:
-        s = lines[i]
-        j = i + 1
-        if s.strip() and re.match(r"\s*(IF|CASE|FOR|WHILE|REPEAT|VAR\w*|FUNCTION\w*|PROGRAM|"
-                                  r"RESOURCE|TYPE)\b", s, re.I) and \
-                not re.search(r"END_\w+\s*;?\s*$", s):
-            ind = indent(s)
-            while j < n and (not lines[j].strip() or indent(lines[j]) > ind or
-                             re.match(r"\s*(ELSIF|ELSE|UNTIL)\b", lines[j])):
-                j += 1
-            if j < n and re.match(r"\s*END_", lines[j]):
-                j += 1
-        out.append((i, j))
-        i = j
+
+def _spans(lines):
+    """(start, end) of every construct the generator writes over several
+    lines (IF ... END_IF, VAR ... END_VAR, a POU, a resource), innermost
+    included; the generator puts one construct per line."""
+    out = []
+    for i, s in enumerate(lines):
+        m = _OPEN.match(s)
+        if not m or re.search(r"\bEND_\w+\s*;?\s*$", s):
+            continue
+        kw = m.group(1).upper()
+        if kw.startswith("VAR"):
+            close = "END_VAR"
+            opener = re.compile(r"\s*VAR", re.I)
+        else:
+            close = _CLOSE[kw]
+            opener = re.compile(rf"\s*{kw}\b", re.I)
+        depth = 0
+        for j in range(i, len(lines)):
+            t = lines[j]
+            if opener.match(t) and not re.search(r"\bEND_\w+\s*;?\s*$", t):
+                depth += 1
+            if re.match(rf"\s*{close}\b", t, re.I):
+                depth -= 1
+                if depth == 0:
+                    out.append((i, j + 1))
+                    break
     return out
 
 
@@ -460,29 +503,84 @@ def minimise(text, events, cycles, engines, sig, workdir, budget=400, log=None):
     changed = True
     while changed and calls[0] < budget:
         changed = False
-        # whole blocks first, biggest first, then nested lines
-        for gran in (8, 4, 2, 1):
-            blocks = _blocks(lines)
-            k = 0
-            while k < len(blocks) and calls[0] < budget:
-                chunk = blocks[k:k + gran]
-                a, b = chunk[0][0], chunk[-1][1]
-                cand = lines[:a] + lines[b:]
-                if cand and still(cand):
-                    lines = cand
-                    blocks = _blocks(lines)
-                    changed = True
-                    if log:
-                        log(f"  minimise: {len(lines)} lines ({calls[0]} runs)")
-                    continue
-                k += gran
-        # single lines inside blocks
-        k = 0
-        while k < len(lines) and calls[0] < budget:
-            cand = lines[:k] + lines[k + 1:]
-            if still(cand):
+        # constructs, biggest first (a POU, a resource, a loop ...)
+        tried = set()
+        while calls[0] < budget:
+            spans = sorted(_spans(lines), key=lambda ab: ab[0] - ab[1])
+            todo = [sp for sp in spans if tuple(lines[sp[0]:sp[1]]) not in tried]
+            if not todo:
+                break
+            a, b = todo[0]
+            tried.add(tuple(lines[a:b]))
+            cand = lines[:a] + lines[b:]
+            if cand and still(cand):
                 lines = cand
                 changed = True
-                continue
-            k += 1
+                if log:
+                    log(f"  minimise: {len(lines)} lines ({calls[0]} runs)")
+        # then single lines, bottom up
+        k = len(lines) - 1
+        while k >= 0 and calls[0] < budget:
+            if not re.match(r"\s*(END_|ELSE|ELSIF|UNTIL)", lines[k]):
+                cand = lines[:k] + lines[k + 1:]
+                if still(cand):
+                    lines = cand
+                    changed = True
+            k -= 1
+        if log:
+            log(f"  minimise: {len(lines)} lines ({calls[0]} runs)")
     return "\n".join(lines) + "\n", calls[0]
+
+
+# ------------------------------------------------------------- campaign
+def unit_seed(seed: int, i: int) -> int:
+    """The seed of the i-th project of a campaign (printed; --unit reruns it)."""
+    return seed * 1_000_003 + i
+
+
+def _batch_job(args):
+    seeds, engines, workdir, cycles = args
+    units = [progen.generate_unit(s, k, cycles) for k, s in enumerate(seeds)]
+    try:
+        return run_units(units, engines, workdir)
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+
+
+def campaign(seeds, engines, jobs=2, batch=10, cycles=100, workroot=None, progress=None):
+    """Runs the projects of the given seeds in batches on `jobs` processes;
+    returns [UnitResult] in seed order."""
+    import multiprocessing
+    workroot = Path(workroot or tempfile.mkdtemp(prefix="fuzzdiff-"))
+    chunks = [seeds[i:i + batch] for i in range(0, len(seeds), batch)]
+    args = [(c, engines, str(workroot / f"b{n}"), cycles) for n, c in enumerate(chunks)]
+    out = {}
+    if jobs <= 1:
+        for a in args:
+            r = _batch_job(a)
+            out.update(r)
+            if progress:
+                progress(r)
+    else:
+        ctx = multiprocessing.get_context("fork")
+        with ctx.Pool(jobs) as pool:
+            for r in pool.imap_unordered(_batch_job, args):
+                out.update(r)
+                if progress:
+                    progress(r)
+    shutil.rmtree(workroot, ignore_errors=True)
+    return [out[s] for s in seeds]
+
+
+def minimise_unit(seed, engines, cycles, workdir, budget=300, log=None):
+    """(minimal text, signature, first difference, runs) for a failing project."""
+    u = progen.generate_unit(seed, 0, cycles)
+    text = u.standalone()
+    runs, err = run_text(text, u.trace, engines, cycles, workdir)
+    sig = signature(runs, err, engines)
+    if sig is None:
+        return None
+    small, _ = minimise(text, u.trace, cycles, engines, sig, workdir, budget=budget, log=log)
+    runs, err = run_text(small, u.trace, engines, cycles, workdir)
+    first = err.splitlines()[0] if runs is None else first_difference(runs, engines)
+    return small, sig, first, u

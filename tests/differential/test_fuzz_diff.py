@@ -1,0 +1,59 @@
+"""Differential tier: random valid projects (progen.py) run in every engine
+available -- the C simulator, the C simulator under ASan+UBSan and, once
+`iec2kmod sim --engine vm` exists, the reference interpreter -- must give
+identical traces (faults included).  300 projects on a fixed seed, 100
+cycles each, in batches of 10 projects per simulator build on 2 processes.
+
+Reproduce or widen: python3 benchmarks/fuzz_diff.py --count 300 --seed 20261123
+(--unit SEED reruns one project, --keep DIR minimises what fails)."""
+
+from __future__ import annotations
+
+import collections
+import os
+import time
+
+import pytest
+
+import difftest
+
+pytestmark = pytest.mark.execution
+
+SEED = 20261123
+COUNT = int(os.environ.get("IEC2KMOD_FUZZ_COUNT", "300"))
+# every construct below must be reached by the campaign (a generator that
+# silently stopped producing one would make the tier pass for nothing)
+MUST_REACH = {
+    "fb_external_depth3", "external_array", "external_struct", "external_string",
+    "external_const", "fb_inout", "function_inout", "array_multidim", "array_of_fb", "struct",
+    "enum", "subrange", "std_CONCAT", "std_MID", "std_REPLACE", "std_FIND", "case", "case_enum",
+    "for_down", "for_variable_step", "for_const_step", "while", "repeat", "exit", "return",
+    "il_body", "il_deferred", "il_jump", "il_CALC", "il_fb_operators", "event_task",
+    "several_resources", "several_tasks", "connection_in_global", "connection_out_direct",
+    "located_I", "located_Q", "located_M", "var_constant", "var_temp", "std_fb_TON",
+    "std_fb_TOF", "std_fb_TP", "std_fb_CTUD", "std_fb_R_TRIG", "std_fb_F_TRIG", "std_fb_SR",
+    "std_fb_RS", "fuzzy_real", "edge_input", "user_function", "global_constant",
+}
+
+
+def test_generated_projects_agree():
+    engines = difftest.available_engines()
+    assert "c" in engines and "sanitize" in engines
+    seeds = [difftest.unit_seed(SEED, i) for i in range(COUNT)]
+    t0 = time.time()
+    results = difftest.campaign(seeds, engines, jobs=2, batch=10, cycles=100)
+    dt = time.time() - t0
+    assert len(results) == COUNT >= 300 or "IEC2KMOD_FUZZ_COUNT" in os.environ
+    reached = set().union(*(r.features for r in results))
+    missing = MUST_REACH - reached
+    assert not missing, f"the generator no longer reaches: {sorted(missing)}"
+    bad = [r for r in results if not r.ok]
+    kinds = collections.Counter(k for r in bad for k, _, _ in r.problems)
+    report = [f"{len(bad)} of {len(results)} projects failed ({dict(kinds)}) "
+              f"with engines {','.join(engines)} in {dt:.0f} s:"]
+    for r in bad[:15]:
+        for kind, eng, text in r.problems[:2]:
+            first = (text or "").strip().splitlines()[0][:400] if text else ""
+            report.append(f"  seed {r.seed}: {kind} [{eng}] {first}")
+    report.append("minimise one: python3 benchmarks/fuzz_diff.py --unit SEED --keep /tmp/found")
+    assert not bad, "\n".join(report)
