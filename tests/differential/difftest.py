@@ -155,6 +155,35 @@ def run_c(project, plan, end_ns, trace, sanitize):
     return run
 
 
+def run_vm_inproc(project, plan, end_ns, trace):
+    """The interpreter in this process (iec2kmod.interp.run, the function
+    behind `sim --engine vm`), on the project the front end already checked."""
+    from iec2kmod import interp
+    watch = [e.path for e in plan.table]
+    try:
+        machine = interp.Machine(project)
+        have = {e.path.upper() for e in machine.table()}
+        missing = [w for w in watch if w.upper() not in have]
+        if missing:
+            return EngineRun("vm", "error", f"the interpreter's variable table lacks "
+                             f"{len(missing)} of the simulator's: {missing[:5]}")
+        res = interp.run(project, end_ns, watch=watch, inputs=str(trace), machine=machine)
+    except interp.VMError as exc:
+        return EngineRun("vm", "error", f"VMError: {exc}")
+    except RecursionError as exc:
+        return EngineRun("vm", "crash", f"RecursionError: {exc}")
+    except Exception as exc:  # noqa: BLE001 - an interpreter crash is a finding
+        import traceback
+        tb = traceback.extract_tb(exc.__traceback__)[-1]
+        return EngineRun("vm", "crash", f"{type(exc).__name__}: {exc} at "
+                         f"{Path(tb.filename).name}:{tb.lineno}")
+    run = EngineRun("vm", "ok")
+    for t, i, v in res.changes:
+        run.changes.setdefault(res.names[i].upper(), []).append((t, _text(v)))
+    run.faults = [(t, task, fault, pou, line) for t, task, fault, pou, _f, line in res.faults]
+    return run
+
+
 def run_vm(files, plan, end_ns, trace, workdir):
     watch = [e.path for e in plan.table]
     out = Path(workdir) / f"vm.{os.getpid()}.csv"
@@ -316,10 +345,7 @@ def run_units(units, engines, workdir, split_on_failure=True):
         elif eng == "sanitize":
             runs[eng] = run_c(project, plan, end, trace, True)
         elif eng == "vm":
-            if sum(len(e.path) + 1 for e in plan.table) > 100_000:
-                # too long for one command line argument: one unit at a time
-                return _split(units, engines, workdir)
-            runs[eng] = run_vm(paths, plan, end, trace, workdir)
+            runs[eng] = run_vm_inproc(project, plan, end, trace)
     bad = [e for e, r in runs.items() if not r.ok]
     if bad and len(units) > 1 and split_on_failure:
         return _split(units, engines, workdir, runs[bad[0]].detail)
@@ -396,7 +422,7 @@ def run_text(text, events, engines, cycles, workdir):
         if eng in ("c", "sanitize"):
             runs[eng] = run_c(project, plan, end, trace, eng == "sanitize")
         else:
-            runs[eng] = run_vm([f], plan, end, trace, workdir)
+            runs[eng] = run_vm_inproc(project, plan, end, trace)
     runs["_names"] = [e.path.upper() for e in plan.table]
     runs["_widths"] = _widths(plan.table)
     return runs, None
