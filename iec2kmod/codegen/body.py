@@ -152,6 +152,8 @@ class BodyEmitter:
         if isinstance(s, ast.Assign):
             f = Frame(self)
             lines = self.assign_ref(f, s.target, s.value)
+            if f.may_fault and N.is_scalar(concrete(s.target.type)):
+                return self.guarded_assign(s.target, s.value, s.pos)
             return self.wrap(f, lines, s.pos)
         if isinstance(s, ast.CallStmt):
             return self.call_stmt(s.call, s.pos)
@@ -355,6 +357,33 @@ class BodyEmitter:
         if bit is not None:
             return [self.set_bit(f, code, target, bit, self.expr.emit(f, value, BOOL))]
         return self.assign_code(f, code, t, value)
+
+    def guarded_assign(self, target, value, pos) -> list[str]:
+        """A scalar assignment that can fault stores nothing when it faults:
+        the value, then the place (its indexes), then the subrange check of
+        the store are computed first, in that order, and the fault checked
+        before the store (the plain form would complete the statement with
+        the runtime's substitute value: element [low], 0, the low limit)."""
+        f = Frame(self)
+        t0 = target.type
+        t = concrete(t0)
+        n = self.next_temp()
+        val = f"val{n}"
+        f.decls.append(f"{N.ctype(t)} {val};")
+        f.pre.append(f"{val} = {self.expr.emit(f, value, t)};")
+        lv, lt, bit = self.expr.lvalue(f, target)
+        holder = self._holder_type(target) if bit is not None else concrete(lt)
+        ptr = f"ptr{n}"
+        f.decls.append(f"{N.ctype(holder)} *{ptr};")
+        f.pre.append(f"{ptr} = &{lv};")
+        if isinstance(t0, SubrangeT) and not _within(value, t0):
+            wide = "ulint" if scalar_kind(t0.elem) == "uint" else "lint"
+            f.pre.append(f"{val} = ({N.ctype(t0.elem)})iec_range_{wide}(ctx, {val}, "
+                         f"{t0.low}LL, {t0.high}LL);")
+        f.may_fault = False
+        store = self.set_bit(f, f"(*{ptr})", target, bit, val) if bit is not None else \
+            f"*{ptr} = {val};"
+        return self.wrap(f, [self.fault_check(pos), store], pos, check=False)
 
     def set_bit(self, f, code, target, bit, val):
         """x.bit := val, where val is a BOOL (0 or 1, never anything else)."""
@@ -620,7 +649,11 @@ class BodyEmitter:
             if op == "STN":
                 cr = f"((iec_bool)!{cr})" if concrete(cr_in) is BOOL else \
                     f"iec_not_{N.type_tag(cr_in)}({cr})"
-            lines += self.assign_ref(f, i.operand, Raw(cr, cr_in))
+            probe = Frame(self)
+            lines += self.assign_ref(probe, i.operand, Raw(cr, cr_in))
+            if probe.may_fault and N.is_scalar(concrete(i.operand.type)):
+                return out + self.guarded_assign(i.operand, Raw(cr, cr_in), i.pos)
+            f = probe
         elif op in ("S", "R") and not isinstance(getattr(i.operand, "type", None), FBType):
             lv, _, bit = self.expr.lvalue(f, i.operand)
             val = "1" if op == "S" else "0"

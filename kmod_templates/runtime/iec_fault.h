@@ -20,7 +20,11 @@
  *     which, if a fault is pending, records where (only the innermost POU,
  *     the first to locate it, is kept) and returns from the body.  A
  *     function returns its (defined) result variable; use
- *     IEC_FAULT_CHECK_RET(ctx, pou, line, retval) there.
+ *     IEC_FAULT_CHECK_RET(ctx, pou, line, retval) there.  A scalar
+ *     assignment that can fault computes its value, its place and its
+ *     subrange check first and is checked before the store, so a
+ *     faulting statement stores nothing (the defined values above never
+ *     reach a variable).
  *  3. Loops: every iteration of WHILE, REPEAT and FOR starts with
  *             if (!iec_loop_tick(ctx)) { IEC_FAULT_LOCATE...; return; }
  *     (IEC_LOOP_TICK(ctx, pou, line) does exactly this.)  The budget is

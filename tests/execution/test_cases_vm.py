@@ -19,10 +19,6 @@ _RUNS: dict = {}
 # cases whose expectation the interpreter does not meet, with the reason
 # (each names the difference between the C simulator and the standard)
 XFAIL: dict = {
-    "faults/div_zero_int.st":
-        "C difference: the C runtime completes a faulting statement with a substitute value "
-        "(q := 12 / 0 stores 0) before the task stops; the interpreter stops the task at the "
-        "faulting operation, as IEC 61131-3 defines no result for it, so q keeps 12",
 }
 
 

@@ -178,13 +178,6 @@ def _cfg(programs):
 
 
 KNOWN = {
-    "fault_substitute_store": (
-        "C completes a faulting statement with a substitute value: an out-of-range index "
-        "writes element [low] (a[0] := 14 here), a division stores 0, a subrange store "
-        "stores the low limit, before the task stops; the interpreter stops at the faulting "
-        "operation and stores nothing",
-        "PROGRAM P\nVAR a : ARRAY[0..3] OF INT; i : INT := 2; END_VAR\n"
-        "  a[i] := 10 + i;\n  i := i + 1;\nEND_PROGRAM\n", ["P"], 4),
     "for_loop_charge": (
         "C charges a constant-bound FOR loop's whole trip count to the loop budget before "
         "its first iteration, so when the budget is short it faults before running the "
