@@ -193,6 +193,17 @@ def modinfo(path: str) -> Dict[str, List[str]]:
     key = (path, st.st_mtime_ns, st.st_size)
     if key in _MODINFO_CACHE:
         return _MODINFO_CACHE[key]
+    try:
+        out = _read_modinfo(path, st.st_size)
+    except (struct.error, ValueError, IndexError, OSError, MemoryError, OverflowError) as exc:
+        # a truncated or corrupt file: offsets past its end, no string end
+        raise ModuleError(f"{path}: not a valid kernel module (truncated or corrupt: "
+                          f"{exc})") from None
+    _MODINFO_CACHE[key] = out
+    return out
+
+
+def _read_modinfo(path: str, size: int) -> Dict[str, List[str]]:
     with open(path, "rb") as f:
         head = f.read(64)
         if len(head) < 64 or head[:4] != b"\x7fELF" or head[4] != 2:
@@ -200,6 +211,8 @@ def modinfo(path: str) -> Dict[str, List[str]]:
         end = "<" if head[5] == 1 else ">"
         shoff, = struct.unpack_from(end + "Q", head, 0x28)
         shentsize, shnum, shstrndx = struct.unpack_from(end + "HHH", head, 0x3A)
+        if shoff + shentsize * shnum > size or shentsize < 64:
+            raise ValueError("section header table past the end of the file")
         f.seek(shoff)
         table = f.read(shentsize * shnum)
 
@@ -208,6 +221,8 @@ def modinfo(path: str) -> Dict[str, List[str]]:
 
         def section(i):
             s = sh(i)
+            if s[4] + s[5] > size:
+                raise ValueError(f"section {i} past the end of the file")
             f.seek(s[4])
             return f.read(s[5])
 
@@ -220,7 +235,8 @@ def modinfo(path: str) -> Dict[str, List[str]]:
                     if b"=" in item:
                         k, v = item.decode("utf-8", "replace").split("=", 1)
                         out.setdefault(k, []).append(v)
-    _MODINFO_CACHE[key] = out
+    if "vermagic" not in out:
+        raise ModuleError(f"{path}: not a kernel module (no .modinfo vermagic)")
     return out
 
 

@@ -206,3 +206,30 @@ def test_swap_candidates_from_a_project(tmp_path):
                                                                   "iec_p_counter_b")]
     assert got[0].ko == tmp_path / "iec_p_counter_b" / "iec_p_counter_b.ko"
     assert project.swap_candidates(str(tmp_path), {"COUNTER": "b", "MIXER": "a"}) == []
+
+
+def test_modinfo_of_truncated_or_corrupt_files_is_a_module_error(tmp_path):
+    """A truncated or corrupt .ko given to load/swap is a clear ModuleError
+    (one line from plc-manager, exit 1), never struct.error escaping as an
+    internal error (issue 9)."""
+    import random
+    import shutil
+    from plc_manager import kmod
+    elf = shutil.which("true") or "/bin/true"
+    data = open(elf, "rb").read()
+    assert data[:4] == b"\x7fELF"
+    rng = random.Random(9)
+    cuts = sorted({0, 3, 63, 64, 65, 200, len(data) // 2, len(data) - 1} |
+                  {rng.randrange(len(data)) for _ in range(40)})
+    variants = [data[:n] for n in cuts]
+    for _ in range(40):   # a few bytes of the headers flipped
+        b = bytearray(data)
+        for _ in range(3):
+            b[rng.randrange(0x20, 0x40)] ^= 0xFF
+        variants.append(bytes(b))
+    variants.append(data)  # a whole ELF file that is no module
+    for k, v in enumerate(variants):
+        p = tmp_path / f"bad{k}.ko"
+        p.write_bytes(v)
+        with pytest.raises(kmod.ModuleError):
+            kmod.modinfo(str(p))
