@@ -312,7 +312,13 @@ def pou_body(project, pou) -> list[str]:
             locals_.append("iec_u32 i;")
         locals_ += f.decls + be.pool_decls()
         locals_ += [f"{ct} {name};" for name, ct in sorted(be.cr_vars.items())]
-        out += ["\t" + ln for ln in locals_ + ["(void)ctx;"] + [x for x in f.pre + init if x]]
+        # a parameter the body does not use is valid IEC: every one is
+        # marked used (-Wunused-parameter is an error in the module build)
+        used = ["(void)ctx;"] + (["(void)ret;"] if not N.is_scalar(pou.vars[pou.key].type)
+                                 else [])
+        used += [f"(void){N.var(v.name)};" for v in pou.vars.values()
+                 if v.section in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")]
+        out += ["\t" + ln for ln in locals_ + used + [x for x in f.pre + init if x]]
         out += ["\t" + ln for ln in stmts]
         rv = be.ret_value()
         out.append(f"\treturn {rv};" if rv else "\treturn;")
