@@ -80,7 +80,10 @@ static void load_events(const char *path)
 		if (ev.var < 0 || ev.var >= sim_nvars)
 			die("event for an unknown variable");
 		ev.kind = kind;
-		if (kind == 'i') {
+		if (kind == 'i' && sim_vars[ev.var].kind == 'u') {
+			/* ULINT/LWORD: 2^63 and more do not fit a long long */
+			ev.i = (long long)strtoull(line + off, NULL, 10);
+		} else if (kind == 'i') {
 			ev.i = strtoll(line + off, NULL, 10);
 		} else if (kind == 'f') {
 			ev.f = strtod(line + off, NULL);

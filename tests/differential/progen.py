@@ -190,9 +190,7 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 #     the C build: tests/execution/cases/user/fuzz_inout_string_length.st
 #   inout_bit_access: w.3 as a BOOL VAR_IN_OUT argument fails the C build:
 #     tests/execution/cases/user/fuzz_inout_bit_access.st
-#   ulint_input_high: the C simulator reads an input event of 2^63 or more for a
-#     ULINT/LWORD as 2^63-1: tests/execution/cases/types/fuzz_ulint_input_high.st
-AVOID = {"fn_string_param", "inout_string_length", "inout_bit_access", "ulint_input_high"}
+AVOID = {"fn_string_param", "inout_string_length", "inout_bit_access"}
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
