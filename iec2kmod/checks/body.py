@@ -9,7 +9,7 @@ from . import stdlib
 from .symbols import POUInfo, Var
 from .types import (BOOL, ELEMENTARY, ERROR, INT, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, TIME, assignable, cat, common,
-                    concrete, is_bit, is_bool, is_int, is_num, literal_fits)
+                    concrete, identical, is_bit, is_bool, is_int, is_num, literal_fits)
 
 ARITH = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD"}
 COMPARE = {"=": "EQ", "<>": "NE", "<": "LT", ">": "GT", "<=": "LE", ">=": "GE"}
@@ -707,9 +707,16 @@ class BodyChecker:
                 self.expr(a.value)
                 return
             t = self.ref(a.value, write=True)
-            if not isinstance(t, ErrorT) and not _same_storage(t, param.type):
-                self.error(a.value.pos, f"VAR_IN_OUT '{param.name}' is {param.type.name}; "
-                                        f"{a.value!r} is {t.name}")
+            bit = any(k == "bit" for k, _, _ in a.value.accessors)
+            if bit and not isinstance(t, ErrorT):
+                # passed by reference, and a bit has no address of its own
+                self.error(a.value.pos, f"VAR_IN_OUT '{param.name}' of {pou.name} needs a variable: "
+                                f"the bit access {a.value!r} cannot be passed by reference")
+            elif not isinstance(t, ErrorT) and not identical(t, param.type):
+                # passed by reference: the argument must have the parameter's
+                # type itself (a STRING[8] is not a STRING[11])
+                self.error(a.value.pos, f"VAR_IN_OUT '{param.name}' of {pou.name} is "
+                                        f"{param.type.name}; {a.value!r} is {t.name}")
             return
         t = self.expr(a.value)
         self.check_assign(t, param.type, a.value, None, what=f"input '{param.name}'")
@@ -975,15 +982,6 @@ def _literal_value(e):
             return None
         return a + b if e.op == "+" else a - b if e.op == "-" else a * b
     return None
-
-
-def _same_storage(a, b) -> bool:
-    from .types import same
-    if a is b or same(a, b):
-        return True
-    if isinstance(a, StringT) and isinstance(b, StringT):
-        return a.wide == b.wide and a.length == b.length
-    return False
 
 
 def _describe(node):

@@ -9,7 +9,7 @@ from .body import BodyChecker
 from .declare import ConstError, address_span, check_address_type
 from .symbols import (Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo,
                       TaskInfo, Var)
-from .types import BOOL, ERROR, ArrayT, ErrorT, FBType, StructT, assignable, same
+from .types import BOOL, ERROR, ArrayT, ErrorT, FBType, StructT, assignable, identical
 
 MAX_PRIORITY = 48   # IEC 0 (most urgent) .. 48 -> SCHED_FIFO 49 .. 1
 
@@ -519,14 +519,11 @@ class ConfigChecker:
 
 
 def _same_type(a, b):
-    if a is b or same(a, b):
-        return True
-    from .types import StringT
-    if isinstance(a, StringT) and isinstance(b, StringT):
-        return a.wide == b.wide and a.length == b.length
-    if isinstance(a, FBType) and isinstance(b, FBType):
-        return a.pou is b.pou
-    return False
+    """An external, an IN_OUT connection, an access path or a VAR_CONFIG
+    entry refers to the global itself: the types must be identical (a
+    STRING[4] external of a STRING[8] global would be a reference of the
+    wrong size)."""
+    return identical(a, b)
 
 
 def _const(decl, v):

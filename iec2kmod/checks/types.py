@@ -240,12 +240,31 @@ def literal_fits(lit: LiteralT, target: Type) -> bool:
 
 
 def same(a: Type, b: Type) -> bool:
+    """Values of a may be stored in b as they are (a string of another
+    length is truncated; the elements of arrays must be identical)."""
     if a is b:
         return True
     if isinstance(a, StringT) and isinstance(b, StringT):
         return a.wide == b.wide
     if isinstance(a, ArrayT) and isinstance(b, ArrayT):
-        return a.dims == b.dims and same(a.elem, b.elem)
+        return identical(a, b)
+    return False
+
+
+def identical(a: Type, b: Type) -> bool:
+    """The same type, with the same storage: what a reference (VAR_IN_OUT,
+    VAR_EXTERNAL) and the elements of an array assignment need.  A STRING[8]
+    is not a STRING[4] here: an array of one is not copied element by
+    element into an array of the other, and a reference to one cannot
+    stand for the other."""
+    if a is b:
+        return True
+    if isinstance(a, StringT) and isinstance(b, StringT):
+        return a.wide == b.wide and a.length == b.length
+    if isinstance(a, ArrayT) and isinstance(b, ArrayT):
+        return a.dims == b.dims and identical(a.elem, b.elem)
+    if isinstance(a, FBType) and isinstance(b, FBType):
+        return a.pou is b.pou
     return False
 
 

@@ -12,7 +12,7 @@ from ..checks import stdlib
 from ..checks.body import IL_ARITH, IL_COMPARE, IL_LOGIC, _CR
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT, FBType,
-                            LiteralT, StringT, StructT, SubrangeT, concrete)
+                            LiteralT, StringT, StructT, SubrangeT, concrete, identical)
 from . import analysis
 from . import cnames as N
 from .expr import (BindingError, CodegenError, CRNode, ExprEmitter, Frame, Raw, _const_int,
@@ -571,8 +571,13 @@ class BodyEmitter:
         return result_code
 
     def by_reference(self, f, e, t):
-        """Pointer to a string/array/struct argument (functions take them const)."""
-        if isinstance(e, ast.Ref):
+        """Pointer to a string/array/struct argument (functions take them
+        const).  A variable of the parameter's own type is passed where it
+        is; anything else (an expression, a string of another length, which
+        the function sees truncated to its parameter's) is first copied
+        into a temporary of the parameter's type."""
+        if isinstance(e, ast.Ref) and e.type is not None and identical(concrete(e.type),
+                                                                       concrete(t)):
             lv, _, _ = self.expr.lvalue(f, e)
             return lv if isinstance(t, ArrayT) else f"&{lv}"
         tmp = f.temp(t)
