@@ -38,6 +38,7 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--batch", type=int, default=10, help="projects per simulator build")
     ap.add_argument("--cycles", type=int, default=100, help="cycles of 10 ms per project")
+    ap.add_argument("--size", type=float, default=1.0, help="body size factor of the projects")
     ap.add_argument("--no-minimise", action="store_true")
     ap.add_argument("--budget", type=int, default=250, help="runs per minimisation")
     a = ap.parse_args(argv)
@@ -61,7 +62,7 @@ def main(argv=None):
                     first = (text or "").strip().splitlines()[0][:300] if text else ""
                     print(f"{s}: {kind} [{eng}] {first}", flush=True)
     results = difftest.campaign(seeds, engines, jobs=a.jobs, batch=a.batch, cycles=a.cycles,
-                                progress=progress)
+                                progress=progress, size=a.size)
     dt = time.time() - t0
     kinds = collections.Counter()
     feats = collections.Counter()
@@ -79,14 +80,14 @@ def main(argv=None):
         keep = Path(a.keep)
         keep.mkdir(parents=True, exist_ok=True)
         for r in bad:
-            u = progen.generate_unit(r.seed, 0, a.cycles)
+            u = progen.generate_unit(r.seed, 0, a.cycles, a.size)
             (keep / f"p{r.seed}.st").write_text(u.standalone())
             (keep / f"p{r.seed}.csv").write_text(u.trace_csv())
             if a.no_minimise:
                 continue
             print(f"minimising {r.seed} ...", flush=True)
             m = difftest.minimise_unit(r.seed, engines, a.cycles, keep / f"work{r.seed}",
-                                       budget=a.budget)
+                                       budget=a.budget, size=a.size)
             if m is None:
                 print(f"  {r.seed}: does not fail alone (batch interaction?)")
                 continue

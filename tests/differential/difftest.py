@@ -565,21 +565,22 @@ def unit_seed(seed: int, i: int) -> int:
 
 
 def _batch_job(args):
-    seeds, engines, workdir, cycles = args
-    units = [progen.generate_unit(s, k, cycles) for k, s in enumerate(seeds)]
+    seeds, engines, workdir, cycles, size = args
+    units = [progen.generate_unit(s, k, cycles, size) for k, s in enumerate(seeds)]
     try:
         return run_units(units, engines, workdir)
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
 
 
-def campaign(seeds, engines, jobs=2, batch=10, cycles=100, workroot=None, progress=None):
+def campaign(seeds, engines, jobs=2, batch=10, cycles=100, workroot=None, progress=None,
+             size=1.0):
     """Runs the projects of the given seeds in batches on `jobs` processes;
     returns [UnitResult] in seed order."""
     import multiprocessing
     workroot = Path(workroot or tempfile.mkdtemp(prefix="fuzzdiff-"))
     chunks = [seeds[i:i + batch] for i in range(0, len(seeds), batch)]
-    args = [(c, engines, str(workroot / f"b{n}"), cycles) for n, c in enumerate(chunks)]
+    args = [(c, engines, str(workroot / f"b{n}"), cycles, size) for n, c in enumerate(chunks)]
     out = {}
     if jobs <= 1:
         for a in args:
@@ -598,9 +599,9 @@ def campaign(seeds, engines, jobs=2, batch=10, cycles=100, workroot=None, progre
     return [out[s] for s in seeds]
 
 
-def minimise_unit(seed, engines, cycles, workdir, budget=300, log=None):
+def minimise_unit(seed, engines, cycles, workdir, budget=300, log=None, size=1.0):
     """(minimal text, signature, first difference, runs) for a failing project."""
-    u = progen.generate_unit(seed, 0, cycles)
+    u = progen.generate_unit(seed, 0, cycles, size)
     text = u.standalone()
     runs, err = run_text(text, u.trace, engines, cycles, workdir)
     sig = signature(runs, err, engines)

@@ -2,9 +2,10 @@
 available -- the C simulator, the C simulator under ASan+UBSan and, once
 `iec2kmod sim --engine vm` exists, the reference interpreter -- must give
 identical traces (faults included).  300 projects on a fixed seed, 100
-cycles each, in batches of 10 projects per simulator build on 2 processes.
+cycles each, in batches of 15 projects per simulator build on 2 processes
+(bodies 0.6 of the benchmark's default size, to stay within the CI budget).
 
-Reproduce or widen: python3 benchmarks/fuzz_diff.py --count 300 --seed 20261123
+Reproduce or widen: python3 benchmarks/fuzz_diff.py --count 300 --seed 20261123 --size 0.6
 (--unit SEED reruns one project, --keep DIR minimises what fails)."""
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ pytestmark = pytest.mark.execution
 
 SEED = 20261123
 COUNT = int(os.environ.get("IEC2KMOD_FUZZ_COUNT", "300"))
+SIZE = 0.6          # statements per body relative to the benchmark's default
 # every construct below must be reached by the campaign (a generator that
 # silently stopped producing one would make the tier pass for nothing)
 MUST_REACH = {
@@ -41,7 +43,7 @@ def test_generated_projects_agree():
     assert "c" in engines and "sanitize" in engines
     seeds = [difftest.unit_seed(SEED, i) for i in range(COUNT)]
     t0 = time.time()
-    results = difftest.campaign(seeds, engines, jobs=2, batch=10, cycles=100)
+    results = difftest.campaign(seeds, engines, jobs=2, batch=15, cycles=100, size=SIZE)
     dt = time.time() - t0
     assert len(results) == COUNT >= 300 or "IEC2KMOD_FUZZ_COUNT" in os.environ
     reached = set().union(*(r.features for r in results))
