@@ -190,7 +190,11 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 #   il_literal_cr: the interpreter does not wrap an IL current result computed
 #     from untyped literals (LD 38 SUB 40) when it is stored (ST u: -2 in a UINT):
 #     tests/execution/cases/il/fuzz_il_literal_cr_store.il
-AVOID = {"fault_in_call_arg", "il_literal_cr"}
+#   fault_in_for_head: a FOR whose step (or bound) faults has already set its
+#     control variable in C: tests/execution/cases/faults/fuzz_fault_for_step.st
+#   fault_in_string_store: a STRING (or aggregate) assignment whose index or value
+#     faults still stores in C: tests/execution/cases/faults/fuzz_fault_string_*.st
+AVOID = {"fault_in_call_arg", "il_literal_cr", "fault_in_for_head", "fault_in_string_store"}
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
@@ -886,6 +890,15 @@ class Gen:
         if not lv:
             return None
         path, t, v = self.pick(lv)
+        if t.kind in ("string", "array", "struct") and "fault_in_string_store" in AVOID:
+            was, self.safe = self.safe, True
+            try:
+                return self._assignment(path, t, v, scope, d)
+            finally:
+                self.safe = was
+        return self._assignment(path, t, v, scope, d)
+
+    def _assignment(self, path, t, v, scope, d):
         lhs = self.render_path(path, scope, d)
         if v.sink:
             self.feat("fuzzy_real")
@@ -1020,6 +1033,7 @@ class Gen:
             step = step if step is not None else -1
             self.feat("for_down")
         a, b = str(lo), str(hi)
+        was, self.safe = self.safe, self.safe or "fault_in_for_head" in AVOID
         if self.chance(0.3):
             self.feat("for_variable_bounds")
             e = self.expr(v.ty, scope)
@@ -1031,6 +1045,7 @@ class Gen:
             st = f" BY {'-' if step < 0 else ''}(ABS({e} MOD 3) + 1)"
         elif step is not None:
             self.feat("for_const_step")
+        self.safe = was
         v.reserved = True
         rng = (v.name, min(lo, hi), max(lo, hi))
         ranged = not a.startswith("(")

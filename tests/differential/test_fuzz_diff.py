@@ -2,7 +2,7 @@
 available -- the C simulator, the C simulator under ASan+UBSan and, once
 `iec2kmod sim --engine vm` exists, the reference interpreter -- must give
 identical traces (faults included).  300 projects on a fixed seed, 100
-cycles each, in batches of 15 projects per simulator build on 2 processes
+cycles each, in batches of 20 projects per simulator build on 2 processes
 (bodies 0.6 of the benchmark's default size, to stay within the CI budget).
 
 Reproduce or widen: python3 benchmarks/fuzz_diff.py --count 300 --seed 20261123 --size 0.6
@@ -43,7 +43,7 @@ def test_generated_projects_agree():
     assert "c" in engines and "sanitize" in engines
     seeds = [difftest.unit_seed(SEED, i) for i in range(COUNT)]
     t0 = time.time()
-    results = difftest.campaign(seeds, engines, jobs=2, batch=15, cycles=100, size=SIZE)
+    results = difftest.campaign(seeds, engines, jobs=2, batch=20, cycles=100, size=SIZE)
     dt = time.time() - t0
     assert len(results) == COUNT >= 300 or "IEC2KMOD_FUZZ_COUNT" in os.environ
     reached = set().union(*(r.features for r in results))
