@@ -38,6 +38,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "else Debian's linux-headers-rt-amd64)")
     bp.add_argument("--container", action="store_true",
                     help="build inside the project's container image (docker)")
+    bp.add_argument("--sparse", action="store_true",
+                    help="also run sparse on every source (make C=1; Debian package "
+                         "sparse); a sparse warning fails the build")
     bp.add_argument("-j", "--jobs", type=int, default=0, help="make -j (default: cores)")
     s = sub.add_parser("sim", help="run a configuration on the host with a simulated clock")
     s.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
@@ -180,7 +183,7 @@ def cmd_build(args) -> int:
     from .kmod.build import BuildError, build_tree
     try:
         result = build_tree(args.tree, kdir=args.kdir, container=args.container,
-                            jobs=args.jobs)
+                            jobs=args.jobs, sparse=args.sparse)
     except BuildError as exc:
         print(f"iec2kmod: error: {exc}", file=sys.stderr)
         return exc.exit_code

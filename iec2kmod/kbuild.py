@@ -108,9 +108,11 @@ class BuildResult:
         return self.returncode == 0
 
     def warnings(self) -> List[str]:
-        """Compiler/modpost warning lines (``warning:`` / ``WARNING:``)."""
+        """Compiler/modpost/sparse warning lines (``warning:`` / ``WARNING:``),
+        and sparse's ``error:`` lines (sparse reports them without failing
+        the build)."""
         return [l for l in self.output.splitlines()
-                if re.search(r"\bwarning:|^WARNING:", l, re.IGNORECASE)]
+                if re.search(r"\bwarning:|^WARNING:|: error:", l, re.IGNORECASE)]
 
     def check(self) -> "BuildResult":
         if not self.ok:
@@ -151,13 +153,29 @@ def _which(prog: str) -> Optional[str]:
     return None
 
 
+SPARSE_PACKAGE = "sparse"
+
+
+def require_sparse() -> str:
+    """The sparse binary (kbuild's ``C=1`` checker), or :class:`KbuildError`
+    naming the package to install."""
+    sparse = _which("sparse")
+    if not sparse:
+        raise KbuildError(f"'sparse' not found: apt-get install {SPARSE_PACKAGE} "
+                          f"(or run scripts/setup.sh)")
+    return sparse
+
+
 def build_modules(moddir: str, *, kdir: Optional[str] = None, warnings: bool = True,
-                  extra_args: Sequence[str] = (), timeout: float = 600,
-                  jobs: Optional[int] = None) -> BuildResult:
-    """``make -C KDIR M=MODDIR W=1 modules``; returns the result (does not raise on
-    a failed build; call ``.check()`` for that)."""
+                  sparse: bool = False, extra_args: Sequence[str] = (),
+                  timeout: float = 600, jobs: Optional[int] = None) -> BuildResult:
+    """``make -C KDIR M=MODDIR W=1 modules`` (with ``C=1``: sparse checks every
+    source it compiles); returns the result (does not raise on a failed build;
+    call ``.check()`` for that)."""
     kdir = kdir or find_kdir()
-    extra = (["W=1"] if warnings else []) + list(extra_args)
+    if sparse:
+        require_sparse()
+    extra = (["W=1"] if warnings else []) + (["C=1"] if sparse else []) + list(extra_args)
     return _make(kdir, moddir, ["modules"], extra, timeout, jobs)
 
 

@@ -48,7 +48,7 @@ command -v apt-get >/dev/null || die "apt-get not found: this script supports De
 
 # ---------------------------------------------------------------- 1. apt ----
 PKGS=(linux-headers-rt-amd64 qemu-system-x86 busybox-static docker.io debootstrap
-      rt-tests cpio valgrind kmod make gcc libc6-dev)
+      rt-tests cpio valgrind kmod make gcc libc6-dev sparse)
 APT_UPDATED=0
 apt_update_once() {
     if [ "$APT_UPDATED" = 0 ]; then

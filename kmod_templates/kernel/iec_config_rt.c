@@ -34,12 +34,14 @@ DEFINE_STATIC_SRCU(iec_gft_srcu);
 static DEFINE_MUTEX(iec_gft_mutex);	/* serialises publications */
 
 void iec2kmod_image_lock(void)
+	__acquires(iec_image_lock)
 {
 	raw_spin_lock(&iec_image_raw_lock);
 }
 EXPORT_SYMBOL_GPL(iec2kmod_image_lock);
 
 void iec2kmod_image_unlock(void)
+	__releases(iec_image_lock)
 {
 	raw_spin_unlock(&iec_image_raw_lock);
 }

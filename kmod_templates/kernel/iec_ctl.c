@@ -324,20 +324,24 @@ bad_size:
 }
 
 /*
- * Takes @t's var_lock at a cycle boundary (no cycle running).  Sleeps
- * between tries; -EBUSY if the task stays inside one cycle for about a
- * second.  Returns 0 with the lock held.
+ * Copies @len bytes from @src to @dst under @t's var_lock at a cycle
+ * boundary (no cycle running).  Sleeps between tries; -EBUSY if the task
+ * stays inside one cycle for about a second.
  */
 #define IEC_BOUNDARY_TRIES	1000
 
-static int iec_task_boundary_lock(struct iec_task *t)
+static int iec_task_boundary_copy(struct iec_task *t, void *dst,
+				  const void *src, u32 len)
 {
 	int i;
 
 	for (i = 0;; i++) {
 		raw_spin_lock(&t->var_lock);
-		if (!t->in_cycle)
+		if (!t->in_cycle) {
+			memcpy(dst, src, len);
+			raw_spin_unlock(&t->var_lock);
 			return 0;
+		}
 		raw_spin_unlock(&t->var_lock);
 		if (i == IEC_BOUNDARY_TRIES)
 			return -EBUSY;
@@ -357,18 +361,12 @@ static u32 iec_value_len(const struct iec_var_desc *d)
 
 static int iec_var_read(const struct iec_var_ref *ref, void *buf, u32 len)
 {
-	if (ref->task) {
-		int err = iec_task_boundary_lock(ref->task);
-
-		if (err)
-			return err;
-		memcpy(buf, ref->desc->addr, len);
-		raw_spin_unlock(&ref->task->var_lock);
-	} else {
-		iec2kmod_image_lock();
-		memcpy(buf, ref->desc->addr, len);
-		iec2kmod_image_unlock();
-	}
+	if (ref->task)
+		return iec_task_boundary_copy(ref->task, buf, ref->desc->addr,
+					      len);
+	iec2kmod_image_lock();
+	memcpy(buf, ref->desc->addr, len);
+	iec2kmod_image_unlock();
 	return 0;
 }
 
@@ -803,12 +801,9 @@ static int iec_nl_var_set(struct sk_buff *skb, struct genl_info *info)
 
 		if (!t)
 			continue;
-		err = iec_task_boundary_lock(t);
-		if (err)
-			break;
-		memcpy(refs[i].desc->addr, nla_data(refs[i].value),
-		       nla_len(refs[i].value));
-		raw_spin_unlock(&t->var_lock);
+		err = iec_task_boundary_copy(t, refs[i].desc->addr,
+					     nla_data(refs[i].value),
+					     nla_len(refs[i].value));
 	}
 	if (err)
 		NL_SET_ERR_MSG(info->extack, "the task stays inside a cycle");

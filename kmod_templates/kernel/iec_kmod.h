@@ -160,8 +160,8 @@ struct iec_config {
 /* --- exported by the configuration module ----------------------------- */
 
 /* The lock of copy-in/copy-out: a raw spinlock, short bounded sections. */
-void iec2kmod_image_lock(void);
-void iec2kmod_image_unlock(void);
+void iec2kmod_image_lock(void) __acquires(iec_image_lock);
+void iec2kmod_image_unlock(void) __releases(iec_image_lock);
 
 /* Runs the body in GFT slot @slot on @self (SRCU read side inside);
  * -ENOENT when the slot is empty, -ENODATA after a fault. */
