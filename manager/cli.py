@@ -95,7 +95,7 @@ def status_text(st) -> str:
     out.append(table(["RESOURCE", "CPU", "MODULE", "TASKS"],
                      [[r.name, r.cpu if r.cpu >= 0 else "any", r.module, len(r.tasks)]
                       for r in st.resources]) if st.resources else "no resource registered")
-    rows, faults = [], []
+    rows, faults, long = [], [], []
     for t in st.tasks():
         ran = t.cycles > 0
         rows.append([t.path, t.state, fmt_period(t.interval_ns), t.priority, t.last_cpu,
@@ -106,12 +106,16 @@ def status_text(st) -> str:
                      t.overruns, t.faults])
         if t.fault:
             faults.append(f"  {t.path}: {t.fault} in {t.fault_pou} line {t.fault_line}")
+        if (t.in_cycle_ns or 0) >= 100_000_000:
+            long.append(f"  {t.path}: inside one cycle for {t.in_cycle_ns // 1_000_000} ms")
     if rows:
         out += ["", table(["TASK", "STATE", "PERIOD", "PRIO", "CPU", "CYCLES",
                            "EXEC us min/avg/max", "JITTER us avg/max", "OVERRUNS", "FAULTS"],
                           rows, right=(3, 4, 5, 8, 9))]
     if faults:
         out += ["", "faults:"] + faults
+    if long:
+        out += ["", "tasks inside a long cycle (stop and unload wait for them, with a bound):"] + long
     out += ["", table(["SLOT", "PROGRAM TYPE", "MODULE", "BUILD", "SINCE"],
                       [[s.index, s.type_name, s.module or "(empty)", s.build_id or "-",
                         fmt_since(s.since_ns, st.now_ns)] for s in st.slots])]

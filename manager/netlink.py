@@ -76,6 +76,7 @@ ATTRIBUTES = [
     ("IEC_A_TASK_INDEX", "uint32"),
     ("IEC_A_VALUE", "cdata"),
     ("IEC_A_ALL", "flag"),
+    ("IEC_A_IN_CYCLE_NS", "int64"),
 ]
 
 STATES = {0: "stopped", 1: "running", 2: "fault"}
@@ -129,6 +130,7 @@ class Task:
     fault: Optional[str] = None
     fault_pou: Optional[str] = None
     fault_line: Optional[int] = None
+    in_cycle_ns: Optional[int] = None    # inside a cycle now, for so long
 
     @property
     def path(self) -> str:
@@ -227,7 +229,7 @@ def _task_from(nl, resource: str) -> Task:
         latency_avg_ns=a["IEC_A_LAT_AVG_NS"], latency_max_ns=a["IEC_A_LAT_MAX_NS"],
         histogram=[int.from_bytes(hist[i:i + 8], "little") for i in range(0, len(hist), 8)],
         fault=a.get("IEC_A_FAULT_NAME"), fault_pou=a.get("IEC_A_FAULT_POU"),
-        fault_line=a.get("IEC_A_FAULT_LINE"))
+        fault_line=a.get("IEC_A_FAULT_LINE"), in_cycle_ns=a.get("IEC_A_IN_CYCLE_NS"))
 
 
 def _status_from(msg) -> Status:

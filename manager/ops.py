@@ -7,12 +7,20 @@ load   check the manifest and the kernel release; insert the configuration
        way removes what was inserted.
 swap   check the new program-type modules (interface hash against the
        running slot, kernel release, files) before inserting anything; insert
-       each one (its init publishes it: RCU pointer swap, then
-       synchronize_srcu, so no task can still run the old body, and the old
-       module's reference is dropped); confirm the slot runs the new build
+       each one (its init publishes it: RCU pointer swap, then a grace
+       period: every task cycle running at the swap has ended, so no task
+       can still run the old body, and the old module's reference is
+       dropped); confirm the slot runs the new build
        and a cycle ran it; remove the old module.  Timed step by step.
 stop   stop the tasks; remove the resources (their exit joins the threads),
        clear the GFT, remove the program types and the configuration.
+
+Nothing waits for ever: the kernel bounds every wait for a task (stop,
+clear, publication: its wait_ms parameter, 1 s by default, plus four task
+periods) and fails with ETIMEDOUT when a task does not come back from its
+cycle; the manager then names the task (from the status: how long it has
+been inside its cycle) in one line and exits 1.  What such a task may
+still run stays loaded (its resource module, the program type it runs).
 """
 
 from __future__ import annotations
@@ -61,6 +69,33 @@ def running_state(st: Status) -> Optional[State]:
             m.get("source_hash") != st.source_hash:
         return None
     return s
+
+
+def _stuck(c: Client) -> str:
+    """The tasks inside a cycle for longer than a second, as the kernel
+    reports them: 'task r.t (inside one cycle for 1234 ms)'."""
+    try:
+        st = c.status()
+    except PLCError:
+        return ""
+    late = sorted((t for t in st.tasks() if (t.in_cycle_ns or 0) >= 100_000_000),
+                  key=lambda t: -(t.in_cycle_ns or 0))
+    return ", ".join(f"task {t.path} (inside one cycle for {t.in_cycle_ns // 1_000_000} ms)"
+                     for t in late)
+
+
+def _kernel_call(c: Client, what: str, fn, *args):
+    """A netlink command; ETIMEDOUT (a task did not come back within the
+    kernel's bound) becomes one line naming the task."""
+    try:
+        return fn(*args)
+    except KernelError as e:
+        if e.code != errno.ETIMEDOUT:
+            raise
+        who = _stuck(c) or "a task"
+        raise PLCError(f"{what}: {who} does not come back; the kernel gave up waiting "
+                       f"(/sys/module/<configuration module>/parameters/wait_ms); what it may "
+                       f"still run stays loaded") from None
 
 
 def _wait_tasks(c: Client, pred, what: str, timeout: float = 5.0) -> Status:
@@ -180,7 +215,7 @@ def unload(config_module: str, progress: Progress = _quiet) -> List[str]:
     resources: List[str] = []
     try:
         with Client() as c:
-            c.stop()
+            _kernel_call(c, "stop", c.stop)
             st = c.status()
             resources = [r.module for r in st.resources]
             for m in resources:
@@ -188,7 +223,7 @@ def unload(config_module: str, progress: Progress = _quiet) -> List[str]:
                 kmod.remove(m)
                 removed.append(m)
                 progress(f"  removed {m:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
-            c.clear()
+            _kernel_call(c, "clear", c.clear)
     except NotLoaded:
         pass
     for m in kmod.holders(config_module):
@@ -211,12 +246,12 @@ def stop(keep_loaded: bool = False, resource: Optional[str] = None,
         st = c.status()
         if resource:
             r = _resource(st, resource)
-            c.stop(r.name)
+            _kernel_call(c, "stop", c.stop, r.name)
             _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()
                                          if t.resource == r.name), "stop")
             progress(f"stopped resource {r.name} ({len(r.tasks)} tasks)")
             return
-        c.stop()
+        _kernel_call(c, "stop", c.stop)
         _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()), "stop")
         progress(f"stopped every task of {st.configuration}")
         if keep_loaded:
@@ -366,7 +401,7 @@ def _swap_one(c: Client, cand: Candidate, st: Status, state: Optional[State], t_
 
     # confirm the slot, then wait for a cycle that certainly ran the new
     # body: every cycle in flight at the publication was waited for by
-    # synchronize_srcu, but one may still be accounting; two more cycles
+    # the grace period, but one may still be accounting; two more cycles
     # than at the confirmation leave no doubt
     st = c.status()
     s2 = st.slot(cand.type_name)
@@ -399,14 +434,17 @@ def _swap_one(c: Client, cand: Candidate, st: Status, state: Optional[State], t_
         try:
             kmod.remove(slot.module)
         except PLCError as e:
+            who = _stuck(c)
             raise PLCError(f"swapped {slot.type_name} to build {cand.build_id}, but the old "
-                           f"module could not be removed: {e}") from None
+                           f"module could not be removed: {e}" +
+                           (f" ({who} does not come back: the old body may still run there)"
+                            if who else "")) from None
         step.remove_ms = _ms(t4, time.perf_counter())
     if state is not None:
         state.swapped(cand)
     progress(f"swapped {slot.type_name}: {slot.module or '(empty slot)'} -> {cand.module}")
     progress(f"  insert + publish   {step.insert_ms:8.2f} ms   (RCU pointer swap, "
-             f"synchronize_srcu: no task runs the old body)")
+             f"grace period: no task runs the old body)")
     progress(f"  confirm slot       {step.confirm_ms:8.2f} ms   (slot runs build "
              f"{cand.build_id})")
     if step.first_cycle_ms is not None:

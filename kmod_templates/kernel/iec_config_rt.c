@@ -6,21 +6,35 @@
  * GFT protocol (seed 000, hot code change):
  *  - a slot holds an RCU pointer to the program type it runs and a module
  *    reference on that type's module, so a body in use cannot be unloaded;
- *  - tasks call bodies inside an SRCU read section (a PLC cycle may be
- *    long: SRCU keeps it out of the global RCU grace periods);
+ *  - bodies run only inside task cycles, which both ends mark under the
+ *    task's var_lock (cycle_seq, iec2kmod_cycle_begin/end): the cycles are
+ *    the read-side critical sections;
  *  - publishing a new type: check the interface hash, take a reference on
- *    the new module, rcu_assign_pointer, synchronize_srcu (no task can
- *    still be running the old body), drop the old module's reference;
+ *    the new module, rcu_replace_pointer, then a grace period: wait until
+ *    every cycle that was running at the replacement has ended (a later
+ *    cycle sees the new pointer: the var_lock orders it), then drop the
+ *    old module's reference;
  *  - clearing a slot (manager, before removing a program module) does the
  *    same with NULL.
+ *
+ * The grace period is our own, not synchronize_srcu(): a PLC cycle may be
+ * long, and a task whose body never returns (a thread that died inside
+ * it) would make an SRCU grace period endless, with the manager blocked
+ * in it.  Ours waits with a bound (iec2kmod_wait_bound()) and can name
+ * the task that does not come back.  When the bound passes, the old body
+ * stays "retired" on its slot with its module reference (the module
+ * cannot be removed: no use-after-free), the command fails with
+ * -ETIMEDOUT, and the next publication or clear of the slot tries again.
  */
+#include <linux/jiffies.h>
 #include <linux/kernel.h>
+#include <linux/moduleparam.h>
 #include <linux/module.h>
 #include <linux/mutex.h>
 #include <linux/sched.h>
 #include <linux/spinlock.h>
-#include <linux/srcu.h>
 #include <linux/timekeeping.h>
+#include <linux/wait.h>
 #include <asm/fpu/api.h>
 
 #include "iec_kmod.h"
@@ -30,8 +44,49 @@ LIST_HEAD(iec_resources);
 DEFINE_MUTEX(iec_resources_lock);
 
 static DEFINE_RAW_SPINLOCK(iec_image_raw_lock);
-DEFINE_STATIC_SRCU(iec_gft_srcu);
 static DEFINE_MUTEX(iec_gft_mutex);	/* serialises publications */
+
+/* woken by the tasks at the end of a cycle and when they go idle */
+DECLARE_WAIT_QUEUE_HEAD(iec_ack_wq);
+
+static unsigned int wait_ms = 1000;
+module_param(wait_ms, uint, 0644);
+MODULE_PARM_DESC(wait_ms,
+		 "longest wait for a task (stop, slot clear, publication), in ms, plus four task periods (default 1000)");
+
+unsigned long iec2kmod_wait_bound(s64 interval_ns)
+{
+	u64 ns = (u64)clamp_t(unsigned int, READ_ONCE(wait_ms), 10, 600000) *
+		 NSEC_PER_MSEC;
+
+	if (interval_ns > 0)
+		ns += 4 * min_t(u64, interval_ns, 60ULL * NSEC_PER_SEC);
+	return nsecs_to_jiffies(ns) + 1;
+}
+EXPORT_SYMBOL_GPL(iec2kmod_wait_bound);
+
+void iec2kmod_task_idle(struct iec_task *t)
+{
+	smp_store_release(&t->active, false);
+	if (wq_has_sleeper(&iec_ack_wq))
+		wake_up_all(&iec_ack_wq);
+}
+EXPORT_SYMBOL_GPL(iec2kmod_task_idle);
+
+/* Names a task that did not come back within the bound. */
+void iec_task_stuck_report(const char *what, struct iec_resource *r,
+			   struct iec_task *t)
+{
+	unsigned long seq = smp_load_acquire(&t->cycle_seq);
+
+	if (seq & 1)
+		pr_err("iec2kmod: %s: task %s.%s does not come back: inside one cycle for %lld ms\n",
+		       what, r->name, t->name,
+		       ktime_ms_delta(ktime_get(), READ_ONCE(t->cycle_start)));
+	else
+		pr_err("iec2kmod: %s: task %s.%s does not come back: it does not acknowledge\n",
+		       what, r->name, t->name);
+}
 
 void iec2kmod_image_lock(void)
 	__acquires(iec_image_lock)
@@ -47,15 +102,15 @@ void iec2kmod_image_unlock(void)
 }
 EXPORT_SYMBOL_GPL(iec2kmod_image_unlock);
 
+/* Called by a task inside its cycle: the cycle is the read-side section. */
 int iec2kmod_run_program(u32 slot, void *self, struct iec_ctx *ctx)
 {
 	struct iec_program_type *type;
-	int idx, ret = 0;
+	int ret = 0;
 
 	if (slot >= iec_cfg->nslots)
 		return -EINVAL;
-	idx = srcu_read_lock(&iec_gft_srcu);
-	type = srcu_dereference(iec_cfg->slots[slot].cur, &iec_gft_srcu);
+	type = rcu_dereference_raw(iec_cfg->slots[slot].cur);
 	if (!type) {
 		ret = -ENOENT;
 	} else if (type->uses_fpu) {
@@ -65,7 +120,6 @@ int iec2kmod_run_program(u32 slot, void *self, struct iec_ctx *ctx)
 	} else {
 		type->body(self, ctx);
 	}
-	srcu_read_unlock(&iec_gft_srcu, idx);
 	if (!ret && ctx->fault != IEC_FAULT_NONE)
 		ret = -ENODATA;
 	return ret;
@@ -82,20 +136,103 @@ static int iec_gft_find(const char *name)
 	return -1;
 }
 
+static bool iec_gp_passed(void)
+{
+	struct iec_resource *r;
+	u32 i;
+
+	list_for_each_entry(r, &iec_resources, node) {
+		for (i = 0; i < r->ntasks; i++) {
+			struct iec_task *t = &r->tasks[i];
+
+			if ((t->gp_snap & 1) &&
+			    smp_load_acquire(&t->cycle_seq) == t->gp_snap)
+				return false;
+		}
+	}
+	return true;
+}
+
+/*
+ * The grace period: waits until every task cycle running now has ended,
+ * at most the bound of the slowest such task.  -ETIMEDOUT (after naming
+ * the task) if one did not end.  The caller holds iec_gft_mutex.
+ */
+static int iec_gft_grace_period(const char *what)
+{
+	struct iec_resource *r;
+	s64 longest = -1;
+	int ret = 0;
+	u32 i;
+
+	mutex_lock(&iec_resources_lock);
+	list_for_each_entry(r, &iec_resources, node) {
+		for (i = 0; i < r->ntasks; i++) {
+			struct iec_task *t = &r->tasks[i];
+
+			/* the lock orders the replaced pointer before the
+			 * task's next cycle_begin, or that begin before us */
+			raw_spin_lock(&t->var_lock);
+			t->gp_snap = t->cycle_seq;
+			raw_spin_unlock(&t->var_lock);
+			if (t->gp_snap & 1)
+				longest = max(longest, t->interval_ns);
+		}
+	}
+	if (longest >= 0 &&
+	    !wait_event_timeout(iec_ack_wq, iec_gp_passed(),
+				iec2kmod_wait_bound(longest))) {
+		ret = -ETIMEDOUT;
+		list_for_each_entry(r, &iec_resources, node)
+			for (i = 0; i < r->ntasks; i++)
+				if ((r->tasks[i].gp_snap & 1) &&
+				    smp_load_acquire(&r->tasks[i].cycle_seq) ==
+				    r->tasks[i].gp_snap)
+					iec_task_stuck_report(what, r, &r->tasks[i]);
+	}
+	mutex_unlock(&iec_resources_lock);
+	return ret;
+}
+
+/* Drops the references of the slot's retired bodies after a grace period. */
+static int iec_gft_sync(struct iec_gft_slot *slot, const char *what)
+{
+	struct iec_program_type *p;
+	int ret;
+
+	lockdep_assert_held(&iec_gft_mutex);
+	if (!slot->retired)
+		return 0;
+	ret = iec_gft_grace_period(what);
+	if (ret) {
+		pr_err("iec2kmod: slot %s: %s stays loaded until that cycle ends\n",
+		       slot->type_name, module_name(slot->retired->owner));
+		return ret;
+	}
+	/* no task runs a retired body any more: their modules may go */
+	while ((p = slot->retired)) {
+		slot->retired = p->retired_next;
+		p->retired_next = NULL;
+		module_put(p->owner);
+	}
+	return 0;
+}
+
 /* Replaces the body of a slot; the caller holds iec_gft_mutex. */
-static void iec_gft_replace(struct iec_gft_slot *slot,
-			    struct iec_program_type *new)
+static int iec_gft_replace(struct iec_gft_slot *slot,
+			   struct iec_program_type *new, const char *what)
 {
 	struct iec_program_type *old;
 
 	old = rcu_replace_pointer(slot->cur, new,
 				  lockdep_is_held(&iec_gft_mutex));
-	synchronize_srcu(&iec_gft_srcu);
-	/* no task runs the old body any more: its module may go */
-	if (old)
-		module_put(old->owner);
+	if (old) {
+		old->retired_next = slot->retired;
+		slot->retired = old;
+	}
 	slot->since = ktime_get_real();
 	slot->publications++;
+	return iec_gft_sync(slot, what);
 }
 
 int iec2kmod_gft_publish(struct iec_program_type *type)
@@ -121,7 +258,12 @@ int iec2kmod_gft_publish(struct iec_program_type *type)
 	/* the caller is the module's own init: it cannot go away meanwhile */
 	__module_get(type->owner);
 	mutex_lock(&iec_gft_mutex);
-	iec_gft_replace(slot, type);
+	/*
+	 * Published even if the grace period times out: the new body runs
+	 * from the next cycle on, the old one stays retired (loaded).  A
+	 * failed init would free a module the slot points to.
+	 */
+	iec_gft_replace(slot, type, "publish");
 	mutex_unlock(&iec_gft_mutex);
 	pr_info("iec2kmod: slot %s now runs %s (%s)\n", type->type_name,
 		module_name(type->owner), type->build_id);
@@ -129,15 +271,52 @@ int iec2kmod_gft_publish(struct iec_program_type *type)
 }
 EXPORT_SYMBOL_GPL(iec2kmod_gft_publish);
 
+/* -ETIMEDOUT if a task stays inside a cycle that may run the old body. */
 int iec_gft_clear(u32 i)
 {
+	struct iec_gft_slot *slot;
+	int ret = 0;
+
 	if (!iec_cfg || i >= iec_cfg->nslots)
 		return -EINVAL;
+	slot = &iec_cfg->slots[i];
 	mutex_lock(&iec_gft_mutex);
-	if (rcu_access_pointer(iec_cfg->slots[i].cur))
-		iec_gft_replace(&iec_cfg->slots[i], NULL);
+	if (rcu_access_pointer(slot->cur))
+		ret = iec_gft_replace(slot, NULL, "clear");
+	else
+		ret = iec_gft_sync(slot, "clear");
 	mutex_unlock(&iec_gft_mutex);
-	return 0;
+	return ret;
+}
+
+static bool iec_resource_idle(struct iec_resource *res, struct iec_task **busy)
+{
+	u32 i;
+
+	for (i = 0; i < res->ntasks; i++) {
+		if (smp_load_acquire(&res->tasks[i].active)) {
+			*busy = &res->tasks[i];
+			return false;
+		}
+	}
+	return true;
+}
+
+/*
+ * After res->stop(): waits until every task of @res acknowledged (its
+ * thread went idle), until @deadline (jiffies) at most.  -ETIMEDOUT names
+ * the task that did not.
+ */
+int iec_wait_resource_idle(struct iec_resource *res, unsigned long deadline)
+{
+	struct iec_task *busy = NULL;
+	long left = max_t(long, (long)(deadline - jiffies), 1);
+
+	smp_mb();	/* the stop request before reading active */
+	if (wait_event_timeout(iec_ack_wq, iec_resource_idle(res, &busy), left))
+		return 0;
+	iec_task_stuck_report("stop", res, busy);
+	return -ETIMEDOUT;
 }
 
 int iec2kmod_register_resource(struct iec_resource *res)
@@ -204,8 +383,9 @@ void iec_config_exit(struct iec_config *cfg)
 	u32 i;
 
 	iec_ctl_exit();
-	/* resource modules hold references on us: none is left here */
+	/* program modules hold references on us: none is left here */
 	for (i = 0; i < cfg->nslots; i++)
-		WARN_ON_ONCE(rcu_access_pointer(cfg->slots[i].cur));
+		WARN_ON_ONCE(rcu_access_pointer(cfg->slots[i].cur) ||
+			     cfg->slots[i].retired);
 	iec_cfg = NULL;
 }

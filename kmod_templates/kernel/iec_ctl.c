@@ -75,9 +75,13 @@ static void iec_forces_write(const struct iec_force *f)
 
 void iec2kmod_cycle_begin(struct iec_task *t)
 {
+	ktime_t now = ktime_get();
+
 	raw_spin_lock(&t->var_lock);
 	iec_forces_write(t->forces);
 	t->in_cycle = true;
+	WRITE_ONCE(t->cycle_start, now);
+	WRITE_ONCE(t->cycle_seq, t->cycle_seq + 1);	/* odd: in a cycle */
 	raw_spin_unlock(&t->var_lock);
 }
 EXPORT_SYMBOL_GPL(iec2kmod_cycle_begin);
@@ -87,7 +91,11 @@ void iec2kmod_cycle_end(struct iec_task *t)
 	raw_spin_lock(&t->var_lock);
 	iec_forces_write(t->forces);
 	t->in_cycle = false;
+	/* the cycle's body calls before the grace period sees it end */
+	smp_store_release(&t->cycle_seq, t->cycle_seq + 1);
 	raw_spin_unlock(&t->var_lock);
+	if (wq_has_sleeper(&iec_ack_wq))
+		wake_up_all(&iec_ack_wq);
 }
 EXPORT_SYMBOL_GPL(iec2kmod_cycle_end);
 
@@ -463,6 +471,12 @@ static int iec_put_task(struct sk_buff *skb, struct iec_task *t)
 			cycles ? div64_s64(s->latency_sum_ns, cycles) : 0, IEC_A_PAD) ||
 	    nla_put_s64(skb, IEC_A_LAT_MAX_NS, s->latency_max_ns, IEC_A_PAD) ||
 	    nla_put(skb, IEC_A_HIST, sizeof(s->hist), s->hist))
+		goto cancel;
+	/* inside a cycle now: for how long (a task that does not come back) */
+	if ((smp_load_acquire(&t->cycle_seq) & 1) &&
+	    nla_put_s64(skb, IEC_A_IN_CYCLE_NS,
+			ktime_to_ns(ktime_sub(ktime_get(), READ_ONCE(t->cycle_start))),
+			IEC_A_PAD))
 		goto cancel;
 	if (s->fault_code &&
 	    (nla_put_string(skb, IEC_A_FAULT_NAME, iec_fault_name(s->fault_code)) ||
@@ -969,11 +983,19 @@ out:
 	return err;
 }
 
-/* start/stop one resource by name, or all of them (name NULL or "all") */
+/*
+ * start/stop one resource by name, or all of them (name NULL or "all").
+ * A stop returns once every task it stopped acknowledged (its thread is
+ * idle: no cycle runs, the resource module may go), or -ETIMEDOUT after
+ * the bound, naming the task that did not.
+ */
 static int iec_control_resource(const char *name, bool start)
 {
 	struct iec_resource *r;
+	unsigned long deadline;
+	s64 longest = 0;
 	int ret = -ENOENT;
+	u32 i;
 
 	if (name && !strcmp(name, "all"))
 		name = NULL;
@@ -985,10 +1007,22 @@ static int iec_control_resource(const char *name, bool start)
 			ret = r->start(r);
 		} else {
 			r->stop(r);
+			for (i = 0; i < r->ntasks; i++)
+				longest = max(longest, r->tasks[i].interval_ns);
 			ret = 0;
 		}
 		if (ret)
 			break;
+	}
+	if (!start && !ret) {
+		deadline = jiffies + iec2kmod_wait_bound(longest);
+		list_for_each_entry(r, &iec_resources, node) {
+			if (name && strcasecmp(name, r->name))
+				continue;
+			ret = iec_wait_resource_idle(r, deadline);
+			if (ret)
+				break;
+		}
 	}
 	if (!name && list_empty(&iec_resources))
 		ret = 0;	/* "all" of nothing */
@@ -1009,6 +1043,9 @@ static int iec_nl_res(struct genl_info *info, bool start)
 	if (err == -ENOENT)
 		NL_SET_ERR_MSG_ATTR(info->extack, info->attrs[IEC_A_NAME],
 				    "no such resource");
+	else if (err == -ETIMEDOUT)
+		NL_SET_ERR_MSG(info->extack,
+			       "a task does not come back from its cycle (kernel log, status: in_cycle)");
 	return err;
 }
 
@@ -1022,15 +1059,19 @@ static int iec_nl_res_stop(struct sk_buff *skb, struct genl_info *info)
 	return iec_nl_res(info, false);
 }
 
+/* every slot is cleared; the first error is returned */
 static int iec_clear_slots(long slot)
 {
 	u32 i;
-	int err = 0;
+	int err = 0, ret;
 
 	if (slot >= 0)
 		return iec_gft_clear(slot);
-	for (i = 0; i < iec_cfg->nslots && !err; i++)
-		err = iec_gft_clear(i);
+	for (i = 0; i < iec_cfg->nslots; i++) {
+		ret = iec_gft_clear(i);
+		if (!err)
+			err = ret;
+	}
 	return err;
 }
 
@@ -1051,6 +1092,9 @@ static int iec_nl_slot_clear(struct sk_buff *skb, struct genl_info *info)
 	mutex_lock(&iec_ctl_mutex);
 	err = iec_clear_slots(slot);
 	mutex_unlock(&iec_ctl_mutex);
+	if (err == -ETIMEDOUT)
+		NL_SET_ERR_MSG(info->extack,
+			       "a task does not come back from its cycle (kernel log, status: in_cycle)");
 	return err;
 }
 
@@ -1187,7 +1231,7 @@ static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
 			int st = READ_ONCE(t->state);
 
 			iec_emit(buf, &len,
-				 "task %s.%s state %s interval_ns %lld priority %d cycles %llu overruns %llu exec_min_ns %lld exec_max_ns %lld exec_avg_ns %lld latency_max_ns %lld faults %llu fault %s pou %s line %d\n",
+				 "task %s.%s state %s interval_ns %lld priority %d cycles %llu overruns %llu exec_min_ns %lld exec_max_ns %lld exec_avg_ns %lld latency_max_ns %lld faults %llu fault %s pou %s line %d in_cycle_ms %lld\n",
 				 r->name, t->name,
 				 st >= 0 && st <= IEC_TASK_FAULT ? iec_state_names[st] : "?",
 				 t->interval_ns, t->priority, s->cycles,
@@ -1196,7 +1240,9 @@ static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
 				 s->latency_max_ns, s->faults,
 				 s->fault_code ? iec_fault_name(s->fault_code) : "none",
 				 s->fault_code ? s->fault_pou_name : "-",
-				 s->fault_line);
+				 s->fault_line,
+				 (smp_load_acquire(&t->cycle_seq) & 1) ?
+				 ktime_ms_delta(ktime_get(), READ_ONCE(t->cycle_start)) : -1LL);
 		}
 	}
 	mutex_unlock(&iec_resources_lock);

@@ -51,12 +51,20 @@ struct iec_program_type {
 	void (*body)(void *self, struct iec_ctx *ctx);
 	bool uses_fpu;
 	struct module *owner;
+	/* configuration module: next in its slot's list of retired bodies */
+	struct iec_program_type *retired_next;
 };
 
 struct iec_gft_slot {
 	const char *type_name;
 	u64 iface_hash;
 	struct iec_program_type __rcu *cur;
+	/*
+	 * Bodies replaced while a task was inside a cycle that did not end
+	 * within the bound: their modules keep the slot's reference until a
+	 * later grace period succeeds (iec_gft_sync()).
+	 */
+	struct iec_program_type *retired;
 	ktime_t since;		/* CLOCK_REALTIME of the last publication */
 	u64 publications;
 };
@@ -127,6 +135,25 @@ struct iec_task {
 	raw_spinlock_t var_lock;
 	bool in_cycle;			/* under var_lock */
 	struct iec_force *forces;	/* forced instance variables, under var_lock */
+
+	/*
+	 * Acknowledgements the manager waits for, with a bound
+	 * (iec2kmod_wait_bound()), instead of a grace period that a task
+	 * which never comes back would make endless:
+	 *  - cycle_seq counts both ends of every cycle (odd: inside one;
+	 *    written under var_lock, the end with release semantics):
+	 *    the GFT grace period waits for the cycles that were running
+	 *    when a body was replaced (iec_config_rt.c);
+	 *  - active is set by the thread while it may run cycles (from a
+	 *    start to its acknowledgement of a stop or a fault); it holds a
+	 *    reference on its resource module meanwhile, so the module
+	 *    cannot go while a cycle may still run, and a stop waits for
+	 *    it to clear.
+	 */
+	unsigned long cycle_seq;
+	ktime_t cycle_start;		/* monotonic, of the current cycle */
+	unsigned long gp_snap;		/* cycle_seq at a grace period's start */
+	bool active;
 };
 
 struct iec_resource {
@@ -178,6 +205,17 @@ void iec2kmod_unregister_resource(struct iec_resource *res);
 void iec2kmod_event(u32 event);
 
 /*
+ * Bounded waits.  Nothing the manager does waits for a task for ever: a
+ * stop, a slot clear or a publication waits at most
+ * iec2kmod_wait_bound(interval) for a task with that period (wait_ms, a
+ * parameter of the configuration module, default 1000 ms, plus four
+ * periods), then fails with -ETIMEDOUT and a message naming the task.
+ * iec2kmod_task_idle() is the thread's acknowledgement of a stop.
+ */
+unsigned long iec2kmod_wait_bound(s64 interval_ns);
+void iec2kmod_task_idle(struct iec_task *t);
+
+/*
  * Manager access (iec_ctl.c), called by the resource runtime:
  *  - iec2kmod_cycle_begin/end at both ends of every task cycle (they take
  *    the task's var_lock and write its forced instance variables);
@@ -200,5 +238,9 @@ extern struct mutex iec_resources_lock;
 int iec_ctl_init(void);
 void iec_ctl_exit(void);
 int iec_gft_clear(u32 slot);
+extern struct wait_queue_head iec_ack_wq;
+int iec_wait_resource_idle(struct iec_resource *res, unsigned long deadline);
+void iec_task_stuck_report(const char *what, struct iec_resource *r,
+			   struct iec_task *t);
 
 #endif /* IEC_KMOD_H */

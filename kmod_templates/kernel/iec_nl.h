@@ -95,6 +95,7 @@ enum iec_nl_attr {
 	IEC_A_TASK_INDEX,	/* u32: 1 + task index in its resource, 0 global */
 	IEC_A_VALUE,		/* binary */
 	IEC_A_ALL,		/* flag */
+	IEC_A_IN_CYCLE_NS,	/* s64: time inside the current cycle, if in one */
 	__IEC_A_MAX
 };
 #define IEC_A_MAX (__IEC_A_MAX - 1)

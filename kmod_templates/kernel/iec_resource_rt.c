@@ -12,6 +12,12 @@
  * the image lock, run the programs, copy the written globals out, account.
  * IEC priority 0..48 maps to SCHED_FIFO 49..1: below the threaded
  * interrupt handlers (50), as on OpenPLC and LinuxCNC.
+ *
+ * Unloading: while a task is active (started, until it acknowledges a
+ * stop or a fault by going idle) its thread holds a reference on this
+ * module, so rmmod refuses ("in use") instead of waiting in module exit
+ * for a cycle that may never end; exit runs only with every thread idle
+ * and kthread_stop() returns at once.
  */
 #include <linux/cpumask.h>
 #include <linux/delay.h>
@@ -146,29 +152,62 @@ static bool iec_wait_event(struct iec_task *t)
 	}
 }
 
-static void iec_wait_started(struct iec_task *t)
+static void iec_wait_stop(void)
 {
 	for (;;) {
 		set_current_state(TASK_INTERRUPTIBLE);
-		if (kthread_should_stop() ||
-		    smp_load_acquire(&t->state) == IEC_TASK_RUNNING)
+		if (kthread_should_stop())
 			break;
 		schedule();
 	}
 	__set_current_state(TASK_RUNNING);
 }
 
+/* The thread acknowledges a stop or a fault: no cycle runs until a start. */
+static void iec_task_idle(struct iec_task *t)
+{
+	iec2kmod_task_idle(t);
+	module_put(THIS_MODULE);
+}
+
+/*
+ * Waits for a start; false if told to stop.  Returns true active, with a
+ * reference on this module (none is given while the module is going).
+ */
+static bool iec_wait_started(struct iec_task *t)
+{
+	for (;;) {
+		set_current_state(TASK_INTERRUPTIBLE);
+		if (kthread_should_stop())
+			break;
+		if (smp_load_acquire(&t->state) != IEC_TASK_RUNNING) {
+			schedule();
+			continue;
+		}
+		__set_current_state(TASK_RUNNING);
+		if (!try_module_get(THIS_MODULE)) {
+			iec_wait_stop();	/* rmmod is under way */
+			return false;
+		}
+		WRITE_ONCE(t->active, true);
+		smp_mb();	/* pairs with iec_wait_resource_idle() */
+		if (smp_load_acquire(&t->state) == IEC_TASK_RUNNING)
+			return true;
+		iec_task_idle(t);	/* stopped meanwhile */
+	}
+	__set_current_state(TASK_RUNNING);
+	return false;
+}
+
 static int iec_task_thread(void *arg)
 {
 	struct iec_task *t = arg;
 
-	while (!kthread_should_stop()) {
-		iec_wait_started(t);
-		if (kthread_should_stop())
-			break;
+	while (iec_wait_started(t)) {
 		if (!t->interval_ns) {
 			while (iec_wait_event(t))
 				iec_task_cycle(t, ktime_get());
+			iec_task_idle(t);
 			continue;
 		}
 		t->next = ktime_get();
@@ -190,6 +229,7 @@ static int iec_task_thread(void *arg)
 			if (!iec_sleep_until(t, t->next))
 				break;
 		}
+		iec_task_idle(t);
 	}
 	return 0;
 }
