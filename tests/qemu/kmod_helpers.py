@@ -49,7 +49,7 @@ def status(guest, manifest) -> dict:
             continue
         if words[0] == "task":
             fields = dict(zip(words[2::2], words[3::2]))
-            m = re.search(r" faults \d+ fault (.*?) pou (\S+) line (\d+)$", line)
+            m = re.search(r" faults \d+ fault (.*?) pou (\S+) line (\d+)(?: |$)", line)
             fields["fault"], fields["pou"], fields["line"] = m.groups()
             tasks[words[1]] = fields
         elif words[0] == "slot":
