@@ -194,33 +194,47 @@ static int iec_gft_grace_period(const char *what)
 	return ret;
 }
 
-/* Drops the references of the slot's retired bodies after a grace period. */
-static int iec_gft_sync(struct iec_gft_slot *slot, const char *what)
+/*
+ * Drops the references of the retired bodies of slot @only (-1: of every
+ * slot) after one grace period.  The caller holds iec_gft_mutex.
+ */
+static int iec_gft_sync(long only, const char *what)
 {
 	struct iec_program_type *p;
+	bool any = false;
 	int ret;
+	u32 i;
 
 	lockdep_assert_held(&iec_gft_mutex);
-	if (!slot->retired)
+	for (i = 0; i < iec_cfg->nslots; i++)
+		if ((only < 0 || i == only) && iec_cfg->slots[i].retired)
+			any = true;
+	if (!any)
 		return 0;
 	ret = iec_gft_grace_period(what);
-	if (ret) {
-		pr_err("iec2kmod: slot %s: %s stays loaded until that cycle ends\n",
-		       slot->type_name, module_name(slot->retired->owner));
-		return ret;
+	for (i = 0; i < iec_cfg->nslots; i++) {
+		struct iec_gft_slot *slot = &iec_cfg->slots[i];
+
+		if ((only >= 0 && i != only) || !slot->retired)
+			continue;
+		if (ret) {
+			pr_err("iec2kmod: slot %s: %s stays loaded until that cycle ends\n",
+			       slot->type_name, module_name(slot->retired->owner));
+			continue;
+		}
+		/* no task runs a retired body any more: their modules may go */
+		while ((p = slot->retired)) {
+			slot->retired = p->retired_next;
+			p->retired_next = NULL;
+			module_put(p->owner);
+		}
 	}
-	/* no task runs a retired body any more: their modules may go */
-	while ((p = slot->retired)) {
-		slot->retired = p->retired_next;
-		p->retired_next = NULL;
-		module_put(p->owner);
-	}
-	return 0;
+	return ret;
 }
 
-/* Replaces the body of a slot; the caller holds iec_gft_mutex. */
-static int iec_gft_replace(struct iec_gft_slot *slot,
-			   struct iec_program_type *new, const char *what)
+/* Puts @new into the slot, the old body on its retired list. */
+static void iec_gft_replace(struct iec_gft_slot *slot,
+			    struct iec_program_type *new)
 {
 	struct iec_program_type *old;
 
@@ -232,7 +246,6 @@ static int iec_gft_replace(struct iec_gft_slot *slot,
 	}
 	slot->since = ktime_get_real();
 	slot->publications++;
-	return iec_gft_sync(slot, what);
 }
 
 int iec2kmod_gft_publish(struct iec_program_type *type)
@@ -263,7 +276,8 @@ int iec2kmod_gft_publish(struct iec_program_type *type)
 	 * from the next cycle on, the old one stays retired (loaded).  A
 	 * failed init would free a module the slot points to.
 	 */
-	iec_gft_replace(slot, type, "publish");
+	iec_gft_replace(slot, type);
+	iec_gft_sync(i, "publish");
 	mutex_unlock(&iec_gft_mutex);
 	pr_info("iec2kmod: slot %s now runs %s (%s)\n", type->type_name,
 		module_name(type->owner), type->build_id);
@@ -271,20 +285,23 @@ int iec2kmod_gft_publish(struct iec_program_type *type)
 }
 EXPORT_SYMBOL_GPL(iec2kmod_gft_publish);
 
-/* -ETIMEDOUT if a task stays inside a cycle that may run the old body. */
-int iec_gft_clear(u32 i)
+/*
+ * Empties slot @i (-1: every slot), with one grace period.  -ETIMEDOUT if
+ * a task stays inside a cycle that may run an old body: the slots are
+ * empty all the same, the old bodies' modules stay loaded.
+ */
+int iec_gft_clear(long i)
 {
-	struct iec_gft_slot *slot;
-	int ret = 0;
+	u32 k;
+	int ret;
 
-	if (!iec_cfg || i >= iec_cfg->nslots)
+	if (!iec_cfg || i >= (long)iec_cfg->nslots)
 		return -EINVAL;
-	slot = &iec_cfg->slots[i];
 	mutex_lock(&iec_gft_mutex);
-	if (rcu_access_pointer(slot->cur))
-		ret = iec_gft_replace(slot, NULL, "clear");
-	else
-		ret = iec_gft_sync(slot, "clear");
+	for (k = 0; k < iec_cfg->nslots; k++)
+		if ((i < 0 || k == i) && rcu_access_pointer(iec_cfg->slots[k].cur))
+			iec_gft_replace(&iec_cfg->slots[k], NULL);
+	ret = iec_gft_sync(i, "clear");
 	mutex_unlock(&iec_gft_mutex);
 	return ret;
 }

@@ -1059,21 +1059,6 @@ static int iec_nl_res_stop(struct sk_buff *skb, struct genl_info *info)
 	return iec_nl_res(info, false);
 }
 
-/* every slot is cleared; the first error is returned */
-static int iec_clear_slots(long slot)
-{
-	u32 i;
-	int err = 0, ret;
-
-	if (slot >= 0)
-		return iec_gft_clear(slot);
-	for (i = 0; i < iec_cfg->nslots; i++) {
-		ret = iec_gft_clear(i);
-		if (!err)
-			err = ret;
-	}
-	return err;
-}
 
 static int iec_nl_slot_clear(struct sk_buff *skb, struct genl_info *info)
 {
@@ -1090,7 +1075,7 @@ static int iec_nl_slot_clear(struct sk_buff *skb, struct genl_info *info)
 		}
 	}
 	mutex_lock(&iec_ctl_mutex);
-	err = iec_clear_slots(slot);
+	err = iec_gft_clear(slot);
 	mutex_unlock(&iec_ctl_mutex);
 	if (err == -ETIMEDOUT)
 		NL_SET_ERR_MSG(info->extack,
@@ -1277,7 +1262,7 @@ static ssize_t control_store(struct kobject *kobj, struct kobj_attribute *attr,
 		ret = iec_control_resource(arg, cmd[2] == 'a');
 	} else if (!strcmp(cmd, "clear")) {
 		if (!strcmp(arg, "all")) {
-			ret = iec_clear_slots(-1);
+			ret = iec_gft_clear(-1);
 		} else {
 			ret = kstrtou32(arg, 10, &slot);
 			if (!ret)

@@ -237,7 +237,7 @@ extern struct list_head iec_resources;
 extern struct mutex iec_resources_lock;
 int iec_ctl_init(void);
 void iec_ctl_exit(void);
-int iec_gft_clear(u32 slot);
+int iec_gft_clear(long slot);	/* -1: every slot */
 extern struct wait_queue_head iec_ack_wq;
 int iec_wait_resource_idle(struct iec_resource *res, unsigned long deadline);
 void iec_task_stuck_report(const char *what, struct iec_resource *r,

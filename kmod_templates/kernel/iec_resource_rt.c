@@ -163,11 +163,16 @@ static void iec_wait_stop(void)
 	__set_current_state(TASK_RUNNING);
 }
 
-/* The thread acknowledges a stop or a fault: no cycle runs until a start. */
+/*
+ * The thread acknowledges a stop or a fault: no cycle runs until a start.
+ * The reference goes first, so a stop that saw the acknowledgement can
+ * remove the module at once; until this thread returns, module exit waits
+ * for it in kthread_stop().
+ */
 static void iec_task_idle(struct iec_task *t)
 {
-	iec2kmod_task_idle(t);
 	module_put(THIS_MODULE);
+	iec2kmod_task_idle(t);
 }
 
 /*
