@@ -47,6 +47,22 @@ def _ident(s: str) -> str:
     return "".join(c if c.isalnum() else "_" for c in s.lower())
 
 
+# the kernel's MODULE_NAME_LEN (64 - sizeof(unsigned long)) less the NUL:
+# modpost refuses a longer name ("module name is too long")
+MODULE_NAME_MAX = 55
+
+
+def _modname(stem: str, suffix: str = "") -> str:
+    """iec_<stem><suffix>, the stem shortened and made unique by a hash of
+    it when the whole would not fit the kernel's limit on module names
+    (long configuration and POU names are valid IEC)."""
+    name = f"iec_{stem}{suffix}"
+    if len(name) <= MODULE_NAME_MAX:
+        return name
+    keep = MODULE_NAME_MAX - len("iec_") - len(suffix) - 9
+    return f"iec_{stem[:keep].rstrip('_')}_{_sha(stem)[:8]}{suffix}"
+
+
 def _sha(*texts) -> str:
     h = hashlib.sha256()
     for t in texts:
@@ -173,7 +189,7 @@ def generate_tree(project, out: Path) -> dict:
         # the code only: comments name the sources and change with any edit
         build_id = _sha(*[_code(t) for t in [body, gen.header] +
                           [gen.bodies[p.key][1] for p in deps]])[:8]
-        mod = f"iec_{cname}_p_{_ident(pou.name)}_{build_id}"
+        mod = _modname(f"{cname}_p_{_ident(pou.name)}", f"_{build_id}")
         main = env.get_template("program_main.c.j2").render(
             type=pou.name, type_upper=pou.name.upper(), build_id=build_id, config=cfg.name,
             header=gen.header_name, prefix=prefix, iface_hash=ihash, uses_fpu=fpu,
@@ -234,7 +250,7 @@ def generate_tree(project, out: Path) -> dict:
     iface_hash = _sha(*[f"{s['name']}={s['hash']}" for s in slots],
                       *[f"{g.path}:{getattr(g.var.type, 'name', '?')}"
                         for g in plan.globals])[:16]
-    config_mod = f"iec_{cname}_config"
+    config_mod = _modname(cname, "_config")
     main = env.get_template("config_main.c.j2").render(
         config=cfg.name, config_lower=cfg.name.lower(), version=__version__,
         source_hash=source_hash, iface_hash=iface_hash, header=gen.header_name,
@@ -248,7 +264,7 @@ def generate_tree(project, out: Path) -> dict:
     res_modules = []
     slot_of = {p.key: i for i, p in enumerate(used_types)}
     for r in cfg.resources:
-        mod = f"iec_{cname}_r_{_ident(r.name)}"
+        mod = _modname(f"{cname}_r_{_ident(r.name)}")
         text = _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events,
                                 res_vars[r.name], source_hash, iface_hash)
         _write_module(out, mod, {"main.c": text}, ["main.o", "iec_string.o", "iec_std_fb.o"],
