@@ -150,7 +150,7 @@ class BodyEmitter:
     # ------------------------------------------------------- statements
     def stmt(self, s) -> list[str]:
         if isinstance(s, ast.Assign):
-            f = Frame(self)
+            f = Frame(self, s.pos)
             lines = self.assign_ref(f, s.target, s.value)
             if f.may_fault and N.is_scalar(concrete(s.target.type)):
                 return self.guarded_assign(s.target, s.value, s.pos)
@@ -206,7 +206,7 @@ class BodyEmitter:
 
     def if_(self, branches, else_):
         cond, body = branches[0]
-        f = Frame(self)
+        f = Frame(self, cond.pos)
         c = self.checked_value(f, self.cond(f, cond), "iec_bool", cond.pos)
         lines = [f"if ({c}) {{"] + self.block(body)
         rest = branches[1:]
@@ -221,7 +221,7 @@ class BodyEmitter:
         return self.wrap(f, lines, cond.pos, check=False) if f.pre or f.decls else lines
 
     def case(self, s):
-        f = Frame(self)
+        f = Frame(self, s.pos)
         st = concrete(s.selector.type)
         sel = self.checked_value(f, self.expr.emit(f, s.selector), N.ctype(st), s.pos)
         lines = [f"switch ({sel}) {{"]
@@ -252,14 +252,14 @@ class BodyEmitter:
         return lines
 
     def while_(self, s):
-        f = Frame(self)
+        f = Frame(self, s.cond.pos)
         c = self.checked_value(f, self.cond(f, s.cond), "iec_bool", s.cond.pos)
         head = f.pre + [f"if (!({c}))", self.ind + "break;"]
         lines = self.loop(s.pos, head, s.body)
         return (["{"] + self.indent(f.decls + lines) + ["}"]) if f.decls else lines
 
     def repeat(self, s):
-        f = Frame(self)
+        f = Frame(self, s.cond.pos)
         c = self.checked_value(f, self.cond(f, s.cond), "iec_bool", s.cond.pos)
         tail = f.pre + [f"if ({c})", self.ind + "break;"]
         lines = self.loop(s.pos, [], s.body, tail)
@@ -269,7 +269,7 @@ class BodyEmitter:
         v = self.pou.var(s.var)
         vt = concrete(v.type)
         ct = N.ctype(vt)
-        f = Frame(self)
+        f = Frame(self, s.pos)
         var = self.var_access(v)
         cstart, cend = _const_int(s.start), _const_int(s.end)
         cstep = 1 if s.step is None else _const_int(s.step)
@@ -364,7 +364,7 @@ class BodyEmitter:
         the store are computed first, in that order, and the fault checked
         before the store (the plain form would complete the statement with
         the runtime's substitute value: element [low], 0, the low limit)."""
-        f = Frame(self)
+        f = Frame(self, pos)
         t0 = target.type
         t = concrete(t0)
         n = self.next_temp()
@@ -454,7 +454,7 @@ class BodyEmitter:
 
     # ------------------------------------------------------------ calls
     def call_stmt(self, c: ast.Call, pos) -> list[str]:
-        f = Frame(self)
+        f = Frame(self, pos)
         target = c.target
         if isinstance(target, Var):           # a function block instance
             lines = self.fb_call(f, c, target)
@@ -463,6 +463,11 @@ class BodyEmitter:
         return self.wrap(f, [f"(void){code};"], pos)
 
     def fb_call(self, f, c, inst: Var) -> list[str]:
+        """A call of a function block instance.  The arguments are evaluated
+        and stored one after the other, left to right; one that can fault
+        is computed into a temporary and checked before it is stored, so a
+        fault stores nothing more and the block does not run; a fault in
+        the block's body leaves its outputs where they are."""
         pou = inst.type.pou
         base = self.var_access(inst)
         lines = []
@@ -485,11 +490,18 @@ class BodyEmitter:
             if a.kind == "out":
                 continue
             if param.section == "VAR_IN_OUT":
-                lv, _, _ = self.expr.lvalue(f, a.value)
-                lines.append(f"{member} = &{lv};" if not isinstance(param.type, ArrayT)
-                             else f"{member} = {lv};")
+                sub = self.sub_frame(f)
+                lv, _, _ = self.expr.lvalue(sub, a.value)
+                ptr = f"&{lv}" if not isinstance(param.type, ArrayT) else lv
+                lines += self.absorb(f, sub)
+                if sub.may_fault:
+                    tmp = f"ref{self.next_temp()}"
+                    f.decls.append(f"{self.pointer_type(param.type)} {tmp};")
+                    lines += [f"{tmp} = {ptr};", self.fault_check(f.pos)]
+                    ptr = tmp
+                lines.append(f"{member} = {ptr};")
             elif a.value is not None:
-                lines += self.assign_code(f, member, param.type, a.value)
+                lines += self.checked_input(f, member, param.type, a.value)
         if en is not None and pou.var("EN") is not None and not pou.standard:
             # a block that declares EN sees it TRUE when it runs
             lines.append(f"{base}.{N.member(pou, pou.var('EN').name)} = 1;")
@@ -502,31 +514,106 @@ class BodyEmitter:
             lines.append(f"{body_fn}(&{base}, ctx);")
         if not pou.standard:
             f.may_fault = True
+            if any(a.kind == "out" and a.value is not None for a in bound.values()) or \
+                    eno is not None:
+                # a fault in the block: its outputs are not copied out
+                lines.append(self.fault_check(f.pos))
         for key, a in bound.items():
             param = pou.var(key)
             if a.kind != "out" or a.value is None:
                 continue
             member = f"{base}.{N.member(pou, param.name)}"
-            lv, lt, bit = self.expr.lvalue(f, a.value)
             val = f"((iec_bool)!{member})" if a.negate else member
-            if bit is not None:
-                lines.append(self.set_bit(f, lv, a.value, bit, val))
-            else:
-                lines.append(f"{lv} = {self.expr.convert(val, param.type, lt)};"
-                             if N.is_scalar(lt) else copy_value(lv, member, lt))
+            lines += self.checked_store(f, a.value, Raw(val, param.type))
         if eno is not None and eno.value is not None:
-            lv, _, _ = self.expr.lvalue(f, eno.value)
-            lines.append(f"{lv} = 1;")
+            lines += self.checked_store(f, eno.value, Raw("1", BOOL))
         if en is not None:
-            return [f"if ({en}) {{"] + self.indent(lines) + ["}"] + (
-                [f"else {self.expr.lvalue(f, eno.value)[0]} = 0;"] if eno is not None and
-                eno.value is not None else [])
+            out = [f"if ({en}) {{"] + self.indent(lines) + ["}"]
+            if eno is not None and eno.value is not None:
+                out += ["else {"] + self.indent(self.checked_store(f, eno.value, Raw("0", BOOL))) \
+                    + ["}"]
+            return out
         return lines
 
+    # ---------------------------------------- left to right, fault by fault
+    def sub_frame(self, f):
+        """A frame for one argument of a call in frame f: its temporaries
+        come from f's pool, its code is placed where the argument is."""
+        sub = Frame(self, f.pos)
+        sub.pooled = f.pooled
+        return sub
+
+    @staticmethod
+    def absorb(f, sub):
+        """sub's declarations into f; its setup code, to be placed next."""
+        f.decls += sub.decls
+        f.may_fault = f.may_fault or sub.may_fault
+        return sub.pre
+
+    def pointer_type(self, t, const=False):
+        t = concrete(t)
+        if isinstance(t, ArrayT):
+            elem, _ = N.array_flat(t)
+            return f"{'const ' if const else ''}{N.ctype(elem)} *"
+        return f"{'const ' if const else ''}{N.ctype(t)} *"
+
+    def checked_input(self, f, member, t, value) -> list[str]:
+        """member := value for an input of a call: when computing the value
+        can fault, it goes into a temporary first and the fault is checked
+        before the store (the input keeps its value, nothing after runs)."""
+        snapshot = dict(f.pooled)
+        sub = self.sub_frame(f)
+        code = self.assign_code(sub, member, t, value)
+        if not sub.may_fault:
+            return self.absorb(f, sub) + code
+        # again, into a temporary of the parameter's type
+        f.pooled.clear()
+        f.pooled.update(snapshot)
+        sub = self.sub_frame(f)
+        if N.is_scalar(concrete(t)):
+            tmp = f"arg{self.next_temp()}"
+            sub.decls.append(f"{N.ctype(t)} {tmp};")
+        else:
+            tmp = sub.temp(t, "arg")
+        code = self.assign_code(sub, tmp, t, value)
+        return self.absorb(f, sub) + code + [self.fault_check(f.pos),
+                                              copy_value(member, tmp, t)]
+
+    def checked_store(self, f, target, value) -> list[str]:
+        """target := value (an output copied out of a call): when the place
+        can fault (an index), it is computed and checked first and nothing
+        is stored on a fault."""
+        sub = self.sub_frame(f)
+        code = self.assign_ref(sub, target, value)
+        if not sub.may_fault:
+            return self.absorb(f, sub) + code
+        sub = self.sub_frame(f)
+        lv, lt, bit = self.expr.lvalue(sub, target)
+        n = self.next_temp()
+        holder = self._holder_type(target) if bit is not None else concrete(lt)
+        ptr = f"ptr{n}"
+        if isinstance(holder, ArrayT):
+            sub.decls.append(f"{self.pointer_type(holder)}{ptr};")
+            place, pre = ptr, [f"{ptr} = {lv};"]
+        else:
+            sub.decls.append(f"{N.ctype(holder)} *{ptr};")
+            place, pre = f"(*{ptr})", [f"{ptr} = &{lv};"]
+        lines = self.absorb(f, sub) + pre + [self.fault_check(f.pos)]
+        sub = self.sub_frame(f)
+        if bit is not None:
+            store = [self.set_bit(sub, place, target, bit, self.expr.emit(sub, value, BOOL))]
+        else:
+            store = self.assign_code(sub, place, lt, value)
+        return lines + self.absorb(f, sub) + store
+
     def user_function_call(self, f, c: ast.Call) -> str:
+        """A call of a user FUNCTION, as a statement of its own in f.pre, in
+        the order of the source.  Its arguments are evaluated left to right;
+        a fault before the call (in this statement, or in an argument) means
+        the function does not run, a fault in the function means its outputs
+        are not copied out."""
         pou = c.target
         bound = c.bound or {}
-        f.may_fault = True
         args = ["ctx"]
         result = pou.vars[pou.key]
         ret_tmp = None
@@ -538,23 +625,40 @@ class BodyEmitter:
             if v.section not in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT"):
                 continue
             a = bound.get(v.key)
+            sub = self.sub_frame(f)
             if v.section == "VAR_INPUT":
                 if a is None or a.value is None:
-                    args.append(self.default_value(f, v))
+                    code = self.default_value(sub, v)
                 elif N.is_scalar(v.type):
-                    args.append(self.expr.emit(f, a.value, v.type))
+                    code = self.expr.emit(sub, a.value, v.type)
                 else:
-                    args.append(self.by_reference(f, a.value, v.type))
+                    code = self.by_reference(sub, a.value, v.type)
+                ctype = N.ctype(v.type) + " " if N.is_scalar(v.type) else \
+                    self.pointer_type(v.type, const=True)
             elif v.section == "VAR_IN_OUT":
                 if a is None or a.value is None:
                     raise BindingError(f"call of {pou.name} leaves VAR_IN_OUT {v.name} unbound")
-                lv, _, _ = self.expr.lvalue(f, a.value)
-                args.append(lv if isinstance(v.type, ArrayT) else f"&{lv}")
+                lv, _, _ = self.expr.lvalue(sub, a.value)
+                code = lv if isinstance(v.type, ArrayT) else f"&{lv}"
+                ctype = self.pointer_type(v.type)
             else:
-                tmp = f.temp(v.type, "out")
-                args.append(tmp if isinstance(v.type, ArrayT) else f"&{tmp}")
+                tmp = sub.temp(v.type, "out")
+                code = tmp if isinstance(v.type, ArrayT) else f"&{tmp}"
+                ctype = None
                 if a is not None and a.value is not None:
                     outs.append((a, tmp, v))
+            f.pre += self.absorb(f, sub)
+            if sub.may_fault and ctype is not None:
+                # computed and checked before the next argument
+                tmp = f"arg{self.next_temp()}"
+                f.decls.append(f"{ctype}{tmp};")
+                f.pre += [f"{tmp} = {code};", self.fault_check(f.pos)]
+                code = tmp
+            args.append(code)
+        if f.may_fault:
+            # something before the call may have faulted: it does not run
+            f.pre.append(self.fault_check(f.pos))
+        f.may_fault = True
         call = f"{N.fn(pou.name)}({', '.join(args)})"
         # every call is a statement of its own, in the order of the source
         # (left to right): a call may change the caller's variables through
@@ -565,9 +669,12 @@ class BodyEmitter:
         else:
             result_code = f.temp(result.type, "ret")
             f.pre.append(f"{result_code} = {call};")
+        if outs:
+            # a fault in the function: nothing is copied out
+            f.pre.append(self.fault_check(f.pos))
         for a, tmp, v in outs:
             val = f"((iec_bool)!{tmp})" if a.negate else tmp
-            f.pre += self.assign_ref(f, a.value, Raw(val, v.type))
+            f.pre += self.checked_store(f, a.value, Raw(val, v.type))
         return result_code
 
     def by_reference(self, f, e, t):
@@ -618,7 +725,7 @@ class BodyEmitter:
         out = []
         if i.label:
             out.append(f"L_{i.label.lower()}:;")
-        f = Frame(self)
+        f = Frame(self, i.pos)
         op = i.op
         lines = []
         cr_in = i.cr_in
@@ -637,7 +744,7 @@ class BodyEmitter:
             inner_t = i.nested[-1].cr_out if i.nested else i.operand.type
             rhs = CRNode(i.pos, inner_t, depth + 1)
             lines += self.wrap(f, inner, i.pos)
-            f = Frame(self)
+            f = Frame(self, i.pos)
             lines += self.il_apply(f, i, op, cr_in, rhs, depth)
         elif op in ("LD", "LDN"):
             t = concrete(i.operand.type) if not isinstance(i.operand.type, LiteralT) else \
@@ -654,7 +761,7 @@ class BodyEmitter:
             if op == "STN":
                 cr = f"((iec_bool)!{cr})" if concrete(cr_in) is BOOL else \
                     f"iec_not_{N.type_tag(cr_in)}({cr})"
-            probe = Frame(self)
+            probe = Frame(self, i.pos)
             lines += self.assign_ref(probe, i.operand, Raw(cr, cr_in))
             if probe.may_fault and N.is_scalar(concrete(i.operand.type)):
                 return out + self.guarded_assign(i.operand, Raw(cr, cr_in), i.pos)

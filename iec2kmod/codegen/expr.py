@@ -53,8 +53,9 @@ class Raw(ast.Expr):
 class Frame:
     """Per-statement emission state: temporaries and their setup code."""
 
-    def __init__(self, body):
+    def __init__(self, body, pos=None):
         self.body = body      # BodyEmitter
+        self.pos = pos        # the statement's: where its fault checks point
         self.pre: list[str] = []
         self.decls: list[str] = []
         self.may_fault = False
@@ -346,7 +347,7 @@ class ExprEmitter:
             rt = c.target.vars[c.target.key].type
         rt = concrete(rt)
         en_code = self.emit(f, en.value, BOOL) if en is not None else None
-        inner = Frame(self.body)
+        inner = Frame(self.body, f.pos)
         inner.pooled = f.pooled          # one pool of temporaries per statement
         code = self.plain_call(inner, c, rt)
         res = f.temp(rt, "en")
