@@ -318,6 +318,8 @@ def pou_body(project, pou) -> list[str]:
                                  else [])
         used += [f"(void){N.var(v.name)};" for v in pou.vars.values()
                  if v.section in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")]
+        # an IL current result may be loaded and never used (valid IL)
+        used += [f"(void){name};" for name in sorted(be.cr_vars)]
         out += ["\t" + ln for ln in locals_ + used + [x for x in f.pre + init if x]]
         out += ["\t" + ln for ln in stmts]
         rv = be.ret_value()
@@ -356,7 +358,9 @@ def pou_body(project, pou) -> list[str]:
             prev = f"self->h_{n}_prev"
             expr = f"{cur} && !{prev}" if v.edge == "R_EDGE" else f"!{cur} && {prev}"
             edge += [f"self->h_{n} = {expr};", f"{prev} = {cur};"]
-    out += ["\t" + ln for ln in locals_ + ["(void)self;", "(void)ctx;"] + f.pre + init + edge]
+    # an IL current result may be loaded and never used (valid IL)
+    used = ["(void)self;", "(void)ctx;"] + [f"(void){name};" for name in sorted(be.cr_vars)]
+    out += ["\t" + ln for ln in locals_ + used + f.pre + init + edge]
     out += ["\t" + ln for ln in stmts]
     if be.uses_ret_label:
         out.append("out:")

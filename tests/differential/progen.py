@@ -183,10 +183,6 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 # Patterns of bugs found by this campaign and reported, which the generator
 # avoids so that the campaign keeps finding others.  Each entry names the
 # regression case that shows the bug; delete the entry once it is fixed.
-#   fault_in_call_arg: a fault in an argument of a function block or function
-#     call does not stop the call in C (the other inputs are assigned, the block
-#     runs; the function runs and a fault inside it is reported instead):
-#     tests/execution/cases/faults/fuzz_fault_in_fb_input.st, fuzz_fault_in_fn_arg.st
 #   il_literal_cr: the interpreter does not wrap an IL current result computed
 #     from untyped literals (LD 38 SUB 40) when it is stored (ST u: -2 in a UINT):
 #     tests/execution/cases/il/fuzz_il_literal_cr_store.il
@@ -194,7 +190,7 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 #     control variable in C: tests/execution/cases/faults/fuzz_fault_for_step.st
 #   fault_in_string_store: a STRING (or aggregate) assignment whose index or value
 #     faults still stores in C: tests/execution/cases/faults/fuzz_fault_string_*.st
-AVOID = {"fault_in_call_arg", "il_literal_cr", "fault_in_for_head", "fault_in_string_store"}
+AVOID = {"il_literal_cr", "fault_in_for_head", "fault_in_string_store"}
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
