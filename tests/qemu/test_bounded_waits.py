@@ -108,13 +108,13 @@ def wait_until(pred, what, timeout):
         time.sleep(0.1)
 
 
-def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, stuck):
-    tree, manifest, pmdir = stuck
-    config = manifest["load_order"][0]
-    ctl = f"{sysfs(manifest)}/control"
-    rc, out = pm(guest, pmdir, "load", tree)
-    assert rc == 0, out
-    try:
+class LongCycles:
+    """rheavy.heavy made to run cycles of about LONG_CYCLE_S (calibrated),
+    one at a time, and checks run inside one of them (check())."""
+
+    def __init__(self, guest, manifest, pmdir):
+        config = manifest["load_order"][0]
+        ctl = f"{sysfs(manifest)}/control"
         r = guest.run(f"echo {WAIT_MS} > /sys/module/{config}/parameters/wait_ms")
         assert r.exit_code == 0, r.output
 
@@ -169,6 +169,19 @@ def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, st
             pytest.fail(f"{calib}: the long cycle ended during '{name}' six times: " +
                         "; ".join(tries[-4:]))
 
+        self.check, self.calib, self.mark, self.times = check, calib, mark, times
+        self.expect_ms = expect_ms
+
+
+def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, stuck):
+    tree, manifest, pmdir = stuck
+    ctl = f"{sysfs(manifest)}/control"
+    rc, out = pm(guest, pmdir, "load", tree)
+    assert rc == 0, out
+    try:
+        lc = LongCycles(guest, manifest, pmdir)
+        check, calib, mark = lc.check, lc.calib, lc.mark
+
         def timed_out(rc, out):
             return rc != 0 and "timed out" in out.lower()
 
@@ -222,3 +235,65 @@ def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, st
     assert rc == 0, out
     assert loaded_modules(guest) == []
     assert guest.run(f"test -e {sysfs(manifest)}").exit_code != 0
+
+
+@pytest.fixture(scope="module")
+def beat_v2(stuck, kdir):
+    """The Beat program type rebuilt with another algorithm (same
+    interface): a module to swap in."""
+    import subprocess
+    import sys
+    from iec2kmod import kbuild
+    tree, manifest, _ = stuck
+    src = tree.parent / "stuck_v2_src"
+    src.mkdir(exist_ok=True)
+    text = (HERE / "projects" / "stuck" / "stuck.st").read_text()
+    assert "beats := beats + 1;" in text
+    (src / "stuck.st").write_text(text.replace("beats := beats + 1;", "beats := beats + 2;"))
+    out = tree.parent / "stuck_v2"
+    p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "gen", str(src), "-o", str(out)],
+                       cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stdout + p.stderr
+    (d,) = [p for p in out.iterdir() if p.name.startswith("iec_stuck_p_beat_")]
+    kbuild.build_modules(str(d), kdir=kdir, extra_args=[
+        f"KBUILD_EXTRA_SYMBOLS={tree / 'Module.symvers'}"]).check()
+    return d / f"{d.name}.ko"
+
+
+def test_a_swap_does_not_wait_for_ever_for_a_long_cycle(guest, stuck, beat_v2):
+    """insmod of a new build publishes it at once and returns within the
+    bound although a cycle in progress may still run an old body; the old
+    module stays loaded (refused by rmmod) until the cycle has ended."""
+    tree, manifest, pmdir = stuck
+    old = next(m["name"] for m in manifest["modules"] if m["name"].startswith("iec_stuck_p_beat"))
+    rc, out = pm(guest, pmdir, "load", tree)
+    assert rc == 0, out
+    try:
+        lc = LongCycles(guest, manifest, pmdir)
+
+        def swap():
+            rc, out, secs = guest_timed(guest, f"insmod {beat_v2}")
+            rm = guest.run(f"rmmod {old}")
+            return rc, out, secs, rm
+        rc, out, secs, rm = lc.check("insmod", swap, early=True)
+        assert rc == 0, out
+        assert secs < 1.0, secs
+        assert rm.exit_code != 0 and old in loaded_modules(guest), rm.output
+        text = guest.run(f"cat {sysfs(manifest)}/status").output
+        assert f" module {beat_v2.stem} " in text, text
+        log = guest.dmesg(since=lc.mark)
+        assert "publish: task rheavy.heavy does not come back: inside one cycle for" in log, log
+        assert f"slot BEAT: {old} stays loaded until that cycle ends" in log, log
+        print(f"\ninsmod of a new build during a long cycle: {secs * 1000:.0f} ms "
+              f"(guest clock; bound {WAIT_MS} ms + 4 x 10 ms)")
+        wait_until(lambda: in_cycle_ms(guest, manifest) < 0, "the end of the long cycle",
+                   10 * LONG_CYCLE_S + 30)
+    finally:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            rc, out = pm(guest, pmdir, "stop")
+            if rc == 0 or "nothing is loaded" in out:
+                break
+            time.sleep(1)
+    assert rc == 0, out
+    assert loaded_modules(guest) == []
