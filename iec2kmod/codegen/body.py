@@ -548,6 +548,7 @@ class BodyEmitter:
         """sub's declarations into f; its setup code, to be placed next."""
         f.decls += sub.decls
         f.may_fault = f.may_fault or sub.may_fault
+        f.calls += sub.calls
         return sub.pre
 
     def pointer_type(self, t, const=False):
@@ -621,6 +622,8 @@ class BodyEmitter:
             ret_tmp = f.temp(result.type)
             args.append(f"&{ret_tmp}" if not isinstance(result.type, ArrayT) else ret_tmp)
         outs = []
+        arg_marks = []
+        hoisted = set()
         for v in pou.vars.values():
             if v.section not in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT"):
                 continue
@@ -648,17 +651,30 @@ class BodyEmitter:
                 if a is not None and a.value is not None:
                     outs.append((a, tmp, v))
             f.pre += self.absorb(f, sub)
+            arg_marks.append((len(args), len(f.pre), f.calls, v))
             if sub.may_fault and ctype is not None:
+                hoisted.add(len(args))
                 # computed and checked before the next argument
                 tmp = f"arg{self.next_temp()}"
                 f.decls.append(f"{ctype}{tmp};")
                 f.pre += [f"{tmp} = {code};", self.fault_check(f.pos)]
                 code = tmp
             args.append(code)
+        for i, end, calls, v in reversed(arg_marks):
+            # a later argument calls a function (which may change this one's
+            # variables through VAR_IN_OUT): this one is computed before it
+            if calls == f.calls or v.section != "VAR_INPUT" or not N.is_scalar(v.type) or \
+                    i in hoisted or isinstance(concrete(v.type), StringT):
+                continue
+            tmp = f"arg{self.next_temp()}"
+            f.decls.append(f"{N.ctype(v.type)} {tmp};")
+            f.pre[end:end] = [f"{tmp} = {args[i]};"]
+            args[i] = tmp
         if f.may_fault:
             # something before the call may have faulted: it does not run
             f.pre.append(self.fault_check(f.pos))
         f.may_fault = True
+        f.calls += 1
         call = f"{N.fn(pou.name)}({', '.join(args)})"
         # every call is a statement of its own, in the order of the source
         # (left to right): a call may change the caller's variables through

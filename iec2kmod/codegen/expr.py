@@ -60,6 +60,7 @@ class Frame:
         self.decls: list[str] = []
         self.may_fault = False
         self.pooled: dict[str, int] = {}
+        self.calls = 0        # user FUNCTION calls emitted into pre
 
     def temp(self, t, prefix="tmp"):
         """A temporary of IEC type t for this statement.  In a POU body,
@@ -144,6 +145,42 @@ class ExprEmitter:
         if want is not None and t is not None:
             return self.convert(code, t, want)
         return code
+
+    def seq(self, f, items, info=None):
+        """C code of operands [(expr, IEC type)], evaluated left to right as
+        IEC says.  A user FUNCTION call is a statement of its own in f.pre,
+        run before the operands computed inline: when a later operand calls
+        one (which may change a variable through VAR_IN_OUT, or fault), each
+        scalar operand before it is computed into a temporary first, and its
+        fault checked, so the call sees (and is preceded by) what came
+        before it in the source.  info receives (pre lines added, may
+        fault) per operand."""
+        codes, marks = [], []
+        for e, t in items:
+            before, n_pre = f.may_fault, len(f.pre)
+            f.may_fault = False
+            code = self.emit(f, e, t)
+            faulted = f.may_fault
+            f.may_fault = before or faulted
+            codes.append(code)
+            marks.append((len(f.pre), f.calls, faulted))
+            if info is not None:
+                info.append((len(f.pre) > n_pre, faulted))
+        for i in range(len(items) - 2, -1, -1):
+            end, calls, faulted = marks[i]
+            e, t = items[i]
+            t = concrete(t if t is not None else e.type)
+            if f.calls == calls or _const_int(e) is not None or isinstance(e, ast.Lit) or \
+                    not N.is_scalar(t) or isinstance(t, StringT):
+                continue
+            tmp = f"opd{self.body.next_temp()}"
+            f.decls.append(f"{N.ctype(t)} {tmp};")
+            hoist = [f"{tmp} = {codes[i]};"]
+            if faulted:
+                hoist.append(self.body.fault_check(f.pos))
+            f.pre[end:end] = hoist
+            codes[i] = tmp
+        return codes
 
     def convert(self, code, src, dst):
         """Implicit widening (the checker allowed it) as a C cast."""
@@ -287,15 +324,13 @@ class ExprEmitter:
                     return f"((iec_bool){'!' if op == '<>' else ''}iec_str_eq({a}, {b}))"
                 fn = "iec_cmp_wstring" if c.wide else "iec_cmp_string"
                 return f"((iec_bool)({fn}({a}, {b}) {_cop(op)} 0))"
-            a = self.emit(f, e.left, c)
-            b = self.emit(f, e.right, c)
+            a, b = self.seq(f, [(e.left, c), (e.right, c)])
             return compare(a, _cop(op), b, c)
         if op in ("AND", "OR", "XOR"):
             rtype = concrete(t)
-            a = self.emit(f, e.left, rtype)
-            mark = (len(f.pre), f.may_fault)
-            b = self.emit(f, e.right, rtype)
-            if rtype is BOOL and op != "XOR" and mark == (len(f.pre), f.may_fault):
+            info = []
+            a, b = self.seq(f, [(e.left, rtype), (e.right, rtype)], info)
+            if rtype is BOOL and op != "XOR" and info[1] == (False, False):
                 # the right operand cannot fault and has no side effect: the
                 # compiler may skip it (C's && and ||), the value is the same
                 return f"((iec_bool)({a} {'&&' if op == 'AND' else '||'} {b}))"
@@ -369,6 +404,7 @@ class ExprEmitter:
             skip += self.body.assign_ref(inner, eno.value, Raw("0", BOOL))
         f.decls += inner.decls
         f.may_fault = f.may_fault or inner.may_fault
+        f.calls += inner.calls
         if en_code is None:
             f.pre += run
         else:
@@ -390,11 +426,11 @@ class ExprEmitter:
         res = concrete(fres.result)
         if isinstance(fres.result, LiteralT) and t is not None:
             res = concrete(t)
-        vals = lambda: [self.emit(f, a, concrete(pt) if not isinstance(pt, LiteralT) else res)
-                        for a, pt in zip(args, pts)]
+        vals = lambda: self.seq(f, [(a, concrete(pt) if not isinstance(pt, LiteralT) else res)
+                                    for a, pt in zip(args, pts)])
         tag = lambda ty: N.type_tag(ty)
         if fam in ("ADD", "SUB", "MUL", "DIV", "MOD"):
-            vs = [self.emit(f, a, res) for a in args]
+            vs = self.seq(f, [(a, res) for a in args])
             if scalar_kind(res) == "real":
                 if fam == "MOD":
                     raise CodegenError("MOD on REAL")
@@ -410,12 +446,11 @@ class ExprEmitter:
                 acc = f"{fn}({acc}, {v})"
             return acc
         if fam in ("ADD_TIME", "SUB_TIME"):
-            a, b = [self.emit(f, x, res) for x in args]
+            a, b = self.seq(f, [(x, res) for x in args])
             return f"iec_{fam.lower().replace('_time', '')}_{tag(res)}({a}, {b})"
         if fam in ("ADD_TOD_TIME", "ADD_DT_TIME", "SUB_TOD_TIME", "SUB_DT_TIME",
                    "SUB_DATE_DATE", "SUB_TOD_TOD", "SUB_DT_DT", "CONCAT_DATE_TOD"):
-            a = self.emit(f, args[0], pts[0])
-            b = self.emit(f, args[1], pts[1])
+            a, b = self.seq(f, [(args[0], pts[0]), (args[1], pts[1])])
             return f"iec_{fam.lower()}({a}, {b})"
         if fam in ("MUL_TIME", "DIV_TIME"):
             tt = concrete(pts[0])
@@ -443,14 +478,13 @@ class ExprEmitter:
             return f"iec_abs_{tag(res)}({a})"
         if fam in ("SQRT", "LN", "LOG", "EXP", "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN",
                    "ATAN2"):
-            vs = [self.emit(f, a, res) for a in args]
+            vs = self.seq(f, [(a, res) for a in args])
             return f"iec_{fam.lower()}_{tag(res)}({', '.join(vs)})"
         if fam in ("SHL", "SHR", "ROL", "ROR"):
-            a = self.emit(f, args[0], res)
-            n = self.emit(f, args[1], ELEMENTARY["LINT"])
+            a, n = self.seq(f, [(args[0], res), (args[1], ELEMENTARY["LINT"])])
             return f"iec_{fam.lower()}_{tag(res)}({a}, {n})"
         if fam in ("AND", "OR", "XOR"):
-            vs = [self.emit(f, a, res) for a in args]
+            vs = self.seq(f, [(a, res) for a in args])
             if res is BOOL:
                 sym = {"AND": "&", "OR": "|", "XOR": "^"}[fam]
                 return "((iec_bool)(" + f" {sym} ".join(vs) + "))"
@@ -468,13 +502,13 @@ class ExprEmitter:
             a, b = self.eager(f, args[1], res), self.eager(f, args[2], res)
             return f"({g} ? {b} : {a})"
         if fam in ("MAX", "MIN"):
-            vs = [self.emit(f, a, res) for a in args]
+            vs = self.seq(f, [(a, res) for a in args])
             acc = vs[0]
             for v in vs[1:]:
                 acc = f"iec_{fam.lower()}_{tag(res)}({acc}, {v})"
             return acc
         if fam == "LIMIT":
-            vs = [self.emit(f, a, res) for a in args]
+            vs = self.seq(f, [(a, res) for a in args])
             return f"iec_limit_{tag(res)}({', '.join(vs)})"
         if fam == "MUX":
             # a function's inputs are all evaluated before it runs (a fault
@@ -497,7 +531,7 @@ class ExprEmitter:
                 cmp = "iec_cmp_wstring" if c.wide else "iec_cmp_string"
                 parts = [f"({cmp}({vs[i]}, {vs[i + 1]}) {sym} 0)" for i in range(len(vs) - 1)]
             else:
-                vs = [self.emit(f, a, c) for a in args]
+                vs = self.seq(f, [(a, c) for a in args])
                 parts = [compare(vs[i], sym, vs[i + 1], c) for i in range(len(vs) - 1)]
             return "((iec_bool)(" + " && ".join(parts) + "))"
         if fam == "LEN":
