@@ -190,7 +190,9 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 #     control variable in C: tests/execution/cases/faults/fuzz_fault_for_step.st
 #   fault_in_string_store: a STRING (or aggregate) assignment whose index or value
 #     faults still stores in C: tests/execution/cases/faults/fuzz_fault_string_*.st
-AVOID = {"il_literal_cr", "fault_in_for_head", "fault_in_string_store"}
+#   string_alias: a[k] := CONCAT('-', a[ABS(j)]) with ABS(j) = k reads the element
+#     C is writing: tests/execution/cases/strings/fuzz_concat_alias.st
+AVOID = {"il_literal_cr", "fault_in_for_head", "fault_in_string_store", "string_alias"}
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
@@ -633,6 +635,9 @@ class Gen:
 
     def inout_args(self, scope, want):
         """Variables that can be passed to a VAR_IN_OUT of type want."""
+        if want.kind == "fb":
+            return [((v.name,), v.ty) for v in scope if v.ty.kind == "fb" and
+                    not v.ty.is_array and v.ty.name == want.name]
         out = []
         for p, t in self.readable(scope, want, writable=True):
             if t is not want and not (want.scalar and same_type(t, want) and t.kind != "sub"):
@@ -905,7 +910,11 @@ class Gen:
                 return None
             self.feat("aggregate_assign")
             return f"{lhs} := {self.render_path(self.pick(same)[0], scope, d)};"
-        return f"{lhs} := {self.expr(t, scope)};"
+        rhs = self.expr(t, scope)
+        if "string_alias" in AVOID and t.kind == "string" and "[" in lhs and \
+                re.search(rf"\b{re.escape(lhs.split('[')[0])}\[", rhs):
+            rhs = self.lit(t)
+        return f"{lhs} := {rhs};"
 
     def stmts(self, scope, d, n, ctx):
         out = []
@@ -1090,6 +1099,8 @@ class Gen:
             if not c:
                 return None
             args.append(f"{name} := {self.render_path(self.pick(c)[0], scope, d)}")
+            if ot.kind == "fb":
+                self.feat("fb_inout_instance_call")
         for name, ot in t.outputs:
             if self.chance(0.3):
                 c = [x for x in self.readable(scope, ot, writable=True)
@@ -1359,6 +1370,10 @@ class Gen:
             t = self.pick_type(allow_struct=True, allow_array=True)
             fb.vars.append(Var(self.uid("io"), t, "inout"))
             self.feat("fb_inout")
+        if self.fbs and self.chance(0.2):
+            # an instance of another block by reference
+            fb.vars.append(Var(self.uid("iof"), self.fb_type(self.pick(self.fbs)), "inout"))
+            self.feat("fb_inout_instance")
         if self.chance(0.6):
             self.externals_for(fb, [g for g in self.cglobals if not g.loc])
         self.add_instances(fb)
