@@ -154,6 +154,8 @@ class BodyEmitter:
             lines = self.assign_ref(f, s.target, s.value)
             if f.may_fault and N.is_scalar(concrete(s.target.type)):
                 return self.guarded_assign(s.target, s.value, s.pos)
+            if f.may_fault:
+                return self.guarded_store(s.target, s.value, s.pos)
             return self.wrap(f, lines, s.pos)
         if isinstance(s, ast.CallStmt):
             return self.call_stmt(s.call, s.pos)
@@ -281,15 +283,18 @@ class BodyEmitter:
         # a constant step: the loop test and the increment are known
         lo_t, hi_t = vt.range
         e_name = f"for_end{n}"
+        setup = list(f.pre)
+        if f.may_fault:
+            # the head faults before the control variable is set
+            start = self.for_start(f, setup, start, ct, n)
         if cend is not None:
             e_name = c_int(cend, vt)
-            setup = list(f.pre)
         else:
             f.decls.append(f"{ct} {e_name};")
-            setup = f.pre + [f"{e_name} = {end};"]
-        setup.append(f"{var} = {start};")
+            setup.append(f"{e_name} = {end};")
         if f.may_fault:
             setup.append(self.fault_check(s.pos))
+        setup.append(f"{var} = {start};")
         head = [f"if ({var} {'>' if cstep > 0 else '<'} {e_name})", self.ind + "break;"]
         if cend is not None and cend == (hi_t if cstep > 0 else lo_t):
             head = []       # up to the type's limit: the increment ends the loop
@@ -334,9 +339,15 @@ class BodyEmitter:
         step = self.expr.emit(f, s.step, vt) if s.step is not None else c_int(1, vt)
         e_name, s_name, nx = f"for_end{n}", f"for_step{n}", f"for_next{n}"
         f.decls += [f"{ct} {e_name};", f"{ct} {s_name};", f"{ct} {nx};"]
-        setup = f.pre + [f"{e_name} = {end};", f"{s_name} = {step};", f"{var} = {start};"]
+        setup = list(f.pre)
+        if f.may_fault:
+            # start, end, step, in this order, and the fault checked before
+            # the control variable is set
+            start = self.for_start(f, setup, start, ct, n)
+        setup += [f"{e_name} = {end};", f"{s_name} = {step};"]
         if f.may_fault:
             setup.append(self.fault_check(s.pos))
+        setup.append(f"{var} = {start};")
         signed = scalar_kind(vt) == "sint"
         neg = f"{s_name} < 0 ? {var} < {e_name} : " if signed else ""
         head = [f"if ({neg}{var} > {e_name})", self.ind + "break;"]
@@ -344,6 +355,14 @@ class BodyEmitter:
                 f"{var} = {nx};"]
         lines = setup + self.loop(s.pos, head, s.body, tail)
         return ["{"] + self.indent(f.decls + lines) + ["}"]
+
+    @staticmethod
+    def for_start(f, setup, start, ct, n):
+        """The FOR start value into a temporary of its own (computed first)."""
+        name = f"for_start{n}"
+        f.decls.append(f"{ct} {name};")
+        setup.append(f"{name} = {start};")
+        return name
 
     def loop_charge(self, pos, n):
         name = N.c_string(self.pou.name.encode())
@@ -384,6 +403,27 @@ class BodyEmitter:
         store = self.set_bit(f, f"(*{ptr})", target, bit, val) if bit is not None else \
             f"*{ptr} = {val};"
         return self.wrap(f, [self.fault_check(pos), store], pos, check=False)
+
+    def guarded_store(self, target, value, pos) -> list[str]:
+        """A STRING, array or structure assignment that can fault stores
+        nothing when it faults: the value into a temporary of the target's
+        type, then the place, then the fault check, then the copy."""
+        f = Frame(self, pos)
+        t = concrete(target.type)
+        tmp = f.temp(t, "val")
+        lines = self.assign_code(f, tmp, t, value)
+        lv, _, _ = self.expr.lvalue(f, target)
+        ptr = f"ptr{self.next_temp()}"
+        f.decls.append(f"{self.pointer_type(t)}{ptr};")
+        if isinstance(t, ArrayT):
+            lines.append(f"{ptr} = {lv};")
+            place = ptr
+        else:
+            lines.append(f"{ptr} = &{lv};")
+            place = f"(*{ptr})"
+        f.may_fault = False
+        lines += [self.fault_check(pos), copy_value(place, tmp, t)]
+        return self.wrap(f, lines, pos, check=False)
 
     def set_bit(self, f, code, target, bit, val):
         """x.bit := val, where val is a BOOL (0 or 1, never anything else)."""
@@ -781,6 +821,8 @@ class BodyEmitter:
             lines += self.assign_ref(probe, i.operand, Raw(cr, cr_in))
             if probe.may_fault and N.is_scalar(concrete(i.operand.type)):
                 return out + self.guarded_assign(i.operand, Raw(cr, cr_in), i.pos)
+            if probe.may_fault:
+                return out + self.guarded_store(i.operand, Raw(cr, cr_in), i.pos)
             f = probe
         elif op in ("S", "R") and not isinstance(getattr(i.operand, "type", None), FBType):
             lv, _, bit = self.expr.lvalue(f, i.operand)

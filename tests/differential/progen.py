@@ -186,13 +186,9 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 #   il_literal_cr: the interpreter does not wrap an IL current result computed
 #     from untyped literals (LD 38 SUB 40) when it is stored (ST u: -2 in a UINT):
 #     tests/execution/cases/il/fuzz_il_literal_cr_store.il
-#   fault_in_for_head: a FOR whose step (or bound) faults has already set its
-#     control variable in C: tests/execution/cases/faults/fuzz_fault_for_step.st
-#   fault_in_string_store: a STRING (or aggregate) assignment whose index or value
-#     faults still stores in C: tests/execution/cases/faults/fuzz_fault_string_*.st
 #   string_alias: a[k] := CONCAT('-', a[ABS(j)]) with ABS(j) = k reads the element
 #     C is writing: tests/execution/cases/strings/fuzz_concat_alias.st
-AVOID = {"il_literal_cr", "fault_in_for_head", "fault_in_string_store", "string_alias"}
+AVOID = {"il_literal_cr", "string_alias"}
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
