@@ -3,10 +3,9 @@
 Engines:
   c         the compiled C simulator (iec2kmod.sim, in process)
   sanitize  the same with -fsanitize=undefined,address: any report is a failure
-  vm        the reference interpreter, ``iec2kmod sim --engine vm`` (through the
-            command line, its documented contract: same CSV output, runtime
-            errors on stderr as ``file:line: runtime error: F in POU (task T,
-            t=S s)``); used as soon as the CLI offers ``--engine vm``
+  vm        the reference interpreter (iec2kmod.interp.run, what ``iec2kmod sim
+            --engine vm`` runs), in process on the project the front end
+            checked once; used when the CLI offers ``--engine vm``
 
 Several generated units share one configuration (one front-end run and one
 simulator build per engine for a whole batch); a batch that does not run
@@ -24,8 +23,6 @@ control flow), NaNs are equal to each other, everything else must be equal.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import os
 import re
@@ -53,7 +50,6 @@ from iec2kmod.codegen.plan import build_plan  # noqa: E402
 ULP_TOLERANCE = 4
 INTERVAL_NS = 10_000_000
 SANITIZER_REPORT = re.compile(r"runtime error|Sanitizer|^==\d+==|SUMMARY:", re.M)
-FAULT_LINE = re.compile(r"^(.*):(\d+): runtime error: (.*) in (\S+) \(task (\S+), t=([0-9.]+) s\)")
 ALL_ENGINES = ("c", "sanitize", "vm")
 
 
@@ -181,39 +177,6 @@ def run_vm_inproc(project, plan, end_ns, trace):
     for t, i, v in res.changes:
         run.changes.setdefault(res.names[i].upper(), []).append((t, _text(v)))
     run.faults = [(t, task, fault, pou, line) for t, task, fault, pou, _f, line in res.faults]
-    return run
-
-
-def run_vm(files, plan, end_ns, trace, workdir):
-    watch = [e.path for e in plan.table]
-    out = Path(workdir) / f"vm.{os.getpid()}.csv"
-    cmd = [sys.executable, "-m", "iec2kmod.cli", "sim", *map(str, files), "--engine", "vm",
-           "--duration", f"{end_ns}ns", "--inputs", str(trace), "--csv", str(out),
-           "--watch", ",".join(watch)]
-    try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=str(ROOT),
-                           env=dict(os.environ, PYTHONPATH=str(ROOT)))
-    except subprocess.TimeoutExpired:
-        return EngineRun("vm", "crash", "the interpreter did not finish in 900 s")
-    if p.returncode not in (0, 1) or not out.exists():
-        return EngineRun("vm", "crash" if p.returncode == 70 else "error",
-                         f"exit {p.returncode}: {p.stderr.strip()[-1500:]}")
-    run = EngineRun("vm", "ok")
-    with open(out, newline="") as fh:
-        rows = list(csv.reader(fh))
-    out.unlink(missing_ok=True)
-    head = [h.upper() for h in rows[0][1:]]
-    for row in rows[1:]:
-        t = int(row[0])
-        for name, v in zip(head, row[1:]):
-            if v == "":
-                continue
-            run.changes.setdefault(name, []).append((t, v))
-    for line in p.stderr.splitlines():
-        m = FAULT_LINE.match(line)
-        if m:
-            _f, ln, fault, pou, task, secs = m.groups()
-            run.faults.append((round(float(secs) * 1e9), task, fault, pou, int(ln)))
     return run
 
 

@@ -35,6 +35,7 @@ MUST_REACH = {
     "located_I", "located_Q", "located_M", "var_constant", "var_temp", "std_fb_TON",
     "std_fb_TOF", "std_fb_TP", "std_fb_CTUD", "std_fb_R_TRIG", "std_fb_F_TRIG", "std_fb_SR",
     "std_fb_RS", "fuzzy_real", "edge_input", "user_function", "global_constant",
+    "fb_inout_instance",
 }
 
 
