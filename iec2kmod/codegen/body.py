@@ -7,6 +7,8 @@ loop iteration ticks the cycle's loop budget."""
 
 from __future__ import annotations
 
+import re
+
 from .. import ast
 from ..checks import stdlib
 from ..checks.body import IL_ARITH, IL_COMPARE, IL_LOGIC, _CR
@@ -49,6 +51,12 @@ class BodyEmitter:
             self._pool_names[key] = name
             self.pool[name] = decl_key.replace("@", name) + ";"
         return self._pool_names[key]
+
+    def pool_snapshot(self):
+        return dict(self.pool), dict(self._pool_names)
+
+    def pool_restore(self, snap):
+        self.pool, self._pool_names = dict(snap[0]), dict(snap[1])
 
     def pool_decls(self):
         return list(self.pool.values())
@@ -151,7 +159,12 @@ class BodyEmitter:
     def stmt(self, s) -> list[str]:
         if isinstance(s, ast.Assign):
             f = Frame(self, s.pos)
+            snap = self.pool_snapshot()
             lines = self.assign_ref(f, s.target, s.value)
+            if f.may_fault:
+                # emitted again: the pooled temporaries of this try are not
+                # declared (an unused one is a warning)
+                self.pool_restore(snap)
             if f.may_fault and N.is_scalar(concrete(s.target.type)):
                 return self.guarded_assign(s.target, s.value, s.pos)
             if f.may_fault:
@@ -483,7 +496,11 @@ class BodyEmitter:
         fres = std_target(value)
         if fres is not None and fres.family == "CONCAT" and not code.startswith("(*"):
             parts = self.expr.concat_parts(f, std_args(value))
-            if not any(code in arg for _, arg in parts[1:]):
+            # the variable holding the destination (a[k] and a[ABS(j)] may
+            # be the same element): a piece that reads it is read before
+            # the destination is written, through a temporary
+            root = re.match(r"[^\[.]*", code).group(0)
+            if not any(root in arg for _, arg in parts[1:]):
                 # built in place: truncating each piece at the destination's
                 # capacity gives the truncated whole
                 return self.expr.concat_lines(buf, parts)
@@ -602,7 +619,7 @@ class BodyEmitter:
         """member := value for an input of a call: when computing the value
         can fault, it goes into a temporary first and the fault is checked
         before the store (the input keeps its value, nothing after runs)."""
-        snapshot = dict(f.pooled)
+        snapshot, snap = dict(f.pooled), self.pool_snapshot()
         sub = self.sub_frame(f)
         code = self.assign_code(sub, member, t, value)
         if not sub.may_fault:
@@ -610,6 +627,7 @@ class BodyEmitter:
         # again, into a temporary of the parameter's type
         f.pooled.clear()
         f.pooled.update(snapshot)
+        self.pool_restore(snap)
         sub = self.sub_frame(f)
         if N.is_scalar(concrete(t)):
             tmp = f"arg{self.next_temp()}"
@@ -624,10 +642,14 @@ class BodyEmitter:
         """target := value (an output copied out of a call): when the place
         can fault (an index), it is computed and checked first and nothing
         is stored on a fault."""
+        snapshot, snap = dict(f.pooled), self.pool_snapshot()
         sub = self.sub_frame(f)
         code = self.assign_ref(sub, target, value)
         if not sub.may_fault:
             return self.absorb(f, sub) + code
+        f.pooled.clear()
+        f.pooled.update(snapshot)
+        self.pool_restore(snap)
         sub = self.sub_frame(f)
         lv, lt, bit = self.expr.lvalue(sub, target)
         n = self.next_temp()
@@ -818,7 +840,10 @@ class BodyEmitter:
                 cr = f"((iec_bool)!{cr})" if concrete(cr_in) is BOOL else \
                     f"iec_not_{N.type_tag(cr_in)}({cr})"
             probe = Frame(self, i.pos)
+            snap = self.pool_snapshot()
             lines += self.assign_ref(probe, i.operand, Raw(cr, cr_in))
+            if probe.may_fault:
+                self.pool_restore(snap)
             if probe.may_fault and N.is_scalar(concrete(i.operand.type)):
                 return out + self.guarded_assign(i.operand, Raw(cr, cr_in), i.pos)
             if probe.may_fault:

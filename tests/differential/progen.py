@@ -186,12 +186,10 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 #   il_literal_cr: the interpreter does not wrap an IL current result computed
 #     from untyped literals (LD 38 SUB 40) when it is stored (ST u: -2 in a UINT):
 #     tests/execution/cases/il/fuzz_il_literal_cr_store.il
-#   string_alias: a[k] := CONCAT('-', a[ABS(j)]) with ABS(j) = k reads the element
-#     C is writing: tests/execution/cases/strings/fuzz_concat_alias.st
 #   output_index_call: an FB output bound to a[F('ab')] (a FUNCTION with a STRING
 #     argument in the index) declares an unused string temporary in C (build
 #     fails): tests/execution/cases/user/fuzz_output_index_string_call.st
-AVOID = {"il_literal_cr", "string_alias", "output_index_call"}
+AVOID = {"il_literal_cr", "output_index_call"}
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
