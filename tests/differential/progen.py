@@ -186,10 +186,7 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 #   il_literal_cr: the interpreter does not wrap an IL current result computed
 #     from untyped literals (LD 38 SUB 40) when it is stored (ST u: -2 in a UINT):
 #     tests/execution/cases/il/fuzz_il_literal_cr_store.il
-#   output_index_call: an FB output bound to a[F('ab')] (a FUNCTION with a STRING
-#     argument in the index) declares an unused string temporary in C (build
-#     fails): tests/execution/cases/user/fuzz_output_index_string_call.st
-AVOID = {"il_literal_cr", "output_index_call"}
+AVOID = {"il_literal_cr"}
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
