@@ -60,6 +60,10 @@ def implicit(src, dst):
                 return f32_safe if d.bits == 32 else None
             if d.cat == "bool":
                 return bool
+            if d.cat in ("sint", "uint", "bit") and s.cat == "int":
+                # a value computed from untyped literals (IL: LD 38 SUB 40)
+                # is stored as every store is: into the variable's type
+                return lambda v: wrap(v, d)
             return None
         if not isinstance(s, Elementary):
             return None

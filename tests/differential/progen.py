@@ -183,10 +183,7 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 # Patterns of bugs found by this campaign and reported, which the generator
 # avoids so that the campaign keeps finding others.  Each entry names the
 # regression case that shows the bug; delete the entry once it is fixed.
-#   il_literal_cr: the interpreter does not wrap an IL current result computed
-#     from untyped literals (LD 38 SUB 40) when it is stored (ST u: -2 in a UINT):
-#     tests/execution/cases/il/fuzz_il_literal_cr_store.il
-AVOID = {"il_literal_cr"}
+AVOID: set = set()
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
