@@ -6,6 +6,15 @@
  *   /sys/kernel/iec2kmod/<configuration>/status    resources, tasks, slots
  *   /sys/kernel/iec2kmod/<configuration>/control   "start <resource>|all",
  *                                                   "stop <resource>|all",
+ *                                                   "run <resource>|all MS"
+ *                                                   (start; every periodic
+ *                                                   task stops by itself
+ *                                                   before its first release
+ *                                                   MS ms after the start,
+ *                                                   running late releases
+ *                                                   late instead of skipping
+ *                                                   them: a fixed number of
+ *                                                   cycles)
  *                                                   "clear <slot>|all"
  *
  * Generic netlink family "iec2kmod" (iec_nl.h), for plc-manager: status,
@@ -989,8 +998,10 @@ out:
  * idle: no cycle runs, the resource module may go), or -ETIMEDOUT after
  * the bound, naming the task that did not.
  */
-static int iec_control_resource(const char *name, bool start)
+static int iec_control_resource(const char *name, bool start, u32 run_ms)
 {
+	/* a common first release, late enough for every task to be asleep */
+	ktime_t epoch = ktime_add_ms(ktime_get(), IEC_START_DELAY_MS);
 	struct iec_resource *r;
 	unsigned long deadline;
 	s64 longest = 0;
@@ -1004,6 +1015,8 @@ static int iec_control_resource(const char *name, bool start)
 		if (name && strcasecmp(name, r->name))
 			continue;
 		if (start) {
+			r->epoch = epoch;
+			r->until = run_ms ? ktime_add_ms(epoch, run_ms) : 0;
 			ret = r->start(r);
 		} else {
 			r->stop(r);
@@ -1038,7 +1051,7 @@ static int iec_nl_res(struct genl_info *info, bool start)
 	if (info->attrs[IEC_A_NAME])
 		name = nla_data(info->attrs[IEC_A_NAME]);
 	mutex_lock(&iec_ctl_mutex);
-	err = iec_control_resource(name, start);
+	err = iec_control_resource(name, start, 0);
 	mutex_unlock(&iec_ctl_mutex);
 	if (err == -ENOENT)
 		NL_SET_ERR_MSG_ATTR(info->extack, info->attrs[IEC_A_NAME],
@@ -1252,14 +1265,17 @@ static ssize_t control_store(struct kobject *kobj, struct kobj_attribute *attr,
 			     const char *buf, size_t count)
 {
 	char cmd[16], arg[64];
-	int ret;
-	u32 slot;
+	int ret, n;
+	u32 slot, run_ms = 0;
 
-	if (sscanf(buf, "%15s %63s", cmd, arg) != 2)
+	n = sscanf(buf, "%15s %63s %u", cmd, arg, &run_ms);
+	if (n < 2 || (n == 3) != !strcmp(cmd, "run") || (n == 3 && !run_ms))
 		return -EINVAL;
 	mutex_lock(&iec_ctl_mutex);
 	if (!strcmp(cmd, "start") || !strcmp(cmd, "stop")) {
-		ret = iec_control_resource(arg, cmd[2] == 'a');
+		ret = iec_control_resource(arg, cmd[2] == 'a', 0);
+	} else if (!strcmp(cmd, "run")) {
+		ret = iec_control_resource(arg, true, run_ms);
 	} else if (!strcmp(cmd, "clear")) {
 		if (!strcmp(arg, "all")) {
 			ret = iec_gft_clear(-1);

@@ -29,6 +29,7 @@
 #define IEC_KMOD_ABI		1
 #define IEC_HIST_BUCKETS	32	/* release latency histogram, 1 us wide */
 #define IEC_POU_NAME_LEN	64
+#define IEC_START_DELAY_MS	50	/* start command to the first release */
 
 /* One variable the manager can read and write by its IEC path. */
 struct iec_var_desc {
@@ -122,6 +123,8 @@ struct iec_task {
 	int state;			/* enum iec_task_state */
 	bool event_pending;
 	bool start_request;
+	ktime_t first;		/* first release after a start (the epoch) */
+	ktime_t until;		/* 0, or: stop before this release ("run") */
 	ktime_t next;
 	struct iec_task_stats stats;
 
@@ -167,6 +170,14 @@ struct iec_resource {
 	/* control, implemented by the resource runtime (static there) */
 	int (*start)(struct iec_resource *res);
 	void (*stop)(struct iec_resource *res);
+	/*
+	 * First release of the periodic tasks at the next start, set by the
+	 * configuration module: every task started by one command shares it,
+	 * so tasks released at the same instant run in priority order as in
+	 * `iec2kmod sim`.
+	 */
+	ktime_t epoch;
+	ktime_t until;		/* 0, or: periodic tasks stop before this release */
 	/* runtime, owned by the configuration module */
 	struct list_head node;
 	struct kobject *kobj;

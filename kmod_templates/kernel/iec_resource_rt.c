@@ -88,11 +88,16 @@ static void iec_task_account(struct iec_task *t, s64 latency, s64 exec)
 	s->exec_sum_ns += exec;
 }
 
+/*
+ * One cycle.  The programs' clock (timers) reads the cycle's release time,
+ * not the moment the thread got the CPU: time advances by exactly one
+ * interval per cycle, as in `iec2kmod sim`, whatever the wake-up latency.
+ */
 static void iec_task_cycle(struct iec_task *t, ktime_t release)
 {
 	ktime_t start = ktime_get();
 
-	iec_ctx_cycle_begin(&t->ctx, ktime_to_ns(start));
+	iec_ctx_cycle_begin(&t->ctx, ktime_to_ns(release));
 	iec2kmod_cycle_begin(t);	/* forces; the manager waits from here */
 	t->copy_in();
 	t->run(&t->ctx);
@@ -215,7 +220,11 @@ static int iec_task_thread(void *arg)
 			iec_task_idle(t);
 			continue;
 		}
-		t->next = ktime_get();
+		t->next = t->first;	/* the common first release */
+		if (!iec_sleep_until(t, t->next)) {
+			iec_task_idle(t);	/* stopped before it */
+			continue;
+		}
 		for (;;) {
 			s64 late;
 
@@ -224,12 +233,24 @@ static int iec_task_thread(void *arg)
 				break;
 			t->next = ktime_add_ns(t->next, t->interval_ns);
 			late = ktime_to_ns(ktime_sub(ktime_get(), t->next));
-			if (late > 0) {
+			if (late > 0 && t->until) {
+				/*
+				 * a run of a fixed length runs every release
+				 * before its end, late ones late, so that the
+				 * number of cycles is exact
+				 */
+				t->stats.overruns++;
+			} else if (late > 0) {
 				/* skip the releases that already passed */
 				u64 missed = div64_u64((u64)late, t->interval_ns) + 1;
 
 				t->stats.overruns += missed;
 				t->next = ktime_add_ns(t->next, missed * t->interval_ns);
+			}
+			if (t->until && !ktime_before(t->next, t->until)) {
+				/* a run of a fixed length ("run" command) is over */
+				smp_store_release(&t->state, IEC_TASK_STOPPED);
+				break;
 			}
 			if (!iec_sleep_until(t, t->next))
 				break;
@@ -289,6 +310,8 @@ static int iec_resource_start(struct iec_resource *res)
 		t->stats.fault_pou_name[0] = '\0';
 		t->stats.fault_line = 0;
 		WRITE_ONCE(t->event_pending, false);
+		t->first = res->epoch;
+		t->until = res->until;
 		smp_store_release(&t->state, IEC_TASK_RUNNING);
 		wake_up_process(t->thread);
 	}

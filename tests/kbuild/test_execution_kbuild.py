@@ -3,10 +3,19 @@ W=1 and zero warnings, on the host (with sparse, C=1: zero sparse warnings
 too) and in the container.  The sources of an
 area are wrapped into one configuration exactly as the execution runner
 does (one task and one program instance per case), so one kbuild run
-covers an area; a case with its own CONFIGURATION builds alone."""
+covers an area; a case with its own CONFIGURATION builds alone.
+
+Host builds are kept under ``$IEC2KMOD_CACHE/kbuild_exec/<group>-<key>``,
+the key hashing the group's sources and everything that generates or
+compiles them (iec2kmod/, kmod_templates/, the kernel headers used): the
+QEMU tier (tests/qemu/test_exec_kernel.py) loads these same modules
+instead of building them a second time."""
 
 from __future__ import annotations
 
+import hashlib
+import os
+import shutil
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -36,13 +45,46 @@ def _cli(*args):
                           capture_output=True, text=True, timeout=3600)
 
 
-def _build(name, cases, tmp: Path, container: bool):
+def group_sources(name, cases, tmp: Path) -> list[str]:
+    """The sources of a group: the cases, and the runner's wrapper
+    configuration unless the case has its own."""
     if len(cases) == 1 and cases[0].standalone:
-        sources = [str(cases[0].path)]
-    else:
-        cfg = tmp / f"{name}_config.st"
-        cfg.write_text(runner.wrapper_config(name, cases))
-        sources = [str(c.path) for c in cases] + [str(cfg)]
+        return [str(cases[0].path)]
+    cfg = tmp / f"{name}_config.st"
+    cfg.write_text(runner.wrapper_config(name, cases))
+    return [str(c.path) for c in cases] + [str(cfg)]
+
+
+def _generator_key() -> str:
+    h = hashlib.sha256()
+    for top in ("iec2kmod", "kmod_templates"):
+        for f in sorted((ROOT / top).rglob("*")):
+            if f.is_file() and "__pycache__" not in f.parts:
+                h.update(str(f.relative_to(ROOT)).encode())
+                h.update(f.read_bytes())
+    h.update(os.uname().release.encode())
+    h.update(" ".join(sorted(p.name for p in Path("/usr/src").glob("linux-headers-*"))).encode())
+    return h.hexdigest()
+
+
+_GEN_KEY: list = []
+
+
+def cache_dir(name, sources) -> Path:
+    if not _GEN_KEY:
+        _GEN_KEY.append(_generator_key())
+    h = hashlib.sha256(_GEN_KEY[0].encode())
+    for src in sources:
+        h.update(Path(src).name.encode())
+        h.update(Path(src).read_bytes())
+    return runner.build_root() / "kbuild_exec" / f"{name}-{h.hexdigest()[:16]}"
+
+
+def _build(name, cases, tmp: Path, container: bool):
+    sources = group_sources(name, cases, tmp)
+    cached = None if container else cache_dir(name, sources)
+    if cached is not None and (cached / "built.ok").exists():
+        return None
     out = tmp / f"tree_{name}"
     p = _cli("gen", *sources, "-o", str(out))
     if p.returncode != 0:
@@ -51,7 +93,22 @@ def _build(name, cases, tmp: Path, container: bool):
     p = _cli("build", str(out), *(["--container"] if container else ["--sparse"]))
     if p.returncode != 0:
         return f"{name}: build failed ({p.returncode}): {p.stderr[-3000:]}"
+    if cached is not None:
+        (out / "built.ok").write_text("")
+        for old in cached.parent.glob(f"{name}-*"):
+            shutil.rmtree(old, ignore_errors=True)
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copytree(out, cached.with_suffix(".tmp"), dirs_exist_ok=True)
+        os.replace(cached.with_suffix(".tmp"), cached)
     return None
+
+
+def built_tree(name, cases, tmp: Path) -> Path:
+    """The host-built module tree of a group, from the cache (built now if
+    missing); raises AssertionError with the build's message on failure."""
+    err = _build(name, cases, tmp, container=False)
+    assert err is None, err
+    return cache_dir(name, group_sources(name, cases, tmp))
 
 
 def _all(tmp_path, container):
