@@ -183,10 +183,7 @@ for _sfx, _t in (("", "INT"), ("_DINT", "DINT"), ("_LINT", "LINT"), ("_UDINT", "
 # Patterns of bugs found by this campaign and reported, which the generator
 # avoids so that the campaign keeps finding others.  Each entry names the
 # regression case that shows the bug; delete the entry once it is fixed.
-#   string_fn_in_concat: CONCAT(..., F(x)) with F returning a STRING, nested in
-#     string functions, declares an unused string temporary in C (build fails):
-#     tests/execution/cases/strings/fuzz_concat_fn_result.st
-AVOID = {"string_fn_in_concat"}
+AVOID: set = set()
 _ZERO = re.compile(r"^\(*(?:[A-Z]+#)?(?:16#)?0+\)*$")
 
 
