@@ -89,6 +89,13 @@ def _unary(obj):
     return node
 
 
+def _exponent(obj):
+    node = obj.operand
+    for op in reversed(obj.ops):
+        node = ast.UnOp(_pos(obj), "NOT" if op[0] in "nN" else op, node)
+    return node
+
+
 def _paren(obj):
     return obj.expr
 
@@ -191,6 +198,7 @@ def metamodel():
     mm.register_obj_processors({
         "Expression": _expression,
         "Unary": _unary,
+        "Exponent": _exponent,
         "Paren": _paren,
         "Literal": _literal,
         "ILSignedNumber": _signed_number,
