@@ -696,6 +696,12 @@ class BodyEmitter:
                     code = self.default_value(sub, v)
                 elif N.is_scalar(v.type):
                     code = self.expr.emit(sub, a.value, v.type)
+                    if isinstance(v.type, SubrangeT) and not _within(a.value, v.type):
+                        # passing a value is assigning it: checked as a store is
+                        sub.may_fault = True
+                        wide = "ulint" if scalar_kind(v.type.elem) == "uint" else "lint"
+                        code = (f"(({N.ctype(v.type.elem)})iec_range_{wide}(ctx, {code}, "
+                                f"{v.type.low}LL, {v.type.high}LL))")
                 else:
                     code = self.by_reference(sub, a.value, v.type)
                 ctype = N.ctype(v.type) + " " if N.is_scalar(v.type) else \
