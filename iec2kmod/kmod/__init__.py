@@ -438,6 +438,12 @@ def _write_module(out, mod, files, objs, fp_objs, runtime):
         f"obj-m := {mod}.o",
         f"{mod}-y := {' '.join(objs)}",
         "ccflags-y := -I$(src)/../runtime -I$(src)/../include -std=gnu11",
+        # string temporaries of different lengths do not share a pooled slot,
+        # so a POU with many of them can pass the kernel's 2048-byte frame
+        # warning (x86-64 kernel stacks are 16 KiB); the ceiling below keeps
+        # the build failing on anything larger until those temporaries move
+        # off the stack (instance or per-task scratch storage)
+        "ccflags-y += -Wframe-larger-than=4096",
     ]
     for o in fp_objs:
         lines.append(f"CFLAGS_{o} += {FP_FLAGS}")
