@@ -176,6 +176,12 @@ def compare_group(name, project, ms, tasks, values) -> list[str]:
             continue
         want = final.get(key, "<none>")
         kind, got = values[key]
+        if e.kind == "e" and isinstance(got, int) and isinstance(want, str):
+            # the manager reads an enumeration as its integer, the simulator
+            # prints the value's name: compare the integers
+            et = e.type.elem if hasattr(e.type, "elem") and not hasattr(e.type, "values") \
+                else e.type
+            want = et.values.get(want.upper(), (None, want))[1]
         if not same(e.kind, got, want, e.size):
             problems.append(f"{name}: {e.path} = {got!r} in the kernel, {want!r} in the "
                             f"simulation")
