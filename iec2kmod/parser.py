@@ -182,12 +182,21 @@ def _call_or_variable(obj):
     return ast.Call(var.pos, var.name, _args(obj.call))
 
 
+def _keyword_call(obj):
+    return ast.Call(_pos(obj), obj.name.upper(), _args(obj.call))
+
+
 def _direct(obj):
     return ast.Direct(_pos(obj), obj.address.upper())
 
 
 def _call_args(obj):
     obj.arglist = _args(obj)
+    return None
+
+
+def _il_call_args(obj):
+    obj.arglist = _args(obj.list)
     return None
 
 
@@ -206,8 +215,9 @@ def metamodel():
         "Variable": _variable,
         "CallOrVariable": _call_or_variable,
         "DirectVariable": _direct,
+        "KeywordCall": _keyword_call,
         "CallArgs": _call_args,
-        "ILCallArgs": _call_args,
+        "ILCallArgs": _il_call_args,
     })
     return mm
 

@@ -755,10 +755,8 @@ class BodyChecker:
                 jumped = self.label_cr.get(i.label.upper())
                 if cr is None:
                     cr = jumped
-                elif jumped is not None and not isinstance(jumped, ErrorT) and \
-                        not isinstance(cr, ErrorT) and concrete(jumped) is not concrete(cr):
-                    # an error only if an instruction reads it (LD replaces it)
-                    cr = _Conflict(i.label, concrete(cr), concrete(jumped))
+                elif jumped is not None:
+                    cr = _join_cr(i.label, cr, jumped)
             i.cr_in = cr
             cr = self.il_instr(i, cr)
             i.cr_out = cr
@@ -848,7 +846,9 @@ class BodyChecker:
             elif target.name.upper() not in self.pou.labels:
                 self.error(target.pos, f"unknown label '{target.name}'")
             elif cr is not None:
-                self.label_cr.setdefault(target.name.upper(), cr)
+                up = target.name.upper()
+                prev = self.label_cr.get(up)
+                self.label_cr[up] = cr if prev is None else _join_cr(target.name, prev, cr)
             return cr if op != "JMP" else None
         if op in ("RET", "RETC", "RETCN"):
             if op != "RET":
@@ -948,6 +948,25 @@ class BodyChecker:
             return self.call(c, statement=False)
         self.error(i.pos, f"unknown IL operator or function '{i.fn}'")
         return ERROR
+
+
+def _join_cr(label, a, b):
+    """The current result's type at a label reached with types a and b: the
+    same type, or an untyped literal's path taking the other path's type when
+    the literal fits it (a literal takes the type its context requires: ed.2
+    2.2.1, ed.3 6.3.3); otherwise a conflict, an error only if an instruction
+    reads the current result (LD replaces it)."""
+    if isinstance(a, _Conflict) or isinstance(b, _Conflict):
+        return a if isinstance(a, _Conflict) else b
+    if isinstance(a, ErrorT) or isinstance(b, ErrorT):
+        return a if isinstance(b, ErrorT) else b
+    if concrete(a) is concrete(b):
+        return b if isinstance(a, LiteralT) else a
+    if isinstance(a, LiteralT) and not isinstance(b, LiteralT) and literal_fits(a, b):
+        return b
+    if isinstance(b, LiteralT) and not isinstance(a, LiteralT) and literal_fits(b, a):
+        return a
+    return _Conflict(label, concrete(a), concrete(b))
 
 
 class _Conflict(ErrorT):

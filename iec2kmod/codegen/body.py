@@ -799,11 +799,28 @@ class BodyEmitter:
     def il_body(self, instrs) -> list[str]:
         lines = []
         self.il_labels_seen = set()
+        self.il_label_cr = {i.label.upper(): i.cr_in for i in instrs if i.label}
+        prev = None
         for i in instrs:
             if i.label:
                 self.il_labels_seen.add(i.label.upper())
+                if prev is not None and prev.op not in ("JMP", "RET"):
+                    lines += self.cr_handover(prev.cr_out, i.cr_in)
             lines += self.il(i, 0)
+            prev = i
         return lines
+
+    def cr_handover(self, src, dst) -> list[str]:
+        """At a label reached with an untyped literal's current result on
+        one path and a typed one on another, the literal's path takes the
+        label's type (the checker's join): its value moves to the current
+        result variable of that type."""
+        if src is None or dst is None or isinstance(src, ErrorT) or isinstance(dst, ErrorT):
+            return []
+        if concrete(src) is concrete(dst) or not N.is_scalar(concrete(dst)) or \
+                not N.is_scalar(concrete(src)):
+            return []
+        return [f"{self.cr_var(dst, 0)} = {self.expr.convert(self.cr_var(src, 0), src, dst)};"]
 
     def il(self, i, depth) -> list[str]:
         out = []
@@ -875,7 +892,8 @@ class BodyEmitter:
         elif op in IL_LOGIC or op in IL_ARITH or op in IL_COMPARE:
             lines += self.il_apply(f, i, op, cr_in, i.operand, depth)
         elif op in ("JMP", "JMPC", "JMPCN"):
-            jump = [f"goto L_{i.operand.name.lower()};"]
+            jump = self.cr_handover(cr_in, self.il_label_cr.get(i.operand.name.upper())) + \
+                [f"goto L_{i.operand.name.lower()};"]
             if i.operand.name.upper() in self.il_labels_seen:
                 # a backward jump closes a loop: it ticks the loop budget like
                 # every iteration of an ST loop, so an endless IL loop faults

@@ -1,0 +1,106 @@
+"""Constructs of the standard that real programs (the standard's Annex F
+examples, OpenPLC Editor and Beremiz output) use and that were refused
+(issue 10): each accepted with the standard's meaning, its model checked
+here; their execution is in tests/execution/cases (C and interpreter)."""
+
+import pytest
+
+from iec2kmod import ast
+from helpers import check, errors, expr, parse_ok
+
+pytestmark = pytest.mark.unit
+
+
+# ---------------------------------------------- 1. a comment after a type name
+
+@pytest.mark.parametrize("text", [
+    "TYPE T : INT (* c *) ; END_TYPE",
+    "TYPE T : INT (* c *) := 5; END_TYPE",
+    "TYPE S : STRUCT a : INT (* c *) ; b : BOOL // c\n; END_STRUCT; END_TYPE",
+    "FUNCTION F : WORD (* BCD encoded *)\nVAR_INPUT x : INT (* c *) ; END_VAR\n"
+    "F := INT_TO_WORD(x);\nEND_FUNCTION",
+    "FUNCTION F : INT\n(* a comment on the next line *)\nVAR_INPUT x : INT; END_VAR\n"
+    "F := x;\nEND_FUNCTION",
+    "FUNCTION_BLOCK B\nVAR t : TON (* c *) ; x : INT (* c *) := 3; END_VAR\nEND_FUNCTION_BLOCK",
+    "PROGRAM P\nVAR x : INT (* c *) ; y : INT(0..10) (* c *) ; END_VAR\nx := y;\nEND_PROGRAM",
+])
+def test_comment_after_a_type_name(text):
+    assert errors(text) == []
+
+
+def test_comment_after_a_type_name_model():
+    unit = parse_ok("TYPE T : INT (* c *) ; R : INT (0..9) ; END_TYPE\n"
+                    "FUNCTION F : WORD (* c *)\nF := 0;\nEND_FUNCTION")
+    t, r = unit.types
+    assert isinstance(t.spec, ast.NamedSpec) and t.spec.name.upper() == "INT"
+    assert isinstance(r.spec, ast.SubrangeSpec)      # INT (...) is still a subrange
+    assert unit.pous[0].result.name.upper() == "WORD"
+
+
+# --------------------------------------- 2. IL CAL with a comment, then a line
+
+def test_il_cal_with_comment_then_instruction():
+    unit = parse_ok("PROGRAM P\nVAR T : TON; q : BOOL; END_VAR\n"
+                    "CAL T (* run timer *)\nLD T.Q\nST q\n"
+                    "CAL T // again\nCAL T(IN := q,\n  PT := T#1s) (* c *)\nEND_PROGRAM")
+    ops = [(i.op, i.fb, len(i.args or [])) for i in unit.pous[0].body]
+    assert ops == [("CAL", "T", 0), ("LD", None, 0), ("ST", None, 0), ("CAL", "T", 0),
+                   ("CAL", "T", 2)]
+
+
+# ---------------------------------------- 3. untyped literal reaching a label
+
+STACK_PATTERN = """PROGRAM P
+VAR OUT : {t}; c : BOOL; v : {t}; END_VAR
+LD c
+JMPC ZRO
+LD v
+JMP SET
+ZRO: LD {lit}
+SET: ST OUT
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("t, lit", [("INT", "0"), ("SINT", "-128"), ("REAL", "0.5"),
+                                    ("UINT", "65535")])
+def test_literal_takes_the_type_of_the_label(t, lit):
+    assert check(STACK_PATTERN.format(t=t, lit=lit)) == []
+
+
+@pytest.mark.parametrize("t, lit, other", [("SINT", "300", "DINT"), ("INT", "0.5", "LREAL"),
+                                           ("UINT", "-1", "DINT")])
+def test_literal_that_does_not_fit_the_label_is_a_conflict(t, lit, other):
+    errs = errors(STACK_PATTERN.format(t=t, lit=lit))
+    assert len(errs) == 1 and "after label 'SET'" in errs[0] and other in errs[0] and t in errs[0]
+
+
+def test_two_typed_paths_still_conflict():
+    text = STACK_PATTERN.format(t="INT", lit="v").replace("v : INT", "v : INT; w : DINT") \
+        .replace("ZRO: LD v", "ZRO: LD w")
+    errs = errors(text)
+    assert len(errs) == 1 and ("DINT or INT" in errs[0] or "INT or DINT" in errs[0]), errs
+
+
+# ------------------------------------- 4. function forms of MOD AND OR XOR
+
+@pytest.mark.parametrize("text, tree", [
+    ("MOD(b + 1, 128)", "MOD((b + 1), 128)"),
+    ("mod (IN1 := b, IN2 := 3)", "MOD(IN1 := b, IN2 := 3)"),
+    ("AND(x, y, z)", "AND(x, y, z)"),
+    ("OR(x, y) AND XOR(x, y)", "(OR(x, y) AND XOR(x, y))"),
+    ("a MOD (b)", "(a MOD b)"),              # still the operator after an operand
+    ("a AND (b OR c)", "(a AND (b OR c))"),
+])
+def test_keyword_function_forms(text, tree):
+    e = expr(text)
+    assert repr(e) == tree
+
+
+def test_keyword_function_forms_check():
+    assert errors("PROGRAM P\nVAR a, b : INT; x, y : WORD; c : BOOL; END_VAR\n"
+                  "a := MOD(b + 1, 128);\nx := AND(x, y);\nx := OR(x, y, 16#F);\n"
+                  "x := XOR(x, y);\nc := AND(c, NOT c);\nEND_PROGRAM") == []
+    errs = errors("PROGRAM P\nVAR a : INT; r : REAL; END_VAR\na := MOD(a);\nr := AND(r, r);\n"
+                  "END_PROGRAM")
+    assert len(errs) == 2, errs
