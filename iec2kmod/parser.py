@@ -499,7 +499,7 @@ def _describe_expected(err) -> str:
         to_match = getattr(r, "to_match", None)
         if isinstance(to_match, str) and r.__class__.__name__ == "StrMatch":
             label = f"'{to_match}'"
-        elif name == "Comment" or name in FAST_PATHS:
+        elif name in ("Comment", "KEYWORD_FUNCTION") or name in FAST_PATHS:
             continue
         elif name in _TOKEN_NAMES:
             label = _TOKEN_NAMES[name]
