@@ -98,12 +98,29 @@ def _kernel_call(c: Client, what: str, fn, *args):
                        f"still run stays loaded") from None
 
 
-def _wait_tasks(c: Client, pred, what: str, timeout: float = 5.0) -> Status:
+def _in_scope(t, resource: Optional[str]) -> bool:
+    return resource is None or t.resource.lower() == resource.lower()
+
+
+def fault_facts(st: Status, resource: Optional[str] = None) -> List[str]:
+    """One line per task (of *resource*, or of every resource) that is
+    stopped on a fault: a fact about the task, not an error of a command."""
+    return [f"task {t.path} is stopped on a fault: {t.fault} in {t.fault_pou} "
+            f"line {t.fault_line}" for t in st.tasks()
+            if t.state == "fault" and _in_scope(t, resource)]
+
+
+def _wait_tasks(c: Client, pred, what: str, timeout: float = 5.0,
+                resource: Optional[str] = None, fail_on_fault: bool = True) -> Status:
+    """Polls the status until *pred* holds.  A fault of a task in scope
+    (*resource*, or every resource) fails a start (*fail_on_fault*); a stop
+    waits only for the tasks to leave the running state, whatever the
+    state of the others."""
     deadline = time.monotonic() + timeout
     while True:
         st = c.status()
-        faults = [t for t in st.tasks() if t.state == "fault"]
-        if faults:
+        faults = [t for t in st.tasks() if t.state == "fault" and _in_scope(t, resource)]
+        if faults and fail_on_fault:
             t = faults[0]
             raise PLCError(f"task {t.path} stopped on a fault: {t.fault} in {t.fault_pou} "
                            f"line {t.fault_line}")
@@ -210,36 +227,60 @@ def _rollback(proj: Project, inserted: List[str], progress: Progress) -> None:
 def unload(config_module: str, progress: Progress = _quiet) -> List[str]:
     """Stop everything and remove the configuration module and every module
     that uses it: resources first (their exit joins the task threads), then
-    the GFT is cleared, then program types, then the configuration."""
-    removed = []
-    resources: List[str] = []
+    the GFT is cleared, then program types, then the configuration.
+
+    Whatever state the tasks are in (running, stopped, stopped on a fault)
+    and whatever was left half done (a slot never published, a resource
+    never started) does not matter: every module that can go goes.  A task
+    that does not come back from its cycle (ETIMEDOUT) stops it all, before
+    anything is removed: what it may still run stays loaded.  Raises
+    PLCError naming what is left loaded, if anything is."""
+    removed: List[str] = []
+    problems: List[str] = []
+
+    def remove(m: str) -> None:
+        t0 = time.perf_counter()
+        try:
+            kmod.remove(m)
+        except kmod.ModuleError as e:
+            if e.code == errno.ENOENT:          # gone already
+                return
+            problems.append(str(e))
+            progress(f"  could not remove {m}: {e}")
+            return
+        removed.append(m)
+        progress(f"  removed {m:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
+
     try:
         with Client() as c:
             _kernel_call(c, "stop", c.stop)
             st = c.status()
-            resources = [r.module for r in st.resources]
-            for m in resources:
-                t0 = time.perf_counter()
-                kmod.remove(m)
-                removed.append(m)
-                progress(f"  removed {m:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
-            _kernel_call(c, "clear", c.clear)
+            for r in st.resources:
+                remove(r.module)
+            try:
+                _kernel_call(c, "clear", c.clear)
+            except PLCError as e:
+                problems.append(str(e))
+                progress(f"  {e}")
     except NotLoaded:
         pass
     for m in kmod.holders(config_module):
-        t0 = time.perf_counter()
-        kmod.remove(m)
-        removed.append(m)
-        progress(f"  removed {m:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
-    t0 = time.perf_counter()
-    kmod.remove(config_module)
-    removed.append(config_module)
-    progress(f"  removed {config_module:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
+        remove(m)
+    remove(config_module)
+    if config_module in kmod.loaded():
+        left = kmod.holders(config_module) + [config_module]
+        raise PLCError(f"{problems[0] if problems else 'unload failed'}; still loaded: "
+                       f"{', '.join(left)}")
     return removed
 
 
 def stop(keep_loaded: bool = False, resource: Optional[str] = None,
          progress: Progress = _quiet) -> None:
+    """Stops the tasks (of one resource with *resource*), then unless
+    *keep_loaded* or *resource* removes every module.  Tasks stopped on a
+    fault are reported (progress), not a reason to refuse: a faulted task is
+    idle, its resource can go.  Everything is checked before anything is
+    done (capabilities, the resource's name)."""
     if not keep_loaded and not resource:
         kmod.require(kmod.CAP_SYS_MODULE, "stop")
     with connect("stop") as c:
@@ -247,12 +288,18 @@ def stop(keep_loaded: bool = False, resource: Optional[str] = None,
         if resource:
             r = _resource(st, resource)
             _kernel_call(c, "stop", c.stop, r.name)
-            _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()
-                                         if t.resource == r.name), "stop")
+            st = _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()
+                                              if _in_scope(t, r.name)),
+                             "stop", resource=r.name, fail_on_fault=False)
+            for line in fault_facts(st, r.name):
+                progress(line)
             progress(f"stopped resource {r.name} ({len(r.tasks)} tasks)")
             return
         _kernel_call(c, "stop", c.stop)
-        _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()), "stop")
+        st = _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()), "stop",
+                         fail_on_fault=False)
+        for line in fault_facts(st):
+            progress(line)
         progress(f"stopped every task of {st.configuration}")
         if keep_loaded:
             return
@@ -263,17 +310,29 @@ def stop(keep_loaded: bool = False, resource: Optional[str] = None,
 
 
 def start(resource: Optional[str] = None, progress: Progress = _quiet) -> None:
+    """Starts the tasks that are not running (stopped, or stopped on a
+    fault: a start clears the fault) of one resource or of every one, and
+    waits until each of them completed a cycle since.  A task in scope that
+    faults meanwhile fails the command; other resources' faults are not
+    this command's business."""
     with connect("start") as c:
         st = c.status()
-        if resource:
-            r = _resource(st, resource)
+        r = _resource(st, resource) if resource else None
+        name = r.name if r else None
+        # cycles are counted since the load: a started task must add one
+        before = {t.path: t.cycles for t in st.tasks() if _in_scope(t, name)}
+
+        def started(s: Status) -> bool:
+            return all(t.state == "running" and
+                       (t.cycles > before.get(t.path, 0) or not t.interval_ns)
+                       for t in s.tasks() if _in_scope(t, name))
+        if r:
             c.start(r.name)
-            _wait_tasks(c, lambda s: all(t.state == "running" and (t.cycles or not t.interval_ns)
-                                         for t in s.tasks() if t.resource == r.name), "start")
+            _wait_tasks(c, started, "start", resource=r.name)
             progress(f"started resource {r.name} ({len(r.tasks)} tasks)")
             return
         c.start()
-        _wait_tasks(c, _all_running, "start")
+        _wait_tasks(c, started, "start")
         progress(f"started every task of {st.configuration}")
 
 

@@ -1,0 +1,169 @@
+"""QEMU tier: what happens around a runtime fault (issue 9).
+
+tests/qemu/projects/faults has two resources: r0.ta runs Faulty, which
+divides by the global `divisor` (a division by zero when it is written 0),
+r1.tb runs Healthy, which counts `beats`.
+
+* a configuration with a faulted task is stopped and unloaded like any
+  other: `stop --resource r1`, `start --resource r1`, `stop --keep-loaded`
+  and `stop` act on what they name, report the fault as a fact (stdout)
+  and exit 0; only `start` of the faulted task's own resource fails (its
+  task faults again); refused input (an unknown resource) changes nothing;
+* what a killed `load` leaves behind (a configuration module, a resource
+  never started, slots never published) is removed by a plain `stop`.
+
+The manager is this checkout's (a plc_manager link on the guest's
+sys.path); the fixtures check the kernel log after every test.
+"""
+
+from __future__ import annotations
+
+import compileall
+import json
+import time
+from pathlib import Path
+
+import pytest
+
+from kmod_helpers import gen_and_build, loaded_modules
+
+pytestmark = pytest.mark.qemu
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+PROJECT = HERE / "projects" / "faults"
+FAULT = "division by zero in Faulty line 15"
+
+
+@pytest.fixture(scope="module")
+def faults(guest_workdir):
+    work = Path(guest_workdir) / "faults"
+    work.mkdir(exist_ok=True)
+    tree = work / "a"
+    manifest = gen_and_build(PROJECT, tree)
+    pmdir = work / "pm"
+    pmdir.mkdir(exist_ok=True)
+    link = pmdir / "plc_manager"
+    if not link.is_symlink():
+        link.symlink_to(ROOT / "manager")
+    compileall.compile_dir(str(ROOT / "manager"), quiet=1)
+    return work, tree, manifest, pmdir
+
+
+def pm(guest, pmdir, *args, timeout=180):
+    code = (f"import sys\nsys.path.insert(0, {str(pmdir)!r})\n"
+            "from plc_manager.cli import main\nsys.exit(main(sys.argv[1:]))")
+    r = guest.pyrun(code, argv=[str(a) for a in args], timeout=timeout)
+    return r.exit_code, r.output
+
+
+def ok(guest, pmdir, *args) -> str:
+    rc, out = pm(guest, pmdir, *args)
+    assert rc == 0, f"plc-manager {' '.join(map(str, args))}: exit {rc}\n{out}"
+    return out
+
+
+def tasks(guest, pmdir) -> dict:
+    st = json.loads(ok(guest, pmdir, "status", "--json"))
+    return {t["path"]: t for r in st["resources"] for t in r["tasks"]}
+
+
+def wait_state(guest, pmdir, path, state, timeout=60.0) -> dict:
+    deadline = time.monotonic() + timeout
+    while True:
+        ts = tasks(guest, pmdir)
+        if ts[path]["state"] == state:
+            return ts
+        assert time.monotonic() < deadline, f"{path} is {ts[path]['state']}, not {state}"
+        time.sleep(0.2)
+
+
+def stop_clean(guest, pmdir):
+    if loaded_modules(guest):
+        rc, out = pm(guest, pmdir, "stop")
+        assert rc == 0 and loaded_modules(guest) == [], out
+
+
+def test_a_faulted_task_does_not_prevent_stop_or_unload(guest, faults):
+    work, tree, manifest, pmdir = faults
+    assert loaded_modules(guest) == []
+    ok(guest, pmdir, "load", tree)
+    try:
+        ok(guest, pmdir, "write", "divisor", "0")
+        ts = wait_state(guest, pmdir, "r0.ta", "fault")
+        assert ts["r1.tb"]["state"] == "running"
+        assert f'{ts["r0.ta"]["fault"]} in {ts["r0.ta"]["fault_pou"]} line ' \
+               f'{ts["r0.ta"]["fault_line"]}' == FAULT, ts["r0.ta"]
+
+        # refused input changes nothing
+        before = (sorted(loaded_modules(guest)),
+                  {p: t["state"] for p, t in tasks(guest, pmdir).items()})
+        for args in (("stop", "--resource", "nosuch"), ("start", "--resource", "nosuch"),
+                     ("stop", "--keep-loaded", "--resource", "nosuch")):
+            rc, out = pm(guest, pmdir, *args)
+            assert rc == 1 and out.strip().startswith("plc-manager: no resource 'nosuch'"), out
+            assert len(out.strip().splitlines()) == 1, out
+        assert before == (sorted(loaded_modules(guest)),
+                          {p: t["state"] for p, t in tasks(guest, pmdir).items()})
+
+        # --resource acts on that resource and says nothing about the other
+        out = ok(guest, pmdir, "stop", "--resource", "r1")
+        assert "r0" not in out and "fault" not in out, out
+        ts = tasks(guest, pmdir)
+        assert ts["r1.tb"]["state"] == "stopped" and ts["r0.ta"]["state"] == "fault", ts
+        out = ok(guest, pmdir, "start", "--resource", "R1")
+        assert "r0" not in out and "fault" not in out, out
+        ts = tasks(guest, pmdir)
+        assert ts["r1.tb"]["state"] == "running" and ts["r0.ta"]["state"] == "fault", ts
+        # the faulted resource: a fault about r0 only, the stop does not refuse
+        out = ok(guest, pmdir, "stop", "--resource", "r0")
+        assert f"task r0.ta is stopped on a fault: {FAULT}" in out, out
+        assert tasks(guest, pmdir)["r1.tb"]["state"] == "running"
+        # restarting it with the cause still there: it faults again, said so
+        rc, out = pm(guest, pmdir, "start", "--resource", "r0")
+        assert rc == 1 and out.strip() == f"plc-manager: task r0.ta stopped on a fault: " \
+                                         f"{FAULT}", out
+        ts = tasks(guest, pmdir)
+        assert ts["r0.ta"]["state"] == "fault" and ts["r0.ta"]["faults"] == 2, ts["r0.ta"]
+        assert ts["r1.tb"]["state"] == "running"
+
+        out = ok(guest, pmdir, "stop", "--keep-loaded")
+        assert f"task r0.ta is stopped on a fault: {FAULT}" in out, out
+        assert sorted(loaded_modules(guest)) == sorted(manifest["load_order"])
+        ts = tasks(guest, pmdir)
+        assert ts["r1.tb"]["state"] == "stopped" and ts["r0.ta"]["state"] == "fault", ts
+
+        ok(guest, pmdir, "start", "--resource", "r1")
+        out = ok(guest, pmdir, "stop")
+        assert f"task r0.ta is stopped on a fault: {FAULT}" in out, out
+        assert "nothing of faults is loaded" in out.lower(), out
+        assert loaded_modules(guest) == []
+    finally:
+        stop_clean(guest, pmdir)
+
+
+@pytest.mark.parametrize("partial", ["config", "config+r1", "no_programs"])
+def test_stop_removes_what_a_killed_load_left(guest, faults, partial):
+    """The modules a `load` killed half way may leave: the configuration
+    alone, with a resource never started and empty slots, or every
+    resource and no program type (slots never published); stopped or
+    started.  A plain `stop` removes all of it and exits 0."""
+    work, tree, manifest, pmdir = faults
+    order = manifest["load_order"]
+    kinds = {m["name"]: m["kind"] for m in manifest["modules"]}
+    res = [n for n in order if kinds[n] == "resource"]
+    want = {"config": order[:1], "config+r1": [order[0], res[-1]],
+            "no_programs": [order[0]] + res}[partial]
+    assert loaded_modules(guest) == []
+    try:
+        for name in want:
+            r = guest.run(f"insmod {tree / name / (name + '.ko')}")
+            assert r.exit_code == 0, r.output
+        if partial == "no_programs":         # started with every slot empty
+            ok(guest, pmdir, "start")
+            assert all(t["state"] == "running" for t in tasks(guest, pmdir).values())
+        out = ok(guest, pmdir, "stop")
+        assert "nothing of faults is loaded" in out.lower(), out
+        assert loaded_modules(guest) == []
+    finally:
+        for name in reversed(want):
+            guest.run(f"rmmod {name} 2>/dev/null")
