@@ -129,8 +129,14 @@ def declare(t, name: str) -> str:
 _C_STRING_SAFE = re.compile(r"[ -~]")
 
 
+# printable ASCII but '"', '?' (trigraphs) and '\\': spelled as they are
+_C_STRING_PLAIN = re.compile(rb"[\x20\x21\x23-\x3e\x40-\x5b\x5d-\x7e]*")
+
+
 def c_string(data: bytes) -> str:
     """A C string literal with every byte spelled safely."""
+    if _C_STRING_PLAIN.fullmatch(data):
+        return '"' + data.decode("ascii") + '"'
     out = []
     for b in data:
         ch = chr(b)
