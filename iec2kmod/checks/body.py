@@ -642,8 +642,10 @@ class BodyChecker:
         given = {}
         npos = 0
         what = "function" if is_function else "function block"
+        eno_out = pou.var("ENO") is not None and pou.var("ENO").section == "VAR_OUTPUT"
         for a in c.args:
-            if self._en_eno(a):
+            if not (eno_out and a.kind == "out" and a.name.upper() == "ENO") and \
+                    self._en_eno(a):
                 continue
             if a.kind == "pos":
                 if npos >= len(pos_params):

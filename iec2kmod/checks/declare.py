@@ -432,6 +432,7 @@ class Declarer:
                                            f"{pou.kind.lower().replace('_', ' ')}")
                 continue
             self.declare_block(block, pou, src, pou.vars)
+        self.declare_eno(pou)
         for v in pou.vars.values():
             if v.section == "VAR_INPUT":
                 pou.inputs.append(v)
@@ -439,6 +440,26 @@ class Declarer:
                 pou.outputs.append(v)
             elif v.section == "VAR_IN_OUT":
                 pou.inouts.append(v)
+
+    def declare_eno(self, pou: POUInfo):
+        """ENO, the implicit BOOL output of every function and function
+        block (ed.2 2.5.1.2, ed.3 6.6.1.5): TRUE when the body starts, the
+        body may set it FALSE, and a call's ENO => receives it.  Declared
+        here when the body uses it (ENO := FALSE; IL ST ENO) without
+        declaring it; a declared ENO output starts TRUE as well."""
+        if pou.kind not in ("FUNCTION", "FUNCTION_BLOCK"):
+            return
+        node = pou.node
+        v = pou.vars.get("ENO")
+        if v is None:
+            if not _mentions(node.body, "ENO"):
+                return
+            v = Var("ENO", BOOL, "VAR_OUTPUT", node.pos, node.src, owner=pou)
+            pou.vars["ENO"] = v
+        if v.section == "VAR_OUTPUT" and v.type is BOOL and v.init is None:
+            lit = ast.Lit(v.pos, "TRUE", "bool", True)
+            lit.type = BOOL
+            v.init = lit
 
     def declare_block(self, block, owner, src, table, allow_located=False):
         constant = "CONSTANT" in block.qualifiers
@@ -556,3 +577,33 @@ def check_address_type(decl_ctx, src, pos, addr, t):
     elif base.bits != bits or base.cat == "bool":
         decl_ctx.error(src, pos, f"{addr} holds {bits} bits; {base.name} has "
                                  f"{base.bits if base.cat != 'bool' else 1}")
+
+
+def _mentions(node, name: str) -> bool:
+    """Does a POU body (statements, IL instructions, expressions) refer to
+    the variable ``name`` (upper case)?"""
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        if n is None or isinstance(n, (str, int, float, bool)):
+            continue
+        if isinstance(n, (list, tuple)):
+            stack.extend(n)
+            continue
+        if isinstance(n, ast.Ref):
+            if n.name.upper() == name:
+                return True
+            stack.extend(v for k, v, _ in n.accessors if k == "index")
+            continue
+        if isinstance(n, ast.Arg):
+            stack.append(n.value)
+            continue
+        if isinstance(n, ast.Call):
+            stack.extend(n.args)
+            continue
+        if isinstance(n, (ast.Expr, ast.Node)):
+            for cls in type(n).__mro__:
+                for slot in getattr(cls, "__slots__", ()):
+                    if slot not in ("pos", "type", "const", "src", "call", "cr_in", "cr_out"):
+                        stack.append(getattr(n, slot, None))
+    return False

@@ -111,6 +111,12 @@ def _realfn(name, types):
     for i, t in enumerate(types):
         _need(is_num, t, "a number", i, name)
     t = types[0]
+    if all(isinstance(x, LiteralT) and x.cat == "real" for x in types):
+        # SQRT(2.0): an untyped real literal takes the type its context
+        # requires (REAL in X := SQRT(2.0) with X : REAL), LREAL where
+        # nothing does (ed.2 2.2.1, ed.3 6.3.3)
+        lit = LiteralT("real", 0.0)
+        return StdFunc(name, name, [lit] * len(types), lit)
     if isinstance(t, LiteralT):
         t = LREAL
     elif not is_real(t) and not isinstance(t, ErrorT):

@@ -562,6 +562,10 @@ class BodyEmitter:
         if en is not None and pou.var("EN") is not None and not pou.standard:
             # a block that declares EN sees it TRUE when it runs
             lines.append(f"{base}.{N.member(pou, pou.var('EN').name)} = 1;")
+        v_eno = pou.var("ENO")
+        if v_eno is not None and v_eno.section == "VAR_OUTPUT" and not pou.standard:
+            # ENO is TRUE when the body starts; the body may set it FALSE
+            lines.append(f"{base}.{N.member(pou, v_eno.name)} = 1;")
         body_fn = N.pou_prefix(pou) + ("" if pou.standard else "_body")
         inline = _INLINE_FB.get(pou.name.upper()) if pou.standard else None
         if inline:
@@ -582,7 +586,7 @@ class BodyEmitter:
             member = f"{base}.{N.member(pou, param.name)}"
             val = f"((iec_bool)!{member})" if a.negate else member
             lines += self.checked_store(f, a.value, Raw(val, param.type))
-        if eno is not None and eno.value is not None:
+        if eno is not None and eno.value is not None and bound.get("ENO") is not eno:
             lines += self.checked_store(f, eno.value, Raw("1", BOOL))
         if en is not None:
             out = [f"if ({en}) {{"] + self.indent(lines) + ["}"]

@@ -400,7 +400,10 @@ class ExprEmitter:
             addr = res if isinstance(rt, ArrayT) else f"&{res}"
             skip = [f"iec_memset({addr}, 0, sizeof({res}));"]
         if eno is not None:
-            run += self.body.assign_ref(inner, eno.value, Raw("1", BOOL))
+            if (c.bound or {}).get("ENO") is not eno:
+                # a function that declares no ENO: TRUE when it ran (one that
+                # does hands its own ENO on, as an output of the call)
+                run += self.body.assign_ref(inner, eno.value, Raw("1", BOOL))
             skip += self.body.assign_ref(inner, eno.value, Raw("0", BOOL))
         f.decls += inner.decls
         f.may_fault = f.may_fault or inner.may_fault

@@ -617,6 +617,10 @@ class PouCompiler:
         key = pou.key
         rkey = pou.key
         dflt = m.init.default(pou.result) if pou.result is not None else None
+        # a function that declares ENO (or uses it: the implicit output)
+        # starts with ENO = TRUE, may set it FALSE, and hands it on
+        v_eno = pou.var("ENO")
+        eno_key = v_eno.key if v_eno is not None and v_eno.section == "VAR_OUTPUT" else None
 
         def call(env):
             if en is not None and not en(env):
@@ -629,11 +633,13 @@ class PouCompiler:
                 fv[k] = f(env)
             for k, f in inouts:
                 frame.r[k] = f(env)
+            if eno_key is not None:
+                fv[eno_key] = True
             m.bodies[key](frame)
             for k, w in outs:
                 w(env, fv[k])
             if eno is not None:
-                eno(env, True)
+                eno(env, fv[eno_key] if eno_key is not None else True)
             return fv[rkey]
         return call
 

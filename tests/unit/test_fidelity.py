@@ -104,3 +104,58 @@ def test_keyword_function_forms_check():
     errs = errors("PROGRAM P\nVAR a : INT; r : REAL; END_VAR\na := MOD(a);\nr := AND(r, r);\n"
                   "END_PROGRAM")
     assert len(errs) == 2, errs
+
+
+# ------------------------------------------- 5. ENO inside a function body
+
+def _project(text):
+    from iec2kmod.checks import check_project
+    from iec2kmod.diagnostics import Diagnostics, SourceFile
+    from iec2kmod.parser import parse_source
+    diags = Diagnostics()
+    unit = parse_source(SourceFile("t.st", text), diags)
+    project = check_project([unit], diags)
+    assert not diags.errors, [d.format() for d in diags.items]
+    return project
+
+
+@pytest.mark.parametrize("body", ["IF x < 0 THEN ENO := FALSE; END_IF;\nF := x;",
+                                  "LD x\nLT 0\nNOT\nST ENO\nLD x\nST F"])
+def test_eno_in_a_function_body_is_its_implicit_output(body):
+    p = _project(f"FUNCTION F : INT\nVAR_INPUT x : INT; END_VAR\n{body}\nEND_FUNCTION\n"
+                 "PROGRAM P\nVAR a : INT; ok : BOOL; END_VAR\na := F(a, ENO => ok);\nEND_PROGRAM")
+    f = p.pous["F"]
+    eno = f.var("ENO")
+    assert eno.section == "VAR_OUTPUT" and eno.type.name == "BOOL" and eno.init.value is True
+    assert f.outputs == [eno]
+    call = p.pous["P"].node.body[0].value
+    assert call.bound["ENO"].kind == "out"        # the call's ENO => receives it
+
+
+def test_eno_is_not_added_where_unused():
+    p = _project("FUNCTION F : INT\nVAR_INPUT x : INT; END_VAR\nF := x;\nEND_FUNCTION\n"
+                 "FUNCTION_BLOCK B\nVAR_INPUT x : INT; END_VAR\nEND_FUNCTION_BLOCK\n"
+                 "PROGRAM P\nVAR a : INT; ok : BOOL; END_VAR\na := F(a, ENO => ok);\n"
+                 "END_PROGRAM")
+    assert p.pous["F"].var("ENO") is None and p.pous["B"].var("ENO") is None
+
+
+def test_eno_in_a_program_is_still_unknown():
+    errs = errors("PROGRAM P\nENO := FALSE;\nEND_PROGRAM")
+    assert errs == ["2:1: error: unknown variable 'ENO'"]
+
+
+# ------------------------------- 6. untyped real literal typed by its context
+
+def test_real_literal_takes_the_type_of_its_context():
+    assert errors("PROGRAM P\nVAR X : REAL; L : LREAL; b : BOOL; END_VAR\nX := SQRT(2.0);\n"
+                  "L := SQRT(2.0);\nb := ABS(X - 1.4142135) < 1.0E-6;\nX := SIN(0.5) + X;\n"
+                  "X := ATAN2(1.0, 2.0);\nb := SQRT(2.0) > X;\nEND_PROGRAM") == []
+    p = _project("PROGRAM P\nVAR X : REAL; END_VAR\nX := SQRT(2.0);\nEND_PROGRAM")
+    call = p.pous["P"].node.body[0].value
+    assert call.type.name == "REAL"            # decided by X, not LREAL
+
+
+def test_typed_arguments_still_decide():
+    errs = errors("PROGRAM P\nVAR X : REAL; L : LREAL; END_VAR\nX := SQRT(L);\nEND_PROGRAM")
+    assert len(errs) == 1 and "cannot assign LREAL to 'X' of type REAL" in errs[0]
