@@ -8,13 +8,14 @@ from . import stdlib
 from .symbols import POUInfo, Project, Var
 from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, LiteralT,
                     StringT, StructT, SubrangeT, Type, assignable)
+from .types import identical as _identical
 
 SECTIONS_IN_POU = {
     "FUNCTION": {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP"},
     "FUNCTION_BLOCK": {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP",
                        "VAR_EXTERNAL"},
     "PROGRAM": {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR", "VAR_TEMP", "VAR_EXTERNAL",
-                "VAR_GLOBAL"},
+                "VAR_GLOBAL", "VAR_ACCESS"},
 }
 
 MAX_STRING = 65534
@@ -426,12 +427,18 @@ class Declarer:
                 pou.result = ERROR
             pou.vars[pou.key] = Var(pou.name, pou.result, "RESULT", node.pos, src, owner=pou)
         allowed = SECTIONS_IN_POU[pou.kind]
+        access = []
         for block in node.blocks:
             if block.kind not in allowed:
                 self.error(src, block.pos, f"{block.kind} is not allowed in a "
                                            f"{pou.kind.lower().replace('_', ' ')}")
                 continue
+            if block.kind == "VAR_ACCESS":
+                access.append(block)
+                continue
             self.declare_block(block, pou, src, pou.vars)
+        for block in access:
+            self.program_access(pou, block)
         self.declare_eno(pou)
         for v in pou.vars.values():
             if v.section == "VAR_INPUT":
@@ -440,6 +447,69 @@ class Declarer:
                 pou.outputs.append(v)
             elif v.section == "VAR_IN_OUT":
                 pou.inouts.append(v)
+
+    def program_access(self, pou: POUInfo, block):
+        """VAR_ACCESS in a PROGRAM (ed.2 2.7.1, program_access_decls):
+        ``name : variable : type READ_ONLY|READ_WRITE`` names a variable of
+        the program (or a member of one of its structures or FB instances)
+        for access from outside; the type must be the variable's own and a
+        CONSTANT can only be READ_ONLY.  Recorded in pou.access as
+        (name, path, Var, direction)."""
+        src = pou.src
+        for d in block.decls:
+            key = d.name.upper()
+            if key in pou.vars or any(a[0].upper() == key for a in pou.access):
+                self.error(src, d.pos, f"access path '{d.name}' is already declared in "
+                                       f"{pou.name}")
+                continue
+            t = self.type_of_spec(d.spec, src)
+            if d.path.startswith("%"):
+                self.error(src, d.pos, f"access path '{d.name}': a program's access path names "
+                                       f"one of its variables, not {d.path} (declare an access "
+                                       "path to a located variable in the configuration's "
+                                       "VAR_ACCESS)")
+                continue
+            parts = d.path.split(".")
+            v, owner, t_cur = None, pou, None
+            for n, part in enumerate(parts):
+                if part.isdigit():
+                    self.error(src, d.pos, f"access path '{d.name}': a bit ({d.path}) cannot "
+                                           "be accessed by name")
+                    v = None
+                    break
+                if n == 0:
+                    v = pou.var(part)
+                    if v is None or v.section == "RESULT":
+                        self.error(src, d.pos, f"access path '{d.name}': {pou.name} has no "
+                                               f"variable '{part}'")
+                        break
+                    t_cur = v.type
+                elif isinstance(t_cur, FBType):
+                    m = t_cur.pou.var(part)
+                    if m is None or m.section not in ("VAR_INPUT", "VAR_OUTPUT"):
+                        self.error(src, d.pos, f"access path '{d.name}': '{part}' is not an "
+                                               f"input or output of {t_cur.name}")
+                        v = None
+                        break
+                    t_cur = m.type
+                elif isinstance(t_cur, StructT) and part.upper() in t_cur.fields:
+                    t_cur = t_cur.fields[part.upper()][1]
+                else:
+                    self.error(src, d.pos, f"access path '{d.name}': {'.'.join(parts[:n])} "
+                                           f"has no member '{part}'")
+                    v = None
+                    break
+            if v is None:
+                continue
+            if t is not ERROR and not _identical(t_cur, t):
+                self.error(src, d.spec.pos, f"access path '{d.name}' is declared {t.name} but "
+                                            f"{d.path} is {t_cur.name}")
+                continue
+            if v.constant and d.direction == "READ_WRITE":
+                self.error(src, d.pos, f"{d.path} is CONSTANT: its access path must be READ_ONLY")
+                continue
+            v.used = True
+            pou.access.append((d.name, d.path, v, d.direction))
 
     def declare_eno(self, pou: POUInfo):
         """ENO, the implicit BOOL output of every function and function
@@ -524,10 +594,18 @@ class Declarer:
             if addr.endswith("*") and isinstance(owner, POUInfo) and owner.kind == "PROGRAM" and \
                     block.kind == "VAR":
                 return  # completed by VAR_CONFIG
+            name = decl.names[0][0]
+            where = owner.kind.lower().replace("_", " ") if isinstance(owner, POUInfo) else \
+                "this declaration"
             self.error(src, decl.pos,
-                       f"located variable AT {addr}: directly represented variables may appear "
-                       "only in configuration and resource declarations and in program "
-                       "connections")
+                       f"located variable '{name}' AT {addr} in a {where}: by the rule of "
+                       "located variables, directly represented variables appear only in "
+                       "configuration and resource declarations and in program connections; "
+                       f"declare it there (VAR_GLOBAL {name} AT {addr} : {t.name}; END_VAR) "
+                       f"and reach it through VAR_EXTERNAL {name}, or make '{name}' an input "
+                       f"or output of the program and connect it: PROGRAM inst WITH task : "
+                       f"{owner.name if isinstance(owner, POUInfo) else 'type'} "
+                       f"({name} {'=>' if addr[1] == 'Q' else ':='} {addr})")
             return
         if addr.endswith("*"):
             self.error(src, decl.pos, f"incomplete address {addr} is allowed only in programs "

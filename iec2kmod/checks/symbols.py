@@ -46,6 +46,7 @@ class POUInfo:
     calls: set = field(default_factory=set)      # upper names of POUs this one uses
     uses_real: bool = False
     labels: dict = field(default_factory=dict)   # IL labels
+    access: list = field(default_factory=list)   # VAR_ACCESS: [(name, path, Var, direction)]
 
     @property
     def key(self) -> str:

@@ -159,3 +159,28 @@ def test_real_literal_takes_the_type_of_its_context():
 def test_typed_arguments_still_decide():
     errs = errors("PROGRAM P\nVAR X : REAL; L : LREAL; END_VAR\nX := SQRT(L);\nEND_PROGRAM")
     assert len(errs) == 1 and "cannot assign LREAL to 'X' of type REAL" in errs[0]
+
+
+# --------------------------------------------------- 7. VAR_ACCESS in a PROGRAM
+
+def test_program_access_paths_are_recorded():
+    p = _project("TYPE R : STRUCT a : INT; END_STRUCT; END_TYPE\n"
+                 "PROGRAM P\nVAR x : INT; t : TON; r : R; END_VAR\n"
+                 "VAR_ACCESS ax : x : INT READ_WRITE; aq : t.Q : BOOL READ_ONLY;\n"
+                 "  ar : r.a : INT; END_VAR\nx := 1;\nEND_PROGRAM")
+    pou = p.pous["P"]
+    assert [(n, path, v.name, d) for n, path, v, d in pou.access] == [
+        ("ax", "x", "x", "READ_WRITE"), ("aq", "t.Q", "t", "READ_ONLY"),
+        ("ar", "r.a", "r", "READ_WRITE")]
+
+
+# ------------------------------------- the rule of directly represented variables
+
+def test_located_variable_message_names_the_rule_and_the_fix():
+    errs = errors("PROGRAM Ctrl\nVAR_OUTPUT m : BOOL; END_VAR\nVAR q AT %QX0.1 : BOOL; END_VAR\n"
+                  "m := %IX0.1;\nq := m;\nEND_PROGRAM")
+    assert len(errs) == 2
+    assert "rule of located variables" in errs[0] and \
+        "VAR_GLOBAL q AT %QX0.1 : BOOL; END_VAR" in errs[0] and \
+        "PROGRAM inst WITH task : Ctrl (q => %QX0.1)" in errs[0]
+    assert "rule of located variables" in errs[1] and "(x := %IX0.1)" in errs[1]
