@@ -204,7 +204,10 @@ class VarBlock(Node):
 
 
 class POU(Node):
-    __slots__ = ("kind", "name", "result", "blocks", "body", "language", "src", "end_pos")
+    """A FUNCTION, FUNCTION_BLOCK or PROGRAM.  ``language`` is ST, IL or SFC;
+    an SFC body is in ``sfc`` (``body`` is then empty)."""
+
+    __slots__ = ("kind", "name", "result", "blocks", "body", "language", "src", "end_pos", "sfc")
 
 
 # statements
@@ -256,6 +259,38 @@ class ILInstr(Node):
 
     __slots__ = ("label", "label_pos", "op", "operand", "deferred", "nested", "fb",
                  "fn", "args", "operands", "call", "cr_in", "cr_out")
+
+
+# textual SFC (IEC 61131-3 ed.2 2.6); checked by iec2kmod/checks/sfc.py
+class SFC(Node):
+    """The SFC body of a POU: its elements in source order."""
+
+    __slots__ = ("steps", "transitions", "actions")
+
+
+class Step(Node):
+    __slots__ = ("name", "initial", "assocs")  # assocs: [ActionAssoc]
+
+
+class ActionAssoc(Node):
+    """``action(qualifier, time, indicators...)``: ``qualifier`` upper case
+    or None (N); ``args`` the expressions after it (a time first for L, D,
+    SD, DS, SL; then indicator variables), ``time`` and ``indicators`` set by
+    the checks."""
+
+    __slots__ = ("action", "qualifier", "qual_pos", "args", "time", "indicators")
+
+
+class Transition(Node):
+    """``sources`` and ``targets``: [(step name, pos)]; the condition is
+    ``cond`` (ST expression) or ``il`` (IL instructions, the condition is the
+    current result at their end)."""
+
+    __slots__ = ("name", "priority", "sources", "targets", "cond", "il", "index")
+
+
+class Action(Node):
+    __slots__ = ("name", "language", "body")
 
 
 # configuration

@@ -814,9 +814,74 @@ def _il(instrs):
     return top
 
 
+_STEP_NAME = re.compile(r"(?:INITIAL_STEP|STEP)\s+", re.I)
+_NAME_AT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _step_names(steps):
+    """[(name, pos)] of a FROM/TO step list."""
+    text = _ctx.src.text
+    out = []
+    pos = _pos(steps)
+    for name in steps.names:
+        m = _NAME_AT.search(text, pos)
+        while m and m.group(0).upper() != name.upper():
+            m = _NAME_AT.search(text, m.end())
+        p = m.start() if m else _pos(steps)
+        out.append((name, p))
+        pos = m.end() if m else pos
+    return out
+
+
+def _sfc(body):
+    """The SFC elements of a body (textual SFC, ed.2 2.6)."""
+    text = _ctx.src.text
+    sfc = ast.SFC(_pos(body), steps=[], transitions=[], actions=[])
+    for e in body.elements:
+        c = _cls(e)
+        pos = _pos(e)
+        if c == "SFCStep":
+            m = _STEP_NAME.match(text, pos)
+            assocs = []
+            for a in e.assocs:
+                qpos = None
+                if a.qualifier:
+                    m2 = re.compile(r"\(\s*").search(text, _pos(a))
+                    qpos = m2.end() if m2 else _pos(a)
+                assocs.append(ast.ActionAssoc(_pos(a), action=a.action,
+                                              qualifier=a.qualifier.upper() if a.qualifier
+                                              else None, qual_pos=qpos, args=list(a.args),
+                                              time=None, indicators=[]))
+            sfc.steps.append(ast.Step(m.end() if m else pos, name=e.name,
+                                      initial=bool(e.initial), assocs=assocs))
+        elif c == "SFCTransition":
+            il = None
+            if e.il is not None:
+                il = _il([i.instruction for i in e.il.instructions])
+            sfc.transitions.append(ast.Transition(
+                pos, name=e.name or None,
+                priority=int(e.priority.replace("_", "")) if e.priority else None,
+                sources=_step_names(e.sources), targets=_step_names(e.targets),
+                cond=e.cond, il=il, index=len(sfc.transitions)))
+        else:
+            b = e.body
+            if b is not None and b.il is not None:
+                language, stmts = "IL", _il(b.il.instructions)
+            else:
+                language, stmts = "ST", _body(b.st) if b is not None else []
+            m = re.compile(r"ACTION\s+", re.I).match(text, pos)
+            sfc.actions.append(ast.Action(m.end() if m else pos, name=e.name,
+                                          language=language, body=stmts))
+    return sfc
+
+
 def _pou(e, kind, src):
     body = e.body
-    if body is None or (body.il is None and body.st is None):
+    sfc = None
+    if body is not None and body.sfc is not None:
+        language, stmts = "SFC", []
+        sfc = _sfc(body.sfc)
+    elif body is None or (body.il is None and body.st is None):
         language, stmts = "ST", []
     elif body.il is not None:
         language, stmts = "IL", _il(body.il.instructions)
@@ -825,7 +890,7 @@ def _pou(e, kind, src):
     return ast.POU(_pos(e), kind=kind, name=e.name,
                    result=_spec(e.result) if kind == "FUNCTION" else None,
                    blocks=[_block(b) for b in e.blocks], body=stmts, language=language,
-                   src=src, end_pos=e._tx_position_end)
+                   src=src, end_pos=e._tx_position_end, sfc=sfc)
 
 
 def _resource_body(body, name, processor, blocks, pos):

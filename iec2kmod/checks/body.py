@@ -49,7 +49,11 @@ class BodyChecker:
     # ------------------------------------------------------------ entry
     def check(self):
         node = self.pou.node
-        if node.language == "IL":
+        if node.language == "SFC":
+            from .sfc import SFCChecker
+            if node.sfc is not None and self.pou.kind != "FUNCTION":
+                SFCChecker(self).check()
+        elif node.language == "IL":
             self.check_il(node.body)
         else:
             self.stmts(node.body)
@@ -302,7 +306,10 @@ class BodyChecker:
 
     def check_writable(self, v: Var, r: ast.Ref):
         member_write = any(k == "member" for k, _, _ in r.accessors) and isinstance(v.type, FBType)
-        if v.section == "VAR_INPUT" and not r.accessors:
+        if v.step is not None:
+            self.error(r.pos, f"cannot assign to step '{v.name}': only transitions change a "
+                              "step's state")
+        elif v.section == "VAR_INPUT" and not r.accessors:
             self.error(r.pos, f"cannot assign to input '{v.name}'")
         elif v.section == "VAR_INPUT" and not member_write:
             self.error(r.pos, f"cannot assign to a part of input '{v.name}'")

@@ -440,6 +440,9 @@ class Declarer:
         for block in access:
             self.program_access(pou, block)
         self.declare_eno(pou)
+        if node.sfc is not None:
+            from .sfc import declare_steps
+            declare_steps(self, pou)
         for v in pou.vars.values():
             if v.section == "VAR_INPUT":
                 pou.inputs.append(v)
@@ -522,7 +525,7 @@ class Declarer:
         node = pou.node
         v = pou.vars.get("ENO")
         if v is None:
-            if not _mentions(node.body, "ENO"):
+            if not _mentions([node.body, node.sfc], "ENO"):
                 return
             v = Var("ENO", BOOL, "VAR_OUTPUT", node.pos, node.src, owner=pou)
             pou.vars["ENO"] = v

@@ -25,6 +25,7 @@ class Var:
     owner: object = None          # POUInfo, ResourceInfo or ConfigInfo
     used: bool = False
     assigned: bool = False
+    step: object = None           # ast.Step: the variable is an SFC step (checks/sfc.py)
 
     @property
     def key(self) -> str:
@@ -47,6 +48,7 @@ class POUInfo:
     uses_real: bool = False
     labels: dict = field(default_factory=dict)   # IL labels
     access: list = field(default_factory=list)   # VAR_ACCESS: [(name, path, Var, direction)]
+    sfc: object = None           # checks.sfc.SFCInfo of an SFC body
 
     @property
     def key(self) -> str:
