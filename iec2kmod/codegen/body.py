@@ -41,6 +41,9 @@ class BodyEmitter:
         self.used_labels: set[str] = set()
         self.cr_depth = 0
         self.ranges: dict[int, tuple] = {}   # id(Var) -> (lo, hi) inside a FOR body
+        self.return_label = None        # inside an SFC action: where RETURN goes
+        self.return_label_used = False
+        self.il_label_prefix = ""       # IL labels of an SFC action: their own names
 
     # ---------------------------------------------------------- helpers
     def pool_name(self, decl_key, i):
@@ -136,6 +139,9 @@ class BodyEmitter:
 
     # ------------------------------------------------------------- body
     def body(self, stmts) -> list[str]:
+        if self.pou.node.language == "SFC":
+            from .sfc import SFCEmitter
+            return SFCEmitter(self).lines()
         if self.pou.node.language == "IL":
             return self.il_body(stmts)
         out = []
@@ -193,6 +199,9 @@ class BodyEmitter:
         raise CodegenError(f"statement {s!r}")
 
     def return_stmt(self):
+        if self.return_label is not None:
+            self.return_label_used = True
+            return f"goto {self.return_label};"
         if self.is_function:
             rv = self.ret_value()
             return f"return {rv};" if rv else "return;"
@@ -829,7 +838,7 @@ class BodyEmitter:
     def il(self, i, depth) -> list[str]:
         out = []
         if i.label:
-            out.append(f"L_{i.label.lower()}:;")
+            out.append(f"L_{self.il_label_prefix}{i.label.lower()}:;")
         f = Frame(self, i.pos)
         op = i.op
         lines = []
@@ -897,7 +906,7 @@ class BodyEmitter:
             lines += self.il_apply(f, i, op, cr_in, i.operand, depth)
         elif op in ("JMP", "JMPC", "JMPCN"):
             jump = self.cr_handover(cr_in, self.il_label_cr.get(i.operand.name.upper())) + \
-                [f"goto L_{i.operand.name.lower()};"]
+                [f"goto L_{self.il_label_prefix}{i.operand.name.lower()};"]
             if i.operand.name.upper() in self.il_labels_seen:
                 # a backward jump closes a loop: it ticks the loop budget like
                 # every iteration of an ST loop, so an endless IL loop faults

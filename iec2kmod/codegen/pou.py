@@ -203,6 +203,9 @@ def pou_struct(pou) -> list[str]:
         for v in edges:
             lines.append(f"\tiec_bool h_{v.name.lower()};")
             lines.append(f"\tiec_bool h_{v.name.lower()}_prev;")
+    if pou.sfc is not None:
+        from .sfc import struct_members
+        lines += ["\t" + ln for ln in struct_members(pou)]
     if len(lines) == 1:
         lines.append("\tiec_u8 h_empty;")
     lines.append("};")

@@ -1145,7 +1145,10 @@ class PouCompiler:
     # ----------------------------------------------------------- POU bodies
     def body(self):
         node = self.pou.node
-        if node.language == "IL":
+        if node.language == "SFC":
+            from .sfc import compile_sfc
+            run = compile_sfc(self)
+        elif node.language == "IL":
             run = self.il_body(node.body)
         else:
             run = self.block(node.body)

@@ -209,3 +209,36 @@ IEC__DEF_TIMER(tof, iec__tof)
 IEC__DEF_TIMER(tp_ltime, iec__tp)
 IEC__DEF_TIMER(ton_ltime, iec__ton)
 IEC__DEF_TIMER(tof_ltime, iec__tof)
+
+static void iec__action_timer(struct iec_fb_ton *tmr, iec_bool in, iec_time pt,
+			      struct iec_ctx *ctx)
+{
+	tmr->in = in;
+	tmr->pt = pt;
+	iec_fb_ton(tmr, ctx);
+}
+
+void iec_fb_action_control(struct iec_fb_action_control *self, struct iec_ctx *ctx)
+{
+	iec_bool p_q, p1_q, p0_q;
+
+	self->s_ff = !self->r && (self->s0 || self->s_ff);
+	iec__action_timer(&self->l_tmr, self->l, self->t, ctx);
+	iec__action_timer(&self->d_tmr, self->d, self->t, ctx);
+	p_q = self->p && !self->p_prev;
+	self->p_prev = !!self->p;
+	p1_q = self->p1 && !self->p1_prev;
+	self->p1_prev = !!self->p1;
+	p0_q = !self->p0 && self->p0_prev;
+	self->p0_prev = !!self->p0;
+	self->sd_ff = !self->r && (self->sd || self->sd_ff);
+	iec__action_timer(&self->sd_tmr, self->sd_ff, self->t, ctx);
+	iec__action_timer(&self->ds_tmr, self->ds, self->t, ctx);
+	self->ds_ff = !self->r && (self->ds_tmr.q || self->ds_ff);
+	self->sl_ff = !self->r && (self->sl || self->sl_ff);
+	iec__action_timer(&self->sl_tmr, self->sl_ff, self->t, ctx);
+	self->q = !self->r &&
+		  (self->n || self->s_ff || (self->l && !self->l_tmr.q) || self->d_tmr.q ||
+		   p_q || p1_q || p0_q || self->sd_tmr.q || self->ds_ff ||
+		   (self->sl_ff && !self->sl_tmr.q));
+}
