@@ -183,6 +183,10 @@ def remove(name: str) -> None:
 # ------------------------------------------------------------ modinfo ----
 
 _MODINFO_CACHE: Dict[tuple, Dict[str, List[str]]] = {}
+# ELF e_machine of the architectures plc-manager knows, e_type names
+_EM = {"x86_64": 62, "aarch64": 183, "riscv64": 243, "i686": 3, "armv7l": 40,
+       "ppc64le": 21, "s390x": 22}
+_ET = {2: "executable", 3: "shared object or position-independent executable", 4: "core file"}
 
 
 def modinfo(path: str) -> Dict[str, List[str]]:
@@ -209,6 +213,15 @@ def _read_modinfo(path: str, size: int) -> Dict[str, List[str]]:
         if len(head) < 64 or head[:4] != b"\x7fELF" or head[4] != 2:
             raise ModuleError(f"{path}: not a 64-bit ELF kernel module")
         end = "<" if head[5] == 1 else ">"
+        e_type, e_machine = struct.unpack_from(end + "HH", head, 0x10)
+        if e_type != 1:         # ET_REL: a module is a relocatable object
+            raise ModuleError(f"{path}: not a kernel module (an ELF "
+                              f"{_ET.get(e_type, f'file of type {e_type}')})")
+        here = _EM.get(platform.machine())
+        if here is not None and e_machine != here:
+            other = next((a for a, m in _EM.items() if m == e_machine), f"machine {e_machine}")
+            raise ModuleError(f"{path}: a module for another architecture ({other}), this "
+                              f"machine is {platform.machine()}")
         shoff, = struct.unpack_from(end + "Q", head, 0x28)
         shentsize, shnum, shstrndx = struct.unpack_from(end + "HHH", head, 0x3A)
         if shoff + shentsize * shnum > size or shentsize < 64:

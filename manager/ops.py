@@ -34,8 +34,8 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 from . import kmod, values
 from .errors import NotLoaded, PLCError, UsageError
 from .netlink import MAX_FORCES, Client, KernelError, Status, VarValue
-from .project import (Candidate, Project, State, check_module_kernel, interface_changes,
-                      swap_candidates)
+from .project import (Candidate, Project, State, check_module_identity, check_module_kernel,
+                      interface_changes, swap_candidates)
 
 Progress = Callable[[str], None]
 
@@ -156,6 +156,7 @@ def load(path: str, start: bool = True, progress: Progress = _quiet) -> LoadRepo
     proj = Project.open(path)
     proj.check_built()
     proj.check_kernel()
+    proj.check_modules()
     loaded = kmod.loaded()
     running = _loaded_configurations()
     if running:
@@ -409,11 +410,9 @@ def swap(new: str, progress: Progress = _quiet) -> SwapReport:
 
 def _check_interface(cand: Candidate, st: Status, state: Optional[State]) -> None:
     slot = st.slot(cand.type_name)
-    if cand.manifest and cand.manifest.get("configuration", "").lower() != \
-            st.configuration.lower():
+    if cand.configuration and cand.configuration.lower() != st.configuration.lower():
         raise UsageError(f"swap refused: {cand.module} belongs to configuration "
-                         f"{cand.manifest['configuration']}, the running one is "
-                         f"{st.configuration}")
+                         f"{cand.configuration}, the running one is {st.configuration}")
     if slot is None:
         raise UsageError(f"swap refused: program type {cand.type_name} is not part of the "
                          f"running configuration {st.configuration}")
@@ -444,6 +443,8 @@ def _check_candidate(cand: Candidate, st: Status, loaded: dict) -> None:
         raise UsageError(f"{cand.ko} is missing: the new build is not built "
                          f"(run `iec2kmod build`)")
     check_module_kernel(cand.ko)
+    check_module_identity(cand.ko, cand.module, st.configuration,
+                          cand.manifest.get("source_hash") if cand.manifest else None)
 
 
 def _swap_one(c: Client, cand: Candidate, st: Status, state: Optional[State], t_cmd: float,

@@ -6,6 +6,7 @@ plc-manager keeps about the running configuration."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -41,9 +42,18 @@ class Project:
             m = json.loads(f.read_text())
         except (OSError, ValueError) as e:
             raise UsageError(f"{f}: unreadable manifest: {e}") from None
+        if not isinstance(m, dict):
+            raise UsageError(f"{f}: not an iec2kmod manifest")
         for key in ("configuration", "load_order", "modules", "program_types", "variables"):
             if key not in m:
                 raise UsageError(f"{f}: not an iec2kmod manifest (no {key!r})")
+        if "digest" not in m:
+            raise UsageError(f"{f}: no digest (written by an older iec2kmod, or by hand): "
+                             f"run `iec2kmod gen` and `iec2kmod build` again")
+        if m["digest"] != manifest_digest(m):
+            raise UsageError(f"{f}: the manifest was changed after `iec2kmod gen` wrote it "
+                             f"(its digest does not match): run `iec2kmod gen` and "
+                             f"`iec2kmod build` again")
         return cls(p, m)
 
     # ------------------------------------------------------------------
@@ -84,12 +94,60 @@ class Project:
             check_module_kernel(self.ko(name), release)
 
 
+    def check_modules(self) -> None:
+        """Every module file is the one the manifest names: the module of
+        this configuration and of these sources (a file copied from another
+        project or another build is refused before anything is inserted)."""
+        for name in self.m["load_order"]:
+            check_module_identity(self.ko(name), name, self.configuration,
+                                  self.m.get("source_hash"))
+
+
+_OF_CONFIG = re.compile(r"(?:configuration| of) (\S+?)(?:,|:| \(|$)")
+
+
+def check_module_identity(ko: Path, name: str, configuration: str,
+                          source_hash: Optional[str]) -> None:
+    """*ko* is module *name* of *configuration*, built from the sources
+    with *source_hash* (None: any build)."""
+    try:
+        info = kmod.modinfo(str(ko))
+    except PLCError as e:
+        raise UsageError(str(e)) from None
+    desc = (info.get("description") or [""])[0]
+    m = _OF_CONFIG.search(desc)
+    if "(iec2kmod)" not in desc or not m:
+        raise UsageError(f"{ko}: not a module written by iec2kmod")
+    if m.group(1).lower() != configuration.lower():
+        raise UsageError(f"{ko}: a module of configuration {m.group(1)}, not of "
+                         f"{configuration}")
+    got = (info.get("name") or ["?"])[0]
+    if got != name:
+        raise UsageError(f"{ko}: is module {got}, not {name} (a file of another build: run "
+                         f"`iec2kmod build` again)")
+    built = (info.get("iec_source_hash") or ["?"])[0]
+    if source_hash is not None and built != source_hash:
+        raise UsageError(f"{ko}: built from other sources ({built}) than the manifest's "
+                         f"({source_hash}): run `iec2kmod gen` and `iec2kmod build` again")
+
+
+def manifest_digest(manifest: dict) -> str:
+    """The checksum `iec2kmod gen` writes into the manifest ("digest"):
+    sha256 of its canonical JSON without "digest" and "kernel_release"
+    (added by `iec2kmod build`).  The same as iec2kmod.kmod.manifest_digest."""
+    body = {k: v for k, v in manifest.items() if k not in ("digest", "kernel_release")}
+    return hashlib.sha256(json.dumps(body, sort_keys=True,
+                                     separators=(",", ":")).encode()).hexdigest()[:32]
+
+
 def check_module_kernel(ko: Path, release: Optional[str] = None) -> None:
     release = release or os.uname().release
     try:
         got = kmod.vermagic_release(str(ko))
-    except (OSError, PLCError) as e:
-        raise UsageError(f"{ko}: not a kernel module ({e})") from None
+    except PLCError as e:
+        raise UsageError(str(e)) from None
+    except OSError as e:
+        raise UsageError(f"{ko}: {e.strerror}") from None
     if got != release:
         raise UsageError(f"{ko.name} was built for kernel {got or '?'}, this is {release} "
                          f"(rebuild it on this kernel)")
@@ -139,6 +197,7 @@ class Candidate:
     interface_hash: str
     entry: Optional[dict]          # its manifest entry (program_types), if known
     manifest: Optional[dict]       # the manifest it came with, if known
+    configuration: Optional[str] = None   # the configuration it was built for
 
 
 _DESC = re.compile(r"program type (\S+) of (\S+), build (\w+)")
@@ -147,17 +206,19 @@ _DESC = re.compile(r"program type (\S+) of (\S+), build (\w+)")
 def _candidate_from_ko(ko: Path, manifest: Optional[dict]) -> Candidate:
     info = kmod.modinfo(str(ko))
     module = (info.get("name") or [ko.stem])[0]
+    m = _DESC.search((info.get("description") or [""])[0])
+    if not m:
+        raise UsageError(f"{ko}: not an iec2kmod program-type module")
+    if manifest and manifest.get("configuration", "").lower() != m.group(2).lower():
+        manifest = None            # not the manifest of this module's project
     entry = None
     if manifest:
         entry = next((p for p in manifest["program_types"] if p["module"] == module), None)
     if entry:
         return Candidate(ko, module, entry["name"], entry["build_id"],
-                         entry["interface_hash"], entry, manifest)
-    m = _DESC.search((info.get("description") or [""])[0])
-    if not m:
-        raise UsageError(f"{ko}: not an iec2kmod program-type module")
+                         entry["interface_hash"], entry, manifest, m.group(2))
     return Candidate(ko, module, m.group(1), m.group(3),
-                     (info.get("iec_interface_hash") or ["?"])[0], None, manifest)
+                     (info.get("iec_interface_hash") or ["?"])[0], None, manifest, m.group(2))
 
 
 def swap_candidates(new: str, running_builds: Dict[str, str]) -> List[Candidate]:
@@ -180,7 +241,7 @@ def swap_candidates(new: str, running_builds: Dict[str, str]) -> List[Candidate]
             if running_builds.get(t["name"].upper()) == t["build_id"]:
                 continue
             out.append(Candidate(proj.ko(t["module"]), t["module"], t["name"], t["build_id"],
-                                 t["interface_hash"], t, proj.m))
+                                 t["interface_hash"], t, proj.m, proj.configuration))
         return out
     ko = p / f"{p.name}.ko"
     if ko.is_file():
@@ -192,10 +253,11 @@ def swap_candidates(new: str, running_builds: Dict[str, str]) -> List[Candidate]
 
 
 def _manifest_near(d: Path) -> Optional[dict]:
-    try:
-        return json.loads((d / MANIFEST).read_text())
-    except (OSError, ValueError):
+    """The manifest of the project a module directory sits in, if there is
+    one (checked like any other: an edited one is refused)."""
+    if not (d / MANIFEST).is_file():
         return None
+    return Project.open(d).m
 
 
 # ---------------------------------------------------------------------------

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import compileall
 import json
+import shutil
 import time
 from pathlib import Path
 
@@ -77,6 +78,13 @@ def wait_state(guest, pmdir, path, state, timeout=60.0) -> dict:
         time.sleep(0.2)
 
 
+def copy_tree(src: Path, dst: Path) -> Path:
+    if dst.exists():
+        shutil.rmtree(dst)
+    shutil.copytree(src, dst, symlinks=True)
+    return dst
+
+
 def stop_clean(guest, pmdir):
     if loaded_modules(guest):
         rc, out = pm(guest, pmdir, "stop")
@@ -94,16 +102,35 @@ def test_a_faulted_task_does_not_prevent_stop_or_unload(guest, faults):
         assert f'{ts["r0.ta"]["fault"]} in {ts["r0.ta"]["fault_pou"]} line ' \
                f'{ts["r0.ta"]["fault_line"]}' == FAULT, ts["r0.ta"]
 
-        # refused input changes nothing
-        before = (sorted(loaded_modules(guest)),
-                  {p: t["state"] for p, t in tasks(guest, pmdir).items()})
-        for args in (("stop", "--resource", "nosuch"), ("start", "--resource", "nosuch"),
-                     ("stop", "--keep-loaded", "--resource", "nosuch")):
+        # refused input changes nothing: unknown resources, bad files
+        # (every kind is in tests/unit/test_manager_badfiles.py)
+        def snapshot():
+            st = json.loads(ok(guest, pmdir, "status", "--json"))
+            return (sorted(loaded_modules(guest)),
+                    [(s["type_name"], s["module"], s["publications"]) for s in st["slots"]],
+                    {t["path"]: (t["state"], t["faults"]) for r in st["resources"]
+                     for t in r["tasks"]})
+        before = snapshot()
+        prog = next(p for p in manifest["program_types"] if p["name"] == "Faulty")["module"]
+        truncated = copy_tree(tree, work / "truncated")
+        ko = truncated / prog / f"{prog}.ko"
+        ko.write_bytes(ko.read_bytes()[:4096])
+        edited = copy_tree(tree, work / "edited")
+        m = json.loads((edited / "manifest.json").read_text())
+        m["variables"][0]["type"] = "LINT"
+        (edited / "manifest.json").write_text(json.dumps(m))
+        for args, want in ((("stop", "--resource", "nosuch"), "no resource 'nosuch'"),
+                           (("start", "--resource", "nosuch"), "no resource 'nosuch'"),
+                           (("stop", "--keep-loaded", "--resource", "nosuch"),
+                            "no resource 'nosuch'"),
+                           (("load", truncated), "not a valid kernel module (truncated"),
+                           (("swap", ko), "not a valid kernel module (truncated"),
+                           (("load", edited), "the manifest was changed after"),
+                           (("swap", edited), "the manifest was changed after")):
             rc, out = pm(guest, pmdir, *args)
-            assert rc == 1 and out.strip().startswith("plc-manager: no resource 'nosuch'"), out
-            assert len(out.strip().splitlines()) == 1, out
-        assert before == (sorted(loaded_modules(guest)),
-                          {p: t["state"] for p, t in tasks(guest, pmdir).items()})
+            assert rc == 1 and out.strip().startswith("plc-manager: "), out
+            assert len(out.strip().splitlines()) == 1 and want in out, out
+        assert snapshot() == before
 
         # --resource acts on that resource and says nothing about the other
         out = ok(guest, pmdir, "stop", "--resource", "r1")

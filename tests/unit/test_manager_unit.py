@@ -200,6 +200,7 @@ def test_swap_candidates_from_a_project(tmp_path):
               "interface_hash": "1" * 16, "interface": []},
              {"name": "Mixer", "module": "iec_p_mixer_a", "build_id": "a",
               "interface_hash": "2" * 16, "interface": []}]}
+    m["digest"] = project.manifest_digest(m)
     (tmp_path / "manifest.json").write_text(json.dumps(m))
     got = project.swap_candidates(str(tmp_path), {"COUNTER": "a", "MIXER": "a"})
     assert [(c.type_name, c.build_id, c.module) for c in got] == [("Counter", "b",
