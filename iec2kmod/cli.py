@@ -14,6 +14,12 @@ import sys
 EXIT_OK, EXIT_SOURCE, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 70
 
 
+SELECTIVE_HELP = ("selective execution (seed 001): skip the function block and program "
+                  "instances whose inputs did not change; 'all' (default) every block the "
+                  "rules of iec2kmod/codegen/selective.py allow except those marked "
+                  "{selective off}, 'marked' only those marked {selective on}")
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):
         self.print_usage(sys.stderr)
@@ -32,6 +38,8 @@ def build_parser() -> argparse.ArgumentParser:
     gp = sub.add_parser("gen", help="write the kbuild tree of a project's kernel modules")
     gp.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
     gp.add_argument("-o", "--output", required=True, metavar="OUT", help="output directory")
+    gp.add_argument("--selective", nargs="?", const="all", choices=("all", "marked"),
+                    help=SELECTIVE_HELP)
     bp = sub.add_parser("build", help="build the kernel modules of a generated tree")
     bp.add_argument("tree", metavar="OUT", help="directory written by `iec2kmod gen`")
     bp.add_argument("--kdir", help="kernel build tree (default: the running kernel's, "
@@ -58,6 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--engine", choices=("c", "vm"), default="c",
                    help="c: compile the generated C and run it (default); vm: run the "
                         "reference interpreter (no C compiler needed)")
+    s.add_argument("--selective", nargs="?", const="all", choices=("all", "marked"),
+                   help=SELECTIVE_HELP + " (C engine)")
     return p
 
 
@@ -95,6 +105,21 @@ def front_end(files):
     return result.project
 
 
+def selective_plan(project, mode):
+    """The selective pass for --selective MODE (None: plain); its warnings
+    (pragmas) are printed like the front end's."""
+    if not mode:
+        return None
+    from .codegen.selective import SelectivePlan
+    from .diagnostics import Diagnostics
+    plan = SelectivePlan(project, mode)
+    diags = Diagnostics()
+    for src, offset, message in plan.warnings:
+        diags.warning(src, offset, message)
+    print_diagnostics(diags)
+    return plan
+
+
 def cmd_sim(args) -> int:
     from . import sim
     project = front_end(args.files)
@@ -103,6 +128,9 @@ def cmd_sim(args) -> int:
     try:
         if args.engine == "vm" and args.sanitize:
             raise sim.SimError("--sanitize applies to the C engine only")
+        if args.engine == "vm" and args.selective:
+            raise sim.SimError("--selective applies to the C engine only")
+        sel = selective_plan(project, args.selective)
         if args.list:
             if args.engine == "vm":
                 from .interp import Machine
@@ -134,7 +162,8 @@ def cmd_sim(args) -> int:
             except interp.VMError as exc:
                 raise sim.SimError(str(exc)) from None
         else:
-            res = sim.run(project, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize)
+            res = sim.run(project, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize,
+                          selective=sel)
     except sim.SimError as exc:
         print(f"iec2kmod: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
@@ -157,6 +186,10 @@ def cmd_sim(args) -> int:
     width = max((len(n) for n in res.names), default=10)
     print(f"simulated {res.end_ns / 1e9:g} s; cycles: " +
           ", ".join(f"{k} {v}" for k, v in res.cycles.items()))
+    if getattr(args, "selective", None):
+        print("selective blocks: " + (", ".join(
+            f"{k} {ev} evaluated {sk} skipped" for k, (ev, sk) in res.selective.items())
+            or "none"))
     for n in res.names:
         v = final.get(n, "")
         print(f"  {n:<{width}}  {sim.format_value(None, v)}")
@@ -173,7 +206,7 @@ def cmd_gen(args) -> int:
     if out.exists() and not out.is_dir():
         print(f"iec2kmod: error: {out} exists and is not a directory", file=sys.stderr)
         return EXIT_USAGE
-    manifest = generate_tree(project, out)
+    manifest = generate_tree(project, out, selective=selective_plan(project, args.selective))
     print(f"wrote {out}: {len(manifest['modules'])} modules "
           f"({', '.join(m['name'] for m in manifest['modules'])})")
     return EXIT_OK

@@ -487,7 +487,8 @@ def _warn_pragmas(src: SourceFile, diags: Diagnostics) -> None:
     if "{" not in src.text:
         return
     for m in _PRAGMA_SCAN.finditer(src.text):
-        if m.group(1):
+        if m.group(1) and not re.match(r"\{\s*selective\b", m.group(1), re.I):
+            # {selective ...} is read by iec2kmod/codegen/selective.py
             diags.warning(src, m.start(1), "pragma ignored")
 
 

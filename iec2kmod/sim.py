@@ -47,6 +47,7 @@ class SimResult:
     changes: list                    # (t_ns, index into names, value)
     faults: list = field(default_factory=list)   # (t_ns, task, fault, pou, file, line)
     cycles: dict = field(default_factory=dict)   # task -> cycles run
+    selective: dict = field(default_factory=dict)  # task -> (blocks evaluated, skipped)
     end_ns: int = 0
     stderr: str = ""                             # the simulator's stderr (sanitizer reports)
 
@@ -70,9 +71,10 @@ def sim_dir() -> Path:
     return ROOT / "sim"
 
 
-def render_sim(project):
-    """Generated sources of the simulator: {file name: text}, plan."""
-    gen = generate(project)
+def render_sim(project, selective=None):
+    """Generated sources of the simulator: {file name: text}, plan.
+    *selective*: a codegen.selective.SelectivePlan, or None (plain)."""
+    gen = generate(project, selective=selective)
     plan = build_plan(project)
     pe = PlanEmitter(project, plan)
     f, init = pe.global_inits()
@@ -82,13 +84,17 @@ def render_sim(project):
             init += pe.ie.lines(f"{ip.c_name}.{member}", t, value, f)
         for b in ip.bindings:
             init += b.lines(ip.c_name, lambda g: g.c_name)
+        if selective is not None and selective.has_layout(ip.pou) and \
+                not selective.instance_selective(program_instance(project, ip)):
+            init.append(f"{ip.c_name}.sel.plain = 1;")
     tasks = []
     for tp in plan.tasks:
         body = []
         for ip in tp.instances:
             cf, lines = pe.connection_inputs(ip)
             block = cf.pre + lines
-            block.append(f"{N.pou_prefix(ip.pou)}_body(&{ip.c_name}, ctx);")
+            run = "_run" if selective is not None and selective.has_layout(ip.pou) else "_body"
+            block.append(f"{N.pou_prefix(ip.pou)}{run}(&{ip.c_name}, ctx);")
             block.append("if (ctx->fault != IEC_FAULT_NONE)")
             block.append("\treturn;")
             block += pe.connection_outputs(ip)
@@ -111,7 +117,15 @@ def render_sim(project):
                  for p in project.pous.values()]
     env = Environment(loader=FileSystemLoader(str(sim_dir())), undefined=StrictUndefined,
                       keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True)
+    sel_token = sel_owned = None
+    if selective is not None:
+        from .codegen.selective import token_define
+        sel_token = token_define([gen.bodies[k][1] for k in gen.order])
+        flags = ["1" if e.owner not in ("global", "direct") else "0" for e in plan.table]
+        sel_owned = [", ".join(flags[k:k + 16]) + "," for k in range(0, len(flags), 16)] or \
+            ["0,"]
     text = env.get_template("sim_project.c.j2").render(
+        sel_token=sel_token, sel_owned=sel_owned,
         config=plan.config, version=__version__, header=gen.header_name,
         bodies=[gen.bodies[k][0] for k in gen.order],
         globals=[N.declare(g.var.type, g.c_name) for g in plan.globals],
@@ -187,9 +201,30 @@ def runtime_objects(build_dir: Path, sanitize: bool = False) -> list:
     return objs
 
 
-def build(project, build_dir: Path, sanitize: bool = False) -> Path:
-    """Compiles the simulator; returns the executable (cached by content)."""
-    files, plan = render_sim(project)
+def program_instance(project, ip):
+    """The checked model's ProgramInstance of an InstancePlan."""
+    from .codegen.plan import _qual
+    for r in project.configurations[0].resources:
+        for inst in r.programs:
+            if r.name == ip.resource and _qual(r, inst.name) == ip.path:
+                return inst
+    raise KeyError(ip.path)
+
+
+def selective_plan(project, selective):
+    """A SelectivePlan for ``--selective[=mode]`` (None or False: plain)."""
+    if not selective:
+        return None
+    from .codegen.selective import SelectivePlan
+    if isinstance(selective, SelectivePlan):
+        return selective
+    return SelectivePlan(project, "all" if selective is True else selective)
+
+
+def build(project, build_dir: Path, sanitize: bool = False, selective=None) -> Path:
+    """Compiles the simulator; returns the executable (cached by content).
+    *selective*: None, True/'all' or 'marked' (``--selective``)."""
+    files, plan = render_sim(project, selective_plan(project, selective))
     objs = runtime_objects(build_dir, sanitize)
     h = hashlib.sha256(__version__.encode() + (b"san" if sanitize else b""))
     for name in sorted(files):
@@ -298,10 +333,10 @@ def read_trace(path: str, plan):
 
 
 def run(project, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=False,
-        timeout=600) -> SimResult:
+        timeout=600, selective=None) -> SimResult:
     build_dir = Path(build_dir or (Path(os.environ.get("IEC2KMOD_CACHE") or
                                         Path.home() / ".cache" / "iec2kmod") / "sim"))
-    exe, plan = build(project, build_dir, sanitize)
+    exe, plan = build(project, build_dir, sanitize, selective)
     index = {e.path.upper(): i for i, e in enumerate(plan.table)}
     if watch:
         idx = []
@@ -340,6 +375,9 @@ def run(project, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=
         elif tag == "n":
             task, n = rest.rsplit(" ", 1)
             res.cycles[task] = int(n)
+        elif tag == "s":
+            task, ev, sk = rest.rsplit(" ", 2)
+            res.selective[task] = (int(ev), int(sk))
     return res
 
 

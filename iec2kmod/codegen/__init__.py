@@ -120,8 +120,9 @@ def source_list(project):
     return out
 
 
-def generate(project, name: str | None = None) -> GeneratedC:
-    """C for every user POU of the project."""
+def generate(project, name: str | None = None, selective=None) -> GeneratedC:
+    """C for every user POU of the project; *selective* is a
+    selective.SelectivePlan (None: plain code)."""
     env = _env()
     cfg = project.configurations[0].name if project.configurations else (name or "project")
     guard = f"IEC_{cfg.upper()}_TYPES"
@@ -153,7 +154,7 @@ def generate(project, name: str | None = None) -> GeneratedC:
     for pou in order:
         if pou.kind == "FUNCTION":
             continue
-        structs.append("\n".join(pou_struct(pou)))
+        structs.append("\n".join(pou_struct(pou, selective)))
         inits.append("\n".join(pou_init(project, pou)))
     memo = {}
     tpl = env.get_template("pou.c.j2")
@@ -161,7 +162,7 @@ def generate(project, name: str | None = None) -> GeneratedC:
     for pou in order:
         text = tpl.render(kind=pou.kind, name=pou.name, version=__version__,
                           path=pou.src.path, line=pou.src.linecol(pou.node.pos)[0],
-                          functions=["\n".join(pou_body(project, pou))])
+                          functions=["\n".join(pou_body(project, pou, selective))])
         bodies[pou.key] = (f"pou_{pou.name.lower()}.c", text)
     # string temporaries of the bodies (CONCAT results ...) need their types too
     for text in [b[1] for b in bodies.values()] + inits:
@@ -171,7 +172,7 @@ def generate(project, name: str | None = None) -> GeneratedC:
         guard=guard, config=cfg, version=__version__, sources=source_list(project),
         string_lengths=sorted(n for w, n in strings if not w and n != 254),
         wstring_lengths=sorted(n for w, n in strings if w and n != 254),
-        enums=enums, structs=structs, inits=inits)
+        enums=enums, structs=structs, inits=inits, selective=selective is not None)
     out = GeneratedC(f"{guard.lower()}.h", header, order=[p.key for p in order])
     out.bodies = bodies
     for pou in order:

@@ -44,6 +44,7 @@ class BodyEmitter:
         self.return_label = None        # inside an SFC action: where RETURN goes
         self.return_label_used = False
         self.il_label_prefix = ""       # IL labels of an SFC action: their own names
+        self.sel = None                 # SelectivePlan (selective.py) or None: plain
 
     # ---------------------------------------------------------- helpers
     def pool_name(self, decl_key, i):
@@ -581,7 +582,13 @@ class BodyEmitter:
             # the bistables and edge detectors of iec_std_fb.c, written out
             lines += [ln.format(b=base) for ln in inline]
         else:
-            lines.append(f"{body_fn}(&{base}, ctx);")
+            kind = self.sel.call_kind(self.pou, inst) if self.sel is not None else None
+            if kind == "sel":
+                lines.append(f"{N.pou_prefix(pou)}_run(&{base}, ctx);")
+            else:
+                lines.append(f"{body_fn}(&{base}, ctx);")
+            if kind == "plain":
+                lines.append(f"{base}.sel.tok = 0;")
         if not pou.standard:
             f.may_fault = True
             if any(a.kind == "out" and a.value is not None for a in bound.values()) or \

@@ -184,8 +184,9 @@ def _lit_type(init, t):
     return t
 
 
-def pou_struct(pou) -> list[str]:
-    """The C struct of a FUNCTION_BLOCK or PROGRAM instance."""
+def pou_struct(pou, sel=None) -> list[str]:
+    """The C struct of a FUNCTION_BLOCK or PROGRAM instance (with its
+    selective execution state at the end when *sel* gives it one)."""
     lines = [f"{N.pou_struct(pou)} {{"]
     for section in SECTION_ORDER:
         vs = [v for v in pou.vars.values() if v.section == section]
@@ -208,6 +209,10 @@ def pou_struct(pou) -> list[str]:
         lines += ["\t" + ln for ln in struct_members(pou)]
     if len(lines) == 1:
         lines.append("\tiec_u8 h_empty;")
+    if sel is not None and sel.has_layout(pou):
+        lines.append(f"\t{N.pou_struct(pou)}_sel sel;")
+        lines.append("};")
+        return sel.struct_lines(pou) + [""] + lines
     lines.append("};")
     return lines
 
@@ -270,10 +275,12 @@ def function_signature(pou) -> str:
     return f"IEC_POU_SCOPE {ret} {N.fn(pou.name)}({', '.join(params)})"
 
 
-def pou_body(project, pou) -> list[str]:
-    """The body function of a POU."""
+def pou_body(project, pou, sel=None) -> list[str]:
+    """The body function of a POU (and, for a selective block type, its
+    ``_run`` function: selective.py)."""
     be = BodyEmitter(pou)
     be.pooling = True
+    be.sel = sel
     stmts = be.body(pou.node.body)
     out = []
     if pou.kind == "FUNCTION":
@@ -369,4 +376,7 @@ def pou_body(project, pou) -> list[str]:
         out.append("out:")
         out.append("\treturn;")
     out.append("}")
+    if sel is not None and sel.has_layout(pou):
+        out.append("")
+        out += sel.run_function(pou)
     return out

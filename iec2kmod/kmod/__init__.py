@@ -79,12 +79,12 @@ def _code(text: str) -> str:
     return _C_COMMENT.sub("", text)
 
 
-def _type_defs(t, out, seen, project):
+def _type_defs(t, out, seen, project, sel=None):
     """Struct text of every type an instance's layout depends on."""
     t = concrete(t)
     if isinstance(t, ArrayT):
         out.append(f"array {t.name}")
-        _type_defs(t.elem, out, seen, project)
+        _type_defs(t.elem, out, seen, project, sel)
     elif isinstance(t, StringT):
         out.append(f"string {t.name}")
     elif isinstance(t, EnumT):
@@ -96,7 +96,7 @@ def _type_defs(t, out, seen, project):
         seen.add(id(t))
         for fname, ft, _ in t.fields.values():
             out.append(f"field {t.name}.{fname}")
-            _type_defs(ft, out, seen, project)
+            _type_defs(ft, out, seen, project, sel)
     elif isinstance(t, FBType):
         pou = t.pou
         if id(pou) in seen:
@@ -105,22 +105,23 @@ def _type_defs(t, out, seen, project):
         if pou.standard:
             out.append(f"standard {pou.name}")
             return
-        out.append("\n".join(pou_struct(pou)))
+        out.append("\n".join(pou_struct(pou, sel)))
         for v in pou.vars.values():
-            _type_defs(v.type, out, seen, project)
+            _type_defs(v.type, out, seen, project, sel)
     else:
         out.append(f"elementary {t.name}")
 
 
-def interface_hash(pou, project) -> str:
+def interface_hash(pou, project, sel=None) -> str:
     """Hash of a program type's interface: the layout of its instance state
-    (every variable, nested FB instance and type).  Algorithms may change
-    across a hot swap; this may not."""
-    parts = [f"abi 1", "\n".join(pou_struct(pou))]
+    (every variable, nested FB instance and type, and with --selective the
+    selective execution state).  Algorithms may change across a hot swap;
+    this may not."""
+    parts = [f"abi 1", "\n".join(pou_struct(pou, sel))]
     seen = set()
     for v in pou.vars.values():
         parts.append(f"{v.section} {v.name} {getattr(v.type, 'name', '?')}")
-        _type_defs(v.type, parts, seen, project)
+        _type_defs(v.type, parts, seen, project, sel)
     return _sha(*parts)[:16]
 
 
@@ -149,11 +150,13 @@ def _deps(pou, project):
     return [p for p in order if p.key in need]
 
 
-def generate_tree(project, out: Path) -> dict:
-    """Writes the kbuild tree; returns the manifest."""
+def generate_tree(project, out: Path, selective=None) -> dict:
+    """Writes the kbuild tree; returns the manifest.  *selective*: a
+    codegen.selective.SelectivePlan (``gen --selective``) or None."""
     from kmod_templates import ROOT
     env = _env()
-    gen = generate(project)
+    sel = selective
+    gen = generate(project, selective=sel)
     plan = build_plan(project)
     cfg = project.configurations[0]
     cname = _ident(cfg.name)
@@ -180,13 +183,19 @@ def generate_tree(project, out: Path) -> dict:
     slots = []
     prog_modules = []
     for i, pou in enumerate(used_types):
-        ihash = interface_hash(pou, project)
+        ihash = interface_hash(pou, project, sel)
         deps = _deps(pou, project)
         fpu = uses_real(pou, project)
         prefix = N.pou_prefix(pou)
+        sel_token = None
+        if sel is not None:
+            from ..codegen.selective import token_define
+            sel_token = token_define([_code(t) for t in [gen.header] +
+                                      [gen.bodies[p.key][1] for p in deps]])
         body = env.get_template("program_body.c.j2").render(
             type=pou.name, header=gen.header_name, bodies=[gen.bodies[p.key][0] for p in deps],
-            prefix=prefix, uses_fpu=fpu, version=__version__)
+            prefix=prefix, uses_fpu=fpu, version=__version__, sel_token=sel_token,
+            run="_run" if sel is not None and sel.has_layout(pou) else "_body")
         # the code only: comments name the sources and change with any edit
         build_id = _sha(*[_code(t) for t in [body, gen.header] +
                           [gen.bodies[p.key][1] for p in deps]])[:8]
@@ -269,7 +278,7 @@ def generate_tree(project, out: Path) -> dict:
     for r in cfg.resources:
         mod = _modname(f"{cname}_r_{_ident(r.name)}")
         text = _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events,
-                                res_vars[r.name], source_hash, iface_hash)
+                                res_vars[r.name], source_hash, iface_hash, sel)
         _write_module(out, mod, {"main.c": text}, ["main.o", "iec_string.o", "iec_std_fb.o"],
                       [], runtime=["iec_string.c", "iec_std_fb.c"])
         res_modules.append({"name": mod, "kind": "resource", "resource": r.name, "dir": mod,
@@ -307,7 +316,7 @@ def _cpu_of(processor):
 
 
 def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, vars_,
-                     source_hash, iface_hash):
+                     source_hash, iface_hash, sel=None):
     res_globals = [g for g in plan.globals if g.resource == r.name]
     instances = [ip for ip in plan.instances if ip.resource == r.name]
     ie = InitEmitter(project)
@@ -319,6 +328,9 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
         init.append(f"{N.pou_prefix(ip.pou)}_init(&{ip.c_name});")
         for member, t, value in ip.config_inits:   # VAR_CONFIG
             init += ie.lines(f"{ip.c_name}.{member}", t, value, f)
+        if sel is not None and sel.has_layout(ip.pou) and \
+                not sel.instance_selective(_instance(cfg, ip)):
+            init.append(f"{ip.c_name}.sel.plain = 1;")
     tasks = []
     pe = PlanEmitter(project, plan)
     by_c = _globals_by_c(plan)

@@ -67,6 +67,11 @@ struct iec_ctx {
 	const char *fault_pou;		/* POU that raised it (NULL: unknown) */
 	int fault_line;			/* source line in that POU, 0: unknown */
 	iec_u32 fault_count;		/* faults raised since the last clear */
+	/* selective execution (iec_sel.h, iec2kmod --selective) */
+	iec_u32 sel_epoch;		/* bumped by writes into instances */
+	bool sel_changed;		/* a nested evaluation changed its state */
+	iec_u64 sel_evaluated;		/* blocks evaluated */
+	iec_u64 sel_skipped;		/* blocks skipped */
 };
 
 static inline void iec_ctx_init(struct iec_ctx *ctx, iec_u32 loop_budget)

@@ -149,9 +149,22 @@ static double get_f(const struct sim_var *v)
 	return v->size == 4 ? *(float *)v->addr : *(double *)v->addr;
 }
 
+/*
+ * Selective execution (iec2kmod sim --selective): the generated table
+ * sim_sel_owned marks the variables that live in program instances; an
+ * input event into one bumps the epoch every task's blocks compare with
+ * (a write the blocks' argument sets do not see).  Plain builds define no
+ * such table.
+ */
+extern const unsigned char sim_sel_owned[] __attribute__((weak));
+static iec_u32 sim_sel_epoch;
+
 static void apply(const struct event *ev)
 {
 	const struct sim_var *v = &sim_vars[ev->var];
+
+	if (sim_sel_owned && sim_sel_owned[ev->var])
+		sim_sel_epoch++;
 
 	if (v->kind == 'f') {
 		if (v->size == 4)
@@ -307,6 +320,7 @@ int main(int argc, char **argv)
 			if (faulted[best])
 				continue;
 			iec_ctx_cycle_begin(&ctx[best], t);
+			ctx[best].sel_epoch = sim_sel_epoch;
 			sim_globals_save();
 			sim_tasks[best].run(&ctx[best]);
 			cycles[best]++;
@@ -341,6 +355,11 @@ int main(int argc, char **argv)
 	}
 	for (i = 0; i < sim_ntasks; i++)
 		printf("n %s %lld\n", sim_tasks[i].name, cycles[i]);
+	for (i = 0; i < sim_ntasks; i++)
+		if (ctx[i].sel_evaluated || ctx[i].sel_skipped)
+			printf("s %s %llu %llu\n", sim_tasks[i].name,
+			       (unsigned long long)ctx[i].sel_evaluated,
+			       (unsigned long long)ctx[i].sel_skipped);
 	for (i = 0; i < nevents; i++)
 		free(events[i].s);
 	for (i = 0; i < sim_nvars; i++)
