@@ -75,6 +75,13 @@ def main(argv=None):
     print(f"\n{len(results)} projects in {dt:.0f} s: " +
           ", ".join(f"{k} {n}" for k, n in sorted(kinds.items())))
     print(f"constructs reached: {len(feats)} ({', '.join(sorted(feats))})")
+    if "selective" in engines:
+        ev = sum(r.selective[0] for r in results)
+        sk = sum(r.selective[1] for r in results)
+        some = sum(1 for r in results if r.selective[1])
+        print(f"selective engine: {ev} block evaluations, {sk} skipped "
+              f"({100.0 * sk / max(1, ev + sk):.1f} %); {some} of {len(results)} projects "
+              "skipped at least one block")
     bad = [r for r in results if not r.ok]
     if bad and a.keep:
         keep = Path(a.keep)

@@ -324,18 +324,18 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
     init = []
     for g in res_globals:
         init += ie.lines(f"res_image.{g.c_name}", g.var.type, g.var.init, f)
+    inst_of = _instances_by_name(cfg)
     for ip in instances:
         init.append(f"{N.pou_prefix(ip.pou)}_init(&{ip.c_name});")
         for member, t, value in ip.config_inits:   # VAR_CONFIG
             init += ie.lines(f"{ip.c_name}.{member}", t, value, f)
         if sel is not None and sel.has_layout(ip.pou) and \
-                not sel.instance_selective(_instance(cfg, ip)):
+                not sel.instance_selective(inst_of[(ip.resource, ip.path.split(".")[-1])]):
             init.append(f"{ip.c_name}.sel.plain = 1;")
     tasks = []
     pe = PlanEmitter(project, plan)
     by_c = _globals_by_c(plan)
     c_of = _global_c_names(plan)
-    inst_of = _instances_by_name(cfg)
     for tp in [t for t in plan.tasks if t.resource == r.name]:
         used: dict[str, tuple] = {}   # global C name -> (read, write)
 

@@ -3,6 +3,9 @@
 Engines:
   c         the compiled C simulator (iec2kmod.sim, in process)
   sanitize  the same with -fsanitize=undefined,address: any report is a failure
+  selective the compiled C simulator with selective execution (``sim
+            --selective``, iec2kmod/codegen/selective.py): blocks whose
+            argument set did not change are skipped, which must be invisible
   vm        the reference interpreter (iec2kmod.interp.run, what ``iec2kmod sim
             --engine vm`` runs), in process on the project the front end
             checked once; used when the CLI offers ``--engine vm``
@@ -50,7 +53,7 @@ from iec2kmod.codegen.plan import build_plan  # noqa: E402
 ULP_TOLERANCE = 4
 INTERVAL_NS = 10_000_000
 SANITIZER_REPORT = re.compile(r"runtime error|Sanitizer|^==\d+==|SUMMARY:", re.M)
-ALL_ENGINES = ("c", "sanitize", "vm")
+ALL_ENGINES = ("c", "sanitize", "selective", "vm")
 
 
 def cache_root() -> Path:
@@ -72,7 +75,7 @@ def vm_available() -> bool:
 
 
 def available_engines() -> list:
-    return ["c", "sanitize"] + (["vm"] if vm_available() else [])
+    return ["c", "sanitize", "selective"] + (["vm"] if vm_available() else [])
 
 
 # ----------------------------------------------------------------- runs
@@ -85,6 +88,7 @@ class EngineRun:
     faults: list = field(default_factory=list)     # (t, task, fault, pou, line)
     floats: set = field(default_factory=set)       # NAMEs of REAL/LREAL (kind f)
     widths: dict = field(default_factory=dict)     # NAME -> 32|64 for floats
+    selective: dict = field(default_factory=dict)  # task -> (blocks evaluated, skipped)
 
     @property
     def ok(self):
@@ -125,12 +129,13 @@ def write_trace(events, table, path):
     return len(rows)
 
 
-def run_c(project, plan, end_ns, trace, sanitize):
-    eng = "sanitize" if sanitize else "c"
+def run_c(project, plan, end_ns, trace, sanitize, selective=False):
+    eng = "selective" if selective else "sanitize" if sanitize else "c"
     watch = [e.path for e in plan.table]
     try:
         res = sim.run(project, end_ns, watch=watch, inputs=str(trace), sanitize=sanitize,
-                      build_dir=cache_root() / "sim", timeout=300)
+                      build_dir=cache_root() / "sim", timeout=300,
+                      selective="all" if selective else None)
     except sim.InternalError as exc:
         msg = str(exc)
         if "did not compile" in msg:
@@ -148,6 +153,7 @@ def run_c(project, plan, end_ns, trace, sanitize):
     for t, i, v in res.changes:
         run.changes.setdefault(res.names[i].upper(), []).append((t, _text(v)))
     run.faults = [(t, task, fault, pou, line) for t, task, fault, pou, _f, line in res.faults]
+    run.selective = dict(res.selective)
     return run
 
 
@@ -177,6 +183,7 @@ def run_vm_inproc(project, plan, end_ns, trace):
     for t, i, v in res.changes:
         run.changes.setdefault(res.names[i].upper(), []).append((t, _text(v)))
     run.faults = [(t, task, fault, pou, line) for t, task, fault, pou, _f, line in res.faults]
+    run.selective = dict(res.selective)
     return run
 
 
@@ -254,6 +261,7 @@ class UnitResult:
     features: set
     problems: list = field(default_factory=list)   # (kind, engine(s), text)
     statuses: dict = field(default_factory=dict)   # engine -> status
+    selective: tuple = (0, 0)     # blocks evaluated, skipped by the selective engine
 
     @property
     def ok(self):
@@ -307,6 +315,8 @@ def run_units(units, engines, workdir, split_on_failure=True):
             runs[eng] = run_c(project, plan, end, trace, False)
         elif eng == "sanitize":
             runs[eng] = run_c(project, plan, end, trace, True)
+        elif eng == "selective":
+            runs[eng] = run_c(project, plan, end, trace, False, selective=True)
         elif eng == "vm":
             runs[eng] = run_vm_inproc(project, plan, end, trace)
     bad = [e for e, r in runs.items() if not r.ok]
@@ -316,6 +326,10 @@ def run_units(units, engines, workdir, split_on_failure=True):
     for u in units:
         res = results[u.seed]
         res.statuses = {e: r.status for e, r in runs.items()}
+        if "selective" in runs:
+            mine = [v for task, v in runs["selective"].selective.items()
+                    if task.upper().startswith(u.prefix.upper())]
+            res.selective = (sum(v[0] for v in mine), sum(v[1] for v in mine))
         for e in bad:
             r = runs[e]
             res.problems.append((r.status, e, r.detail))
@@ -382,8 +396,9 @@ def run_text(text, events, engines, cycles, workdir):
     end = end_ns(cycles)
     runs = {}
     for eng in engines:
-        if eng in ("c", "sanitize"):
-            runs[eng] = run_c(project, plan, end, trace, eng == "sanitize")
+        if eng in ("c", "sanitize", "selective"):
+            runs[eng] = run_c(project, plan, end, trace, eng == "sanitize",
+                              selective=eng == "selective")
         else:
             runs[eng] = run_vm_inproc(project, plan, end, trace)
     runs["_names"] = [e.path.upper() for e in plan.table]

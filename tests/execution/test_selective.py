@@ -1,0 +1,398 @@
+"""Selective execution (``sim --selective``, iec2kmod/codegen/selective.py):
+hand-written cases for the edge cases of issue 11.  Each project runs plain
+and selective on the same input trace; every variable of the table (globals,
+program and FB instance variables) must change at the same simulated times
+to the same values, faults included, and the selective run must actually
+have skipped blocks where the case says so (a selective build that never
+skips would pass the comparison for nothing).
+
+The random-program campaign (tests/differential, engine ``selective``) is
+the wide proof; these are the cases written on purpose."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from iec2kmod import frontend, sim
+from iec2kmod.codegen import generate
+from iec2kmod.codegen.plan import build_plan
+from iec2kmod.codegen.selective import SelectivePlan
+
+pytestmark = pytest.mark.execution
+
+ROOT = Path(__file__).resolve().parents[2]
+MS = 1_000_000
+
+
+def _project(tmp_path, text, name="case.st"):
+    f = tmp_path / name
+    f.write_text(text)
+    res = frontend.run([str(f)], use_cache=False)
+    assert res.ok, [d.format() for d in res.diags.sorted()]
+    return res.project
+
+
+def _trace(tmp_path, rows):
+    p = tmp_path / "trace.csv"
+    p.write_text("".join(f"{t}ms,{v},{x}\n" for t, v, x in rows))
+    return str(p)
+
+
+def _both(tmp_path, text, rows, duration_ms, mode="all"):
+    """(plain result, selective result) of the same project and trace;
+    asserts the traces are identical."""
+    project = _project(tmp_path, text)
+    watch = [e.path for e in build_plan(project).table]
+    trace = _trace(tmp_path, rows)
+    a = sim.run(project, duration_ms * MS, watch=watch, inputs=trace)
+    b = sim.run(project, duration_ms * MS, watch=watch, inputs=trace, selective=mode)
+    assert not a.selective, "the plain build counted selective blocks"
+    assert a.names == b.names
+    assert a.faults == b.faults, (a.faults, b.faults)
+    assert a.cycles == b.cycles
+    if a.changes != b.changes:
+        first = next(i for i, (x, y) in enumerate(zip(a.changes, b.changes)) if x != y) \
+            if any(x != y for x, y in zip(a.changes, b.changes)) else min(len(a.changes),
+                                                                           len(b.changes))
+        ca = a.changes[first] if first < len(a.changes) else None
+        cb = b.changes[first] if first < len(b.changes) else None
+        pytest.fail(f"traces differ at change {first}: plain {ca and (ca[0], a.names[ca[1]], ca[2])}"
+                    f", selective {cb and (cb[0], b.names[cb[1]], cb[2])}")
+    return a, b
+
+
+def _skipped(res):
+    return sum(sk for _, sk in res.selective.values())
+
+
+def _evaluated(res):
+    return sum(ev for ev, _ in res.selective.values())
+
+
+CONFIG = """
+CONFIGURATION c
+VAR_GLOBAL {globals} END_VAR
+RESOURCE r ON CPU0
+  TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+  PROGRAM p WITH t : Main;
+END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+def test_skipped_block_output_overwritten_later(tmp_path):
+    """A block writes a global (VAR_EXTERNAL) and an output bound to a
+    global; code after it overwrites both.  When its inputs do not change
+    it is skipped, yet the global must hold what plain execution rewrites
+    every cycle: the overwritten external is in the block's argument set,
+    the output binding is the caller's statement."""
+    text = """
+FUNCTION_BLOCK Put
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT q : INT; END_VAR
+VAR_EXTERNAL g : INT; END_VAR
+g := x * 2;
+q := x + 1;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Pure
+VAR_INPUT a, b : BOOL; END_VAR
+VAR_OUTPUT y : BOOL; END_VAR
+y := a AND NOT b;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL g, h, sel : INT; END_VAR
+VAR put1 : Put; pure1 : Pure; END_VAR
+put1(x := sel, q => h);
+pure1(a := sel > 0, b := FALSE);
+IF sel = 3 THEN g := 100; h := -1; END_IF;
+END_PROGRAM
+""" + CONFIG.format(globals="g, h, sel : INT;")
+    rows = [(0, "sel", 1), (50, "sel", 3), (120, "sel", 3), (200, "sel", 2), (300, "sel", 3)]
+    a, b = _both(tmp_path, text, rows, 500)
+    final = b.values_at()
+    assert final["g"] == 100 and final["h"] == -1
+    assert b.values_at(250 * MS)["g"] == 4
+    assert _skipped(b) > 20, b.selective
+
+
+def test_timer_runs_out_while_inputs_do_not_change(tmp_path):
+    """A block containing a TON depends on time: it is evaluated every
+    cycle, so its Q rises PT after IN although no input changes; a
+    time-independent block beside it is skipped."""
+    text = """
+FUNCTION_BLOCK Delay
+VAR_INPUT start : BOOL; END_VAR
+VAR_OUTPUT done : BOOL; END_VAR
+VAR t : TON; END_VAR
+t(IN := start, PT := T#200ms);
+done := t.Q;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Latch
+VAR_INPUT s, r : BOOL; END_VAR
+VAR_OUTPUT q : BOOL; END_VAR
+q := (q OR s) AND NOT r;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL go, out, held : BOOL; END_VAR
+VAR d : Delay; l : Latch; END_VAR
+d(start := go);
+out := d.done;
+l(s := go, r := FALSE);
+held := l.q;
+END_PROGRAM
+""" + CONFIG.format(globals="go, out, held : BOOL;")
+    a, b = _both(tmp_path, text, [(100, "go", "TRUE")], 600)
+    rises = [t for t, i, v in b.changes if b.names[i] == "out" and v is True]
+    assert rises == [300 * MS], rises
+    plan = SelectivePlan(_project(tmp_path, text), "all")
+    report = "\n".join(plan.report())
+    assert "function_block Delay: always evaluated: depends on time (contains TON)" in report
+    assert "function_block Latch: selective" in report
+    assert "program Main: always evaluated: depends on time" in report
+    assert _skipped(b) > 40, b.selective        # the latch, after its input settled
+
+
+def test_block_reads_global_written_by_another_task(tmp_path):
+    """A slow task's block reads a global that a fast task writes now and
+    then: the block is evaluated when the global changed, skipped
+    otherwise; the program instance as a whole is skipped too."""
+    text = """
+FUNCTION_BLOCK Scale
+VAR_INPUT k : INT; END_VAR
+VAR_OUTPUT y : INT; END_VAR
+VAR_EXTERNAL level : INT; END_VAR
+y := level * k;
+END_FUNCTION_BLOCK
+
+PROGRAM Fast
+VAR_EXTERNAL level, tick : INT; END_VAR
+tick := tick + 1;
+IF tick MOD 20 = 0 THEN level := level + 1; END_IF;
+END_PROGRAM
+
+PROGRAM Slow
+VAR_EXTERNAL scaled : INT; END_VAR
+VAR s : Scale; END_VAR
+s(k := 3);
+scaled := s.y;
+END_PROGRAM
+
+CONFIGURATION c
+VAR_GLOBAL level, tick, scaled : INT; END_VAR
+RESOURCE r ON CPU0
+  TASK fast (INTERVAL := T#10ms, PRIORITY := 1);
+  TASK slow (INTERVAL := T#30ms, PRIORITY := 2);
+  PROGRAM f WITH fast : Fast;
+  PROGRAM s WITH slow : Slow;
+END_RESOURCE
+END_CONFIGURATION
+"""
+    a, b = _both(tmp_path, text, [], 1000)
+    assert b.values_at()["scaled"] == 3 * b.values_at()["level"]
+    ev, sk = b.selective["r.slow"]
+    assert sk > 10 and ev > 10, b.selective
+    assert b.selective["r.fast"][1] == 0       # a counter never settles
+
+
+def test_counter_and_writes_into_instances(tmp_path):
+    """A block that counts (its state feeds back) never settles; a value
+    written into an instance's internal variable from outside (the trace,
+    like the manager) is seen although no input changed (the epoch)."""
+    text = """
+FUNCTION_BLOCK Count
+VAR_INPUT en : BOOL; END_VAR
+VAR_OUTPUT n : DINT; END_VAR
+IF en THEN n := n + 1; END_IF;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Hold
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT y : INT; END_VAR
+VAR offset : INT; END_VAR
+y := x + offset;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL run : BOOL; total : DINT; out : INT; END_VAR
+VAR c : Count; h : Hold; END_VAR
+c(en := run);
+total := c.n;
+h(x := 5);
+out := h.y;
+END_PROGRAM
+""" + CONFIG.format(globals="run : BOOL; total : DINT; out : INT;")
+    rows = [(0, "run", "TRUE"), (200, "run", "FALSE"), (300, "r.p.h.offset", 10),
+            (400, "r.p.h.offset", 20)]
+    a, b = _both(tmp_path, text, rows, 600)
+    assert b.values_at()["total"] == 20
+    assert b.values_at()["out"] == 25
+    assert b.values_at(350 * MS)["out"] == 15
+    assert _skipped(b) > 20
+
+
+def test_fault_on_the_same_arguments_is_not_hidden(tmp_path):
+    """A block that divides by its input faults in the cycle the input
+    becomes 0, skipped or not before; and a block whose loop uses part of
+    the cycle's budget is charged that part when skipped, so a later loop
+    exhausts the budget in the same cycle and at the same line as in plain
+    execution."""
+    text = """
+FUNCTION_BLOCK Divide
+VAR_INPUT d : INT; END_VAR
+VAR_OUTPUT q : INT; END_VAR
+q := 1000 / d;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Spin
+VAR_INPUT n : DINT; END_VAR
+VAR_OUTPUT s : DINT; END_VAR
+VAR i : DINT; END_VAR
+s := 0;
+FOR i := 1 TO n DO
+  s := s + 1;
+END_FOR;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL d : INT; n1, n2 : DINT; q : INT; END_VAR
+VAR a : Divide; big, grow : Spin; END_VAR
+a(d := d);
+q := a.q;
+big(n := n1);
+grow(n := n2);
+END_PROGRAM
+
+PROGRAM Other
+VAR_EXTERNAL d2 : INT; q2 : INT; END_VAR
+VAR a : Divide; END_VAR
+a(d := d2);
+q2 := a.q;
+END_PROGRAM
+
+CONFIGURATION c
+VAR_GLOBAL d, d2, q, q2 : INT; n1, n2 : DINT; END_VAR
+RESOURCE r ON CPU0
+  TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+  TASK u (INTERVAL := T#10ms, PRIORITY := 2);
+  PROGRAM p WITH t : Main;
+  PROGRAM o WITH u : Other;
+END_RESOURCE
+END_CONFIGURATION
+"""
+    budget = sim.LOOP_BUDGET
+    rows = [(0, "d", 4), (0, "d2", 5), (0, "n1", budget // 2 + 10), (0, "n2", 10),
+            (200, "n2", budget // 4), (300, "n2", budget // 2), (400, "d2", 0)]
+    a, b = _both(tmp_path, text, rows, 600)
+    assert [(t // MS, task, f) for t, task, f, *_ in b.faults] == \
+        [(300, "r.t", "endless loop (loop budget exhausted)"),
+         (400, "r.u", "division by zero")], b.faults
+    assert _skipped(b) > 20, b.selective
+
+
+def test_pragmas_select_blocks(tmp_path):
+    """{selective off} on an instance and on a program instance keeps them
+    evaluated; --selective=marked skips only what {selective on} marks."""
+    text = """
+{selective on}
+FUNCTION_BLOCK Marked
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT y : INT; END_VAR
+y := x * 3;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Other
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT y : INT; END_VAR
+y := x - 1;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL x, y1, y2, y3 : INT; END_VAR
+VAR
+  m : Marked;
+  {selective off} m_off : Marked;
+  o : Other;
+END_VAR
+m(x := x); y1 := m.y;
+m_off(x := x); y2 := m_off.y;
+o(x := x); y3 := o.y;
+END_PROGRAM
+
+CONFIGURATION c
+VAR_GLOBAL x, y1, y2, y3 : INT; END_VAR
+RESOURCE r ON CPU0
+  TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+  {selective off} PROGRAM p WITH t : Main;
+END_RESOURCE
+END_CONFIGURATION
+"""
+    rows = [(0, "x", 2), (300, "x", 5)]
+    cycles = 51
+    _, every = _both(tmp_path, text, rows, 500, mode="all")
+    # the program instance is off: each cycle evaluates it plainly; m and o
+    # are skipped except after a change; m_off is never counted
+    ev, sk = every.selective["r.t"]
+    assert ev + sk == 2 * cycles and sk >= 2 * cycles - 8, every.selective
+    _, marked = _both(tmp_path, text, rows, 500, mode="marked")
+    ev, sk = marked.selective["r.t"]
+    assert ev + sk == cycles and sk >= cycles - 4, marked.selective
+    project = _project(tmp_path, text)
+    plan = SelectivePlan(project, "marked")
+    main = project.pous["MAIN"]
+    kinds = {v.name: plan.call_kind(main, v) for v in main.vars.values()
+             if v.section == "VAR"}
+    assert kinds == {"m": "sel", "m_off": "plain", "o": None}
+
+
+def test_pragma_warnings_and_cli(tmp_path):
+    """A selective pragma that precedes nothing it can apply to, or says
+    something else than on/off, is a warning with file:line:col and a caret;
+    `sim --selective` prints how many blocks it evaluated and skipped."""
+    text = """
+FUNCTION_BLOCK F
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT y : INT; {selective off} END_VAR
+y := x;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL x, y : INT; END_VAR
+VAR {selective maybe} f : F; {selective off} n : INT; END_VAR
+f(x := x); y := f.y + n;
+END_PROGRAM
+""" + CONFIG.format(globals="x, y : INT;")
+    (tmp_path / "p.st").write_text(text)
+    cmd = [sys.executable, "-m", "iec2kmod.cli", "sim", str(tmp_path / "p.st"), "--cycles", "20",
+           "--selective"]
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0, p.stderr
+    err = p.stderr
+    assert f"{tmp_path / 'p.st'}:4:21: warning: selective pragma applies to nothing" in err, err
+    assert "p.st:10:5: warning: unknown selective pragma" in err, err
+    assert "p.st:10:30: warning: selective pragma on 'n', which is not an instance" in err, err
+    assert "^" in err
+    assert "pragma ignored" not in err
+    assert "selective blocks: r.t 2 evaluated 19 skipped" in p.stdout, p.stdout
+    plain = subprocess.run(cmd[:-1], capture_output=True, text=True, cwd=ROOT)
+    assert plain.returncode == 0 and "selective" not in plain.stdout + plain.stderr
+
+
+def test_generated_code_deterministic_and_plain_unchanged(tmp_path):
+    """The selective C is the same bytes every time; without --selective
+    nothing of it appears (the plain output is the plain output)."""
+    project = _project(tmp_path, (ROOT / "examples" / "hvac" / "hvac.st").read_text())
+    one = generate(project, selective=SelectivePlan(project, "all"))
+    two = generate(project, selective=SelectivePlan(project, "all"))
+    plain = generate(project)
+    assert one.header == two.header and one.bodies == two.bodies
+    assert "sel" in one.header and "_run(" in "".join(b for _, b in one.bodies.values())
+    blob = plain.header + "".join(b for _, b in plain.bodies.values())
+    assert "iec_sel" not in blob and "_run(" not in blob and "IEC_SEL_TOKEN" not in blob
