@@ -23,7 +23,8 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
    analysis can see.  Never skipped: a POU that contains, at any depth (its
    own variables of any section, arrays and structures of instances, the
    function blocks and functions it calls), a standard timer (TON, TOF,
-   TP: they read the task's clock, so the result depends on time); a POU
+   TP: they read the task's clock, so the result depends on time) or an
+   SFC body (its steps' T and timed action qualifiers read the clock); a POU
    whose VAR_EXTERNALs inside arrays of FB instances would have to be
    compared element by element (not done: "cannot see").  Functions have
    no state and no VAR_EXTERNAL: they are part of the caller's evaluation.
@@ -246,6 +247,9 @@ class SelectivePlan:
         timers = sorted(std & TIMERS)
         if timers:
             b.reason = f"depends on time (contains {', '.join(timers)})"
+        sfc = [p.name for p in closure if getattr(p, "sfc", None) is not None]
+        if sfc and b.reason is None:
+            b.reason = f"depends on time (SFC steps' T in {', '.join(sorted(sfc))})"
         b.loops = any(_has_loop(p) for p in closure)
         b.inputs = [v for v in pou.vars.values() if v.section == "VAR_INPUT"]
         if pou.kind == "FUNCTION_BLOCK":
