@@ -116,14 +116,18 @@ class Arg:
 
 
 class Call(Expr):
-    __slots__ = ("name", "args", "target", "bound")
+    __slots__ = ("name", "args", "target", "bound", "ref")
 
-    def __init__(self, pos, name, args):
+    def __init__(self, pos, name, args, ref=None):
         super().__init__(pos)
         self.name = name
         self.args = args
         self.target = None  # resolved POU, FB instance Var or standard function
         self.bound = None   # upper parameter name -> Arg, for user POUs
+        # the instance called when it is an element of an array of FB
+        # instances (t[i](IN := x)): a Ref with accessors; target is then
+        # the array variable and ref.type the instance's FBType
+        self.ref = ref
 
     def __repr__(self):
         return f"{self.name}({', '.join(map(repr, self.args))})"

@@ -10,9 +10,9 @@ NS = {"d": 86_400_000_000_000, "h": 3_600_000_000_000, "m": 60_000_000_000,
       "s": 1_000_000_000, "ms": 1_000_000, "us": 1_000, "ns": 1}
 
 TIME_PREFIX = {"T": "TIME", "TIME": "TIME", "LT": "LTIME", "LTIME": "LTIME"}
-DATE_PREFIX = {"D": "DATE", "DATE": "DATE", "LD": "LDATE"}
-TOD_PREFIX = {"TOD": "TOD", "TIME_OF_DAY": "TOD", "LTOD": "LTOD"}
-DT_PREFIX = {"DT": "DT", "DATE_AND_TIME": "DT", "LDT": "LDT"}
+DATE_PREFIX = {"D": "DATE", "DATE": "DATE", "LD": "LDATE", "LDATE": "LDATE"}
+TOD_PREFIX = {"TOD": "TOD", "TIME_OF_DAY": "TOD", "LTOD": "LTOD", "LTIME_OF_DAY": "LTOD"}
+DT_PREFIX = {"DT": "DT", "DATE_AND_TIME": "DT", "LDT": "LDT", "LDATE_AND_TIME": "LDT"}
 
 _DUR_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(d|h|ms|m|s|us|ns)_?", re.I)
 _DATE = re.compile(r"([0-9]+)-([0-9]+)-([0-9]+)$")

@@ -720,9 +720,10 @@ def _stmt(s):
         if s.assign:
             return ast.Assign(pos, target=s.target, value=s.value)
         target = s.target
-        if target.accessors:
-            _ctx.diags.error(_ctx.src, target.pos, f"'{target!r}' cannot be called")
-        return ast.CallStmt(pos, call=ast.Call(target.pos, target.name, s.call.arglist))
+        # t[i](IN := x): an element of an array of FB instances (the checker
+        # tells whether what the accessors lead to can be called)
+        return ast.CallStmt(pos, call=ast.Call(target.pos, target.name, s.call.arglist,
+                                               ref=target if target.accessors else None))
     if c == "IfStmt":
         branches = [(s.cond, _body(s.then))]
         branches += [(e.cond, _body(e.body)) for e in s.elsifs]

@@ -7,7 +7,7 @@ from __future__ import annotations
 from .. import ast
 from . import stdlib
 from .symbols import POUInfo, Var
-from .types import (BOOL, ELEMENTARY, ERROR, INT, ArrayT, Elementary, EnumT, ErrorT, FBType,
+from .types import (BOOL, ELEMENTARY, ERROR, INT, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, TIME, assignable, cat, common,
                     concrete, identical, is_bit, is_bool, is_int, is_num, literal_fits)
 
@@ -117,6 +117,12 @@ class BodyChecker:
                 if v is not None and not tt.low <= v <= tt.high:
                     self.error(value.pos, f"{v} is outside the subrange {tt.low}..{tt.high} "
                                           f"of {tt.name}")
+            return
+        if isinstance(vt, AnyIntResult):
+            self.error(value.pos, f"{vt.generic} gives an integer (ANY_INT), and {tt.name} is not "
+                                  f"one: convert it explicitly (e.g. DINT_TO_{tt.name})"
+                       if isinstance(tt.base, Elementary) else
+                       f"{vt.generic} gives an integer (ANY_INT), not {tt.name}")
             return
         if isinstance(vt, LiteralT) and isinstance(tt.base, Elementary) and vt.cat == "int":
             if tt.base.cat in ("sint", "uint", "bit", "bool"):
@@ -503,6 +509,8 @@ class BodyChecker:
 
     # ------------------------------------------------------------ calls
     def call(self, c: ast.Call, statement: bool):
+        if c.ref is not None:
+            return self.element_call(c)
         key = c.name.upper()
         if not statement or self.pou.var(c.name) is not None:
             v = self.pou.var(c.name)
@@ -541,6 +549,30 @@ class BodyChecker:
             self.error(c.pos, f"unknown function '{c.name}'")
         self.args_exprs(c)
         return ERROR
+
+    def element_call(self, c: ast.Call):
+        """A call statement of an element of an array of FB instances,
+        t[i](IN := x) (ed.3 6.6.3.4: an instance is any variable of a
+        function block type).  Only array indexes may lead to it."""
+        r = c.ref
+        if any(k != "index" for k, _, _ in r.accessors):
+            self.error(r.pos, f"'{r!r}' cannot be called: only an element of an array of "
+                              "function block instances can be called this way")
+            self.args_exprs(c)
+            return ERROR
+        t = self.ref(r)
+        if isinstance(t, ErrorT):
+            self.args_exprs(c)
+            return ERROR
+        if not isinstance(t, FBType):
+            self.error(r.pos, f"'{r!r}' is {t.name}, not a function block instance: it cannot be "
+                              "called")
+            self.args_exprs(c)
+            return ERROR
+        c.target = r.symbol
+        self.pou.calls.add(t.pou.key)
+        self.fb_args(c, t.pou)
+        return None
 
     def args_exprs(self, c):
         for a in c.args:

@@ -4,7 +4,8 @@ standard function blocks of IEC 61131-3."""
 from __future__ import annotations
 
 from .symbols import POUInfo, Var
-from .types import (BOOL, ELEMENTARY, ERROR, INT, LREAL, TIME, Elementary, ErrorT, LiteralT,
+from .types import (BOOL, ELEMENTARY, ERROR, INT, LREAL, TIME, AnyIntResult, Elementary, ErrorT,
+                    LiteralT,
                     StringT, STRING, assignable, cat, common, concrete, is_bit, is_bool, is_int,
                     is_num, is_real, is_string, is_elementary)
 
@@ -212,6 +213,21 @@ def _fixed(params, result, family=None):
     return resolve
 
 
+def _trunc(name, types):
+    """TRUNC: ANY_REAL -> ANY_INT (ed.3 table 22), the integer type given by
+    the context (i := TRUNC(r) with i : INT truncates into INT), DINT where
+    nothing gives one."""
+    t = types[0]
+    if isinstance(t, LiteralT):
+        if t.cat != "real":
+            raise CallError(f"argument 1 of {name} must be REAL or LREAL (ANY_REAL), not an "
+                            "integer")
+        t = LREAL
+    elif not is_real(t) and not isinstance(t, ErrorT):
+        raise CallError(f"argument 1 of {name} must be REAL or LREAL (ANY_REAL), not {t.name}")
+    return StdFunc(name, "TRUNC", [t], AnyIntResult(name.upper()))
+
+
 def _move(name, types):
     t = concrete(types[0])
     return StdFunc(name, name, [t], t)
@@ -262,7 +278,7 @@ FUNCTIONS = {
     "SUB_TOD_TOD": (_fixed([_T["TOD"], _T["TOD"]], TIME), ["IN1", "IN2"], 2, 2),
     "SUB_DT_DT": (_fixed([_T["DT"], _T["DT"]], TIME), ["IN1", "IN2"], 2, 2),
     "CONCAT_DATE_TOD": (_fixed([_T["DATE"], _T["TOD"]], _T["DT"]), ["IN1", "IN2"], 2, 2),
-    "TRUNC": (_fixed([LREAL], _T["DINT"]), ["IN"], 1, 1),
+    "TRUNC": (_trunc, ["IN"], 1, 1),
 }
 
 # names of conversion sources and targets

@@ -149,6 +149,19 @@ class LiteralT(Type):
         self.name = "integer literal" if cat == "int" else "real literal"
 
 
+class AnyIntResult(LiteralT):
+    """The result of a generic function whose integer result type comes from
+    its context (TRUNC: ANY_REAL -> ANY_INT, ed.3 table 22): adapts to any
+    integer type as an integer literal would, without a value to check."""
+
+    generic = "TRUNC"
+
+    def __init__(self, func="TRUNC"):
+        super().__init__("int", 0)
+        self.generic = func
+        self.name = "ANY_INT"
+
+
 class ErrorT(Type):
     """The type of an expression that already produced an error."""
 
@@ -229,6 +242,8 @@ def literal_fits(lit: LiteralT, target: Type) -> bool:
     target = target.base
     if not isinstance(target, Elementary):
         return False
+    if isinstance(lit, AnyIntResult):
+        return target.cat in INT_CATS
     if lit.cat == "real":
         return target.cat == "real"
     if target.cat == "real":
@@ -297,6 +312,8 @@ def common(a: Type, b: Type):
     if isinstance(a, LiteralT) and isinstance(b, LiteralT):
         if a.cat == "real" or b.cat == "real":
             return LiteralT("real", 0.0)
+        if isinstance(a, AnyIntResult) or isinstance(b, AnyIntResult):
+            return AnyIntResult(a.generic if isinstance(a, AnyIntResult) else b.generic)
         return LiteralT("int", 0)
     if isinstance(a, LiteralT):
         return b if literal_fits(a, b) else None

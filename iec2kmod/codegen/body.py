@@ -525,7 +525,7 @@ class BodyEmitter:
         target = c.target
         if isinstance(target, Var):           # a function block instance
             lines = self.fb_call(f, c, target)
-            return self.wrap(f, lines, pos, check=not target.type.pou.standard or f.may_fault)
+            return self.wrap(f, lines, pos, check=not _fb_pou(c).standard or f.may_fault)
         code = self.expr.emit(f, c)
         return self.wrap(f, [f"(void){code};"], pos)
 
@@ -535,9 +535,22 @@ class BodyEmitter:
         is computed into a temporary and checked before it is stored, so a
         fault stores nothing more and the block does not run; a fault in
         the block's body leaves its outputs where they are."""
-        pou = inst.type.pou
-        base = self.var_access(inst)
+        pou = _fb_pou(c)
         lines = []
+        if c.ref is not None:
+            # an element of an array of instances: its index is computed
+            # (and checked) once, before the arguments
+            sub = self.sub_frame(f)
+            lv, _, _ = self.expr.lvalue(sub, c.ref)
+            lines += self.absorb(f, sub)
+            ptr = f"fbp{self.next_temp()}"
+            f.decls.append(f"{N.pou_struct(pou)} *{ptr};")
+            lines.append(f"{ptr} = &{lv};")
+            if sub.may_fault:
+                lines.append(self.fault_check(f.pos))
+            base = f"(*{ptr})"
+        else:
+            base = self.var_access(inst)
         eno = None
         en = None
         for a in c.args:
@@ -938,7 +951,7 @@ class BodyEmitter:
             else:
                 neg = "!" if op == "CALCN" else ""
                 lines += [f"if ({neg}{self.cr_var(cr_in, depth)}) {{"] + self.indent(call_lines) + ["}"]
-            f.may_fault = f.may_fault or not i.call.target.type.pou.standard
+            f.may_fault = f.may_fault or not _fb_pou(i.call).standard
         elif op == "NOP":
             pass                # a label on a line of its own
         else:
@@ -993,3 +1006,9 @@ def _within(value, t: SubrangeT) -> bool:
     from .expr import _const_int
     v = _const_int(value)
     return v is not None and t.low <= v <= t.high
+
+
+def _fb_pou(c):
+    """The function block (POUInfo) a call statement of an instance calls:
+    of the instance variable, or of the array element c.ref leads to."""
+    return (c.ref.type if c.ref is not None else c.target.type).pou

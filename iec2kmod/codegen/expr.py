@@ -551,7 +551,7 @@ class ExprEmitter:
             # TRUNC (LREAL -> DINT) and the typed REAL_TRUNC_INT ... forms
             src = concrete(pts[0])
             a = self.emit(f, args[0], src)
-            return f"iec_{tag(src)}_trunc_{tag(concrete(fres.result))}({a})"
+            return f"iec_{tag(src)}_trunc_{tag(res)}({a})"
         if fam in ("BCD_TO", "TO_BCD"):
             src, dst = concrete(pts[0]), res
             a = self.emit(f, args[0], src)

@@ -646,7 +646,7 @@ class PouCompiler:
     def fb_call(self, c):
         """A statement: calls the FB instance c.target."""
         inst_var = c.target
-        pou = inst_var.type.pou
+        pou = (c.ref.type if c.ref is not None else inst_var.type).pou
         binds = self.bind_args(c, pou)
         ins = [(k, f) for kind, k, f in binds if kind == "in"]
         inouts = [(k, f) for kind, k, f in binds if kind == "inout"]
@@ -665,7 +665,15 @@ class PouCompiler:
 
             def run(inst):
                 m.bodies[key](inst)
-        if inst_var.section in REF_SECTIONS:
+        if c.ref is not None:
+            # an element of an array of instances (t[i](...)): its index is
+            # computed, and checked, before the arguments
+            cell = self.cell(c.ref)
+
+            def get_inst(env):
+                cc, kk = cell(env)
+                return cc[kk]
+        elif inst_var.section in REF_SECTIONS:
             def get_inst(env):
                 cc, kk = env.r[k_inst]
                 return cc[kk]

@@ -184,3 +184,50 @@ def test_located_variable_message_names_the_rule_and_the_fix():
         "VAR_GLOBAL q AT %QX0.1 : BOOL; END_VAR" in errs[0] and \
         "PROGRAM inst WITH task : Ctrl (q => %QX0.1)" in errs[0]
     assert "rule of located variables" in errs[1] and "(x := %IX0.1)" in errs[1]
+
+
+# -------------------------- 8. calls on array elements, LDATE#, generic TRUNC
+
+def test_call_of_an_array_element_of_fb_instances():
+    p = _project("PROGRAM P\nVAR t : ARRAY[1..2] OF TON; x, q : BOOL; i : INT := 1; END_VAR\n"
+                 "t[1](IN := x, PT := T#1s);\nt[i + 1](IN := NOT x);\nq := t[i].Q;\n"
+                 "END_PROGRAM")
+    c = p.pous["P"].node.body[0].call
+    assert c.ref is not None and repr(c.ref) == "t[1]" and c.ref.type.name == "TON"
+    assert c.target.name == "t" and set(c.bound) == {"IN", "PT"}
+
+
+@pytest.mark.parametrize("stmt, msg", [
+    ("a[1](IN := x);", "'a[1]' is INT, not a function block instance: it cannot be called"),
+    ("t[1].Q(IN := x);", "'t[1].Q' cannot be called: only an element of an array of function "
+                         "block instances can be called this way"),
+    ("t[3](IN := x);", "index 3 is out of bounds 1..2"),
+    ("t[1](IN := 5);", "5 is out of range for BOOL"),
+])
+def test_call_of_an_array_element_errors(stmt, msg):
+    errs = errors("PROGRAM P\nVAR t : ARRAY[1..2] OF TON; a : ARRAY[1..2] OF INT; x : BOOL; "
+                  f"END_VAR\n{stmt}\nEND_PROGRAM")
+    assert len(errs) == 1 and msg in errs[0], errs
+
+
+@pytest.mark.parametrize("text, type_name", [
+    ("LDATE#2020-01-01", "LDATE"), ("LD#2020-01-01", "LDATE"),
+    ("LTIME_OF_DAY#12:30:00.5", "LTOD"), ("LDATE_AND_TIME#2021-03-04-05:06:07", "LDT"),
+])
+def test_long_date_prefixes(text, type_name):
+    e = expr(text)
+    assert isinstance(e, ast.Lit) and e.type_name == type_name
+
+
+def test_trunc_result_type_comes_from_the_context():
+    assert errors("PROGRAM P\nVAR r : REAL; l : LREAL; i : INT; s : SINT; u : UDINT; "
+                  "li : LINT; END_VAR\ni := TRUNC(r);\ns := TRUNC(r);\nu := TRUNC(l);\n"
+                  "li := TRUNC(l) + 1;\nEND_PROGRAM") == []
+    errs = errors("PROGRAM P\nVAR r : REAL; b : BOOL; x : REAL; i : INT; END_VAR\n"
+                  "b := TRUNC(r);\nx := TRUNC(r);\ni := TRUNC(i);\nEND_PROGRAM")
+    assert [e.split(": error: ")[1] for e in errs] == [
+        "TRUNC gives an integer (ANY_INT), and BOOL is not one: convert it explicitly "
+        "(e.g. DINT_TO_BOOL)",
+        "TRUNC gives an integer (ANY_INT), and REAL is not one: convert it explicitly "
+        "(e.g. DINT_TO_REAL)",
+        "argument 1 of TRUNC must be REAL or LREAL (ANY_REAL), not INT"]
