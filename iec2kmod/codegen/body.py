@@ -595,7 +595,13 @@ class BodyEmitter:
             # the bistables and edge detectors of iec_std_fb.c, written out
             lines += [ln.format(b=base) for ln in inline]
         else:
-            kind = self.sel.call_kind(self.pou, inst) if self.sel is not None else None
+            if self.sel is None:
+                kind = None
+            elif c.ref is not None:
+                # an element of an array of instances is always evaluated
+                kind = "plain" if self.sel.has_layout(pou) else None
+            else:
+                kind = self.sel.call_kind(self.pou, inst)
             if kind == "sel":
                 lines.append(f"{N.pou_prefix(pou)}_run(&{base}, ctx);")
             else:

@@ -543,7 +543,9 @@ def writes(stmts, var) -> bool:
                 if a.kind == "out":
                     return True
                 param = next((k for k, b in bound.items() if b is a), None)
-                pou = getattr(getattr(target, "type", None), "pou", None) or target
+                ref = getattr(n, "ref", None)     # t[i](...): an element's FB
+                pou = ref.type.pou if ref is not None else \
+                    getattr(getattr(target, "type", None), "pou", None) or target
                 p = pou.var(param) if param and hasattr(pou, "var") else None
                 if p is None:
                     if hasattr(pou, "var"):        # a user POU: unknown binding
