@@ -183,7 +183,6 @@ def run_vm_inproc(project, plan, end_ns, trace):
     for t, i, v in res.changes:
         run.changes.setdefault(res.names[i].upper(), []).append((t, _text(v)))
     run.faults = [(t, task, fault, pou, line) for t, task, fault, pou, _f, line in res.faults]
-    run.selective = dict(res.selective)
     return run
 
 
