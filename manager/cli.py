@@ -95,8 +95,12 @@ def status_text(st) -> str:
     out.append(table(["RESOURCE", "CPU", "MODULE", "TASKS"],
                      [[r.name, r.cpu if r.cpu >= 0 else "any", r.module, len(r.tasks)]
                       for r in st.resources]) if st.resources else "no resource registered")
-    rows, faults, long = [], [], []
+    rows, faults, long, sel = [], [], [], []
     for t in st.tasks():
+        if t.sel_evaluated is not None:
+            total = t.sel_evaluated + (t.sel_skipped or 0)
+            sel.append([t.path, t.sel_evaluated, t.sel_skipped or 0,
+                        f"{100.0 * (t.sel_skipped or 0) / total:.1f}" if total else "-"])
         ran = t.cycles > 0
         rows.append([t.path, t.state, fmt_period(t.interval_ns), t.priority, t.last_cpu,
                      t.cycles,
@@ -112,6 +116,9 @@ def status_text(st) -> str:
         out += ["", table(["TASK", "STATE", "PERIOD", "PRIO", "CPU", "CYCLES",
                            "EXEC us min/avg/max", "JITTER us avg/max", "OVERRUNS", "FAULTS"],
                           rows, right=(3, 4, 5, 8, 9))]
+    if sel:
+        out += ["", table(["TASK", "BLOCKS EVALUATED", "SKIPPED", "SKIPPED %"], sel,
+                          right=(1, 2, 3))]
     if faults:
         out += ["", "faults:"] + faults
     if long:

@@ -77,6 +77,8 @@ ATTRIBUTES = [
     ("IEC_A_VALUE", "cdata"),
     ("IEC_A_ALL", "flag"),
     ("IEC_A_IN_CYCLE_NS", "int64"),
+    ("IEC_A_SEL_EVALUATED", "uint64"),
+    ("IEC_A_SEL_SKIPPED", "uint64"),
 ]
 
 STATES = {0: "stopped", 1: "running", 2: "fault"}
@@ -131,6 +133,8 @@ class Task:
     fault_pou: Optional[str] = None
     fault_line: Optional[int] = None
     in_cycle_ns: Optional[int] = None    # inside a cycle now, for so long
+    sel_evaluated: Optional[int] = None  # --selective modules: blocks evaluated
+    sel_skipped: Optional[int] = None    # and skipped
 
     @property
     def path(self) -> str:
@@ -229,7 +233,8 @@ def _task_from(nl, resource: str) -> Task:
         latency_avg_ns=a["IEC_A_LAT_AVG_NS"], latency_max_ns=a["IEC_A_LAT_MAX_NS"],
         histogram=[int.from_bytes(hist[i:i + 8], "little") for i in range(0, len(hist), 8)],
         fault=a.get("IEC_A_FAULT_NAME"), fault_pou=a.get("IEC_A_FAULT_POU"),
-        fault_line=a.get("IEC_A_FAULT_LINE"), in_cycle_ns=a.get("IEC_A_IN_CYCLE_NS"))
+        fault_line=a.get("IEC_A_FAULT_LINE"), in_cycle_ns=a.get("IEC_A_IN_CYCLE_NS"),
+        sel_evaluated=a.get("IEC_A_SEL_EVALUATED"), sel_skipped=a.get("IEC_A_SEL_SKIPPED"))
 
 
 def _status_from(msg) -> Status:

@@ -356,6 +356,8 @@ static int iec_task_boundary_copy(struct iec_task *t, void *dst,
 		raw_spin_lock(&t->var_lock);
 		if (!t->in_cycle) {
 			memcpy(dst, src, len);
+			/* selective blocks of the task see a write they do not compare */
+			t->ctx.sel_epoch++;
 			raw_spin_unlock(&t->var_lock);
 			return 0;
 		}
@@ -486,6 +488,13 @@ static int iec_put_task(struct sk_buff *skb, struct iec_task *t)
 	    nla_put_s64(skb, IEC_A_IN_CYCLE_NS,
 			ktime_to_ns(ktime_sub(ktime_get(), READ_ONCE(t->cycle_start))),
 			IEC_A_PAD))
+		goto cancel;
+	/* selective execution: the task's counts of blocks (iec_sel.h) */
+	if ((READ_ONCE(t->ctx.sel_evaluated) || READ_ONCE(t->ctx.sel_skipped)) &&
+	    (nla_put_u64_64bit(skb, IEC_A_SEL_EVALUATED,
+			       READ_ONCE(t->ctx.sel_evaluated), IEC_A_PAD) ||
+	     nla_put_u64_64bit(skb, IEC_A_SEL_SKIPPED,
+			       READ_ONCE(t->ctx.sel_skipped), IEC_A_PAD)))
 		goto cancel;
 	if (s->fault_code &&
 	    (nla_put_string(skb, IEC_A_FAULT_NAME, iec_fault_name(s->fault_code)) ||
@@ -894,6 +903,7 @@ static int iec_nl_var_force(struct sk_buff *skb, struct genl_info *info)
 			t->forces = f;
 			if (!t->in_cycle)
 				memcpy(f->desc->addr, f->value, f->size);
+			t->ctx.sel_epoch++;	/* selective blocks: a new value */
 			raw_spin_unlock(&t->var_lock);
 		} else {
 			iec2kmod_image_lock();

@@ -96,6 +96,8 @@ enum iec_nl_attr {
 	IEC_A_VALUE,		/* binary */
 	IEC_A_ALL,		/* flag */
 	IEC_A_IN_CYCLE_NS,	/* s64: time inside the current cycle, if in one */
+	IEC_A_SEL_EVALUATED,	/* u64: blocks evaluated (--selective modules) */
+	IEC_A_SEL_SKIPPED,	/* u64: blocks skipped (--selective modules) */
 	__IEC_A_MAX
 };
 #define IEC_A_MAX (__IEC_A_MAX - 1)
