@@ -4,6 +4,11 @@
 
 Exit status: 0 clean (warnings allowed), 1 source errors, 2 usage or I/O
 errors, 70 internal error (a bug of ours, reported in one line).
+
+`iec2kmod verify`: 0 every property proved, 1 source errors or a construct
+that cannot be encoded, 2 usage, 3 a property violated (counterexample
+written), 4 no violation up to --depth cycles but not every property
+proved, 70 internal error.
 """
 
 from __future__ import annotations
@@ -68,6 +73,23 @@ def build_parser() -> argparse.ArgumentParser:
                         "reference interpreter (no C compiler needed)")
     s.add_argument("--selective", nargs="?", const="all", choices=("all", "marked"),
                    help=SELECTIVE_HELP + " (C engine)")
+    v = sub.add_parser("verify", help="prove properties of a configuration for every input "
+                                      "sequence (bounded model checking and k-induction)")
+    v.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
+    v.add_argument("--property", "-p", action="append", default=[], metavar="EXPR",
+                   help="an ST boolean expression over the configuration's variables, "
+                        "checked after every cycle (repeatable; {verify NAME: EXPR} pragmas "
+                        "in the sources are checked too)")
+    v.add_argument("--assume", action="append", default=[], metavar="EXPR",
+                   help="a constraint on the inputs at the start of every cycle (repeatable)")
+    v.add_argument("--depth", type=int, default=20, metavar="N",
+                   help="cycles of bounded model checking and of induction (default 20)")
+    v.add_argument("--instance", metavar="PATH",
+                   help="resolve --property/--assume names in this program instance")
+    v.add_argument("--cex-dir", default=".", metavar="DIR",
+                   help="where counterexamples are written (default: .)")
+    v.add_argument("--timeout", type=float, default=120, metavar="S",
+                   help="solver time limit per query in seconds (default 120)")
     return p
 
 
@@ -225,7 +247,12 @@ def cmd_build(args) -> int:
     return EXIT_OK
 
 
-COMMANDS = {"check": cmd_check, "sim": cmd_sim, "gen": cmd_gen, "build": cmd_build}
+def cmd_verify(args) -> int:
+    from .verify.cli import run_verify
+    return run_verify(args)
+
+
+COMMANDS = {"verify": cmd_verify, "check": cmd_check, "sim": cmd_sim, "gen": cmd_gen, "build": cmd_build}
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,222 @@
+"""Pass `verify`: prove properties of a configuration over every input
+sequence (`iec2kmod verify`), with counterexamples the simulator replays.
+
+What is encoded (exactly, as the reference interpreter iec2kmod.interp
+executes it; the encoder walks the same checked AST and reuses the
+interpreter's storage layout and initial values):
+
+  * the cycle of the configuration's one periodic task: every program
+    instance of the task in declaration order -- connected inputs copied in
+    (with their subrange checks), the body, connected outputs copied out --
+    as one transition T(state, inputs) over z3 terms (model.py, encode.py);
+  * state: every variable a cycle can change -- globals, %Q/%M addresses,
+    program and FB instance variables at every depth, the hidden state of
+    the standard FBs (edge memories, counters' edges, the timers' automaton
+    location and elapsed time);
+  * inputs (free: any value of their type in every cycle, constrained only
+    by --assume and {assume} pragmas): located %I addresses connected to
+    programs, globals no cycle writes, program inputs connected to nothing.
+    An enumeration or subrange input ranges over its declared values; a REAL
+    input over the finite values (an input trace cannot write NaN or an
+    infinity).  Variables no cycle writes and no one else may write are
+    constants (their initial value);
+  * integers of every width as bit-vectors with two's complement
+    wrap-around; division and MOD truncating toward zero; REAL and LREAL as
+    IEEE binary32/binary64 (round to nearest even) for + - * / SQRT, the
+    comparisons, MIN/MAX/LIMIT/SEL/MUX/ABS, and conversions to and from
+    integers (rounded to nearest even and saturated, NaN -> 0; TRUNC);
+    TIME/LTIME as signed 64-bit nanoseconds (ADD/SUB/MUL/DIV with integers,
+    conversions to and from integers); BOOL and the bit strings with
+    AND/OR/XOR/NOT, SHL/SHR/ROL/ROR and bit access; enumerations; subranges
+    (a store outside the range is a fault); arrays of any element type with
+    constant or variable indexes (an index out of range is a fault);
+    structures; user FUNCTIONs (EN/ENO included), FUNCTION_BLOCK instances
+    at any depth (VAR_IN_OUT, VAR_EXTERNAL, VAR_TEMP instances, R_EDGE and
+    F_EDGE inputs, arrays of instances); IF, CASE (an invalid enumeration
+    selector is a fault), FOR with constant start/end/step (unrolled, at
+    most 4096 iterations a loop and 100000 a cycle; a loop longer than the
+    kernel's loop budget is the budget fault), EXIT, RETURN; IL with its
+    current result, deferred operators `OP(`, S/R, the FB input operators,
+    CAL/CALC/CALCN, forward jumps JMP/JMPC/JMPCN and RET/RETC/RETCN;
+  * the standard FBs SR, RS, R_TRIG, F_TRIG, CTU/CTD/CTUD (every width) and
+    the timers TON, TOF, TP as the automata of seed 002 with the task's
+    period as the time step: the elapsed time of a running timer grows by
+    exactly one period per cycle (it saturates at 2^63-1 ns, 292 years; time
+    is a signed 64-bit count in the kernel too);
+  * runtime faults -- division by zero, index out of range, subrange,
+    invalid enumeration, MUX selector, loop budget -- are violations of the
+    implicit property "no runtime error".  A faulting cycle is the end of a
+    run (the task stops), so the other properties are checked on runs
+    without a runtime error.
+
+What is refused, with an error naming the construct (never approximated):
+STRING/WSTRING values and the string functions, WHILE and REPEAT loops,
+FOR loops whose bounds are not constant, IL backward jumps, EXPT and the
+transcendental functions (LN LOG EXP SIN COS TAN ASIN ACOS ATAN ATAN2),
+date and time-of-day arithmetic, conversions between REAL and TIME or of
+enumerations and BCD, event tasks (SINGLE), and configurations with more
+than one task.
+
+Properties are ST boolean expressions over the configuration's variables,
+from the command line or from {verify NAME: EXPR} pragmas in the sources
+(props.py), checked after every cycle; engine.py decides them by bounded
+model checking to --depth cycles and k-induction (proved for every depth).
+A violation writes its input trace (CSV for `iec2kmod sim --inputs`) and a
+VCD of the run, replayed in the reference interpreter before it is
+reported (cex.py)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import z3
+
+from ..diagnostics import Diagnostics, SourceFile
+from .encode import TRUE, Encoder, Frame, Refuse, const_of, land
+from .engine import System, check
+from .model import SymbolicMachine
+from .props import (Prop, PropChecker, config_scope, instance_of_path, parse_expr,
+                    scan_pragmas)
+
+__all__ = ["verify", "Refuse", "Outcome"]
+
+
+@dataclass
+class Outcome:
+    results: list = field(default_factory=list)
+    props: list = field(default_factory=list)     # [Prop] with .scope_path
+    system: object = None
+    sym: object = None
+    state_terms: dict = field(default_factory=dict)   # property name -> term on a state
+    invariants: list = field(default_factory=list)
+    seconds: float = 0.0
+    leaves: int = 0
+    inputs: int = 0
+
+
+def _scopes(sym, prop, instance, diags):
+    """[(display name, POUInfo, Instance)] a property is checked in."""
+    if prop.program is not None:
+        out = []
+        for (path, inst), pi in zip(sym.machine.instances, sym.programs):
+            if pi.pou.key == prop.program and pi.task is sym.task:
+                out.append((f"{path}.{prop.name}", pi.pou, inst))
+        return out
+    if instance is not None and prop.src.path.startswith("<"):
+        hit = instance_of_path(sym, instance)
+        if hit is None:
+            diags.error(None, None, f"--instance: no program instance '{instance}'")
+            return []
+        return [(prop.name, hit[0], hit[1])]
+    pou, inst = config_scope(sym)
+    return [(prop.name, pou, inst)]
+
+
+def build(project, cli_props, cli_assumes, instance, diags):
+    """The transition system of the project's configuration with its
+    properties; None when diags got errors."""
+    sym = SymbolicMachine(project)
+    props, bad = scan_pragmas(project)
+    for src, pos, msg in bad:
+        diags.error(src, pos, msg)
+    for n, text in enumerate(cli_props, 1):
+        props.append(Prop("property", f"property {n}", text,
+                          SourceFile(f"<--property {n}>", text), 0, None))
+    for n, text in enumerate(cli_assumes, 1):
+        props.append(Prop("assume", f"assume {n}", text,
+                          SourceFile(f"<--assume {n}>", text), 0, None))
+    directs = dict(sym.machine.direct_types)
+    checked = []
+    for p in props:
+        for name, pou, inst in _scopes(sym, p, instance, diags):
+            e = parse_expr(p.text, p.src, p.start, diags)
+            if e is None:
+                continue
+            ck = PropChecker(project, diags, pou, p.src, directs)
+            if not ck.check_expr(e):
+                continue
+            checked.append((p, name, pou, inst, e))
+    if diags.errors:
+        return None
+    enc = Encoder(sym)
+
+    def evaluate(p, pou, inst, e):
+        frame = Frame(inst, pou)
+        n0 = len(enc.faults)
+        v = enc.expr_as(e, _BOOL, frame, TRUE)
+        if len(enc.faults) > n0:
+            del enc.faults[n0:]
+            raise Refuse(p.src, e.pos, "verify: a property that can fault (an index out of "
+                                       "range or a division by zero in it)")
+        return v
+
+    # properties and assumptions on the state as it is (before the cycle)
+    state_terms = {}
+    assumes = []
+    for p, name, pou, inst, e in checked:
+        v = evaluate(p, pou, inst, e)
+        if p.kind == "assume":
+            assumes.append(v)
+        else:
+            state_terms[name] = v
+    sym.run_cycle(enc)
+    post_props = []
+    for p, name, pou, inst, e in checked:
+        if p.kind == "property":
+            post_props.append((name, evaluate(p, pou, inst, e)))
+    # classify the leaves
+    state, inputs, consts = [], [], []
+    for leaf in sym.leaves:
+        post = leaf.c[leaf.k]
+        if z3.is_expr(post) and post.eq(leaf.var):
+            if leaf.candidate:
+                leaf.role = "input"
+                inputs.append(leaf)
+            else:
+                leaf.role = "const"
+                consts.append(leaf)
+        else:
+            leaf.role = "state"
+            state.append(leaf)
+    cpairs = [(leaf.var, const_of(leaf.init, leaf.type)) for leaf in consts]
+
+    def fix(t):
+        t = z3.substitute(t, *cpairs) if cpairs else t
+        return t
+
+    ts = System(
+        state=[(leaf, leaf.var, const_of(leaf.init, leaf.type), fix(leaf.c[leaf.k]))
+               for leaf in state],
+        inputs=[(leaf, leaf.var, sym.domain(leaf, leaf.var)) for leaf in inputs],
+        faults=[(fix(c), kind, pou, src, pos) for c, kind, pou, src, pos in enc.faults],
+        props=[(n, fix(t)) for n, t in post_props],
+        assume=fix(land(*assumes)) if assumes else TRUE)
+    ts.invariants = [(n, fix(t)) for n, t in sym.invariant_candidates(lambda lf: lf.var)]
+    out = Outcome(props=[c[1] for c in checked if c[0].kind == "property"], system=ts,
+                  sym=sym, state_terms={n: fix_all(t, cpairs) for n, t in state_terms.items()})
+    out.leaves = len(state)
+    out.inputs = len(inputs)
+    out.cpairs = cpairs
+    return out
+
+
+def fix_all(t, pairs):
+    return z3.substitute(t, *pairs) if pairs else t
+
+
+def verify(project, cli_props=(), cli_assumes=(), depth=20, instance=None, diags=None,
+           timeout_ms=60000):
+    """Builds and checks; returns an Outcome (None on source errors, in
+    diags).  Raises Refuse for a construct that cannot be encoded."""
+    diags = diags if diags is not None else Diagnostics()
+    t0 = time.perf_counter()
+    out = build(project, list(cli_props), list(cli_assumes), instance, diags)
+    if out is None:
+        return None
+    out.results, out.invariants = check(out.system, depth, timeout_ms)
+    out.seconds = time.perf_counter() - t0
+    return out
+
+
+from ..checks.types import BOOL as _BOOL  # noqa: E402

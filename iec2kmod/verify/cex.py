@@ -1,0 +1,152 @@
+"""Counterexamples: the input trace of a violating run as an `iec2kmod sim
+--inputs` CSV (time,variable,value), the run itself as a VCD, and the
+replay of that trace in the reference interpreter that confirms the
+violation before it is reported.
+
+Cycle k (1-based) of the task runs at (k-1) * period; the inputs of cycle k
+are written at that time, before the cycle runs, so `sim --inputs` applies
+them exactly when the verifier's cycle k reads them."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import z3
+
+from ..checks.types import EnumT, concrete
+from ..interp.model import Instance
+from .encode import const_of, kind, py_value
+
+
+def input_values(out, result):
+    """[(cycle, {leaf name: Python value})] of a violating BMC path."""
+    model = result.model
+    rows = []
+    for k in range(1, result.cycle + 1):
+        vals = {}
+        for leaf, var, _ in out.system.inputs:
+            c = z3.Const(f"{var}@b{k}", var.sort())
+            term = model.eval(c, model_completion=True)
+            vals[leaf.name] = py_value(term, leaf.type)
+        rows.append((k, vals))
+    return rows
+
+
+def format_value(leaf, v):
+    t = concrete(leaf.type)
+    if isinstance(t, EnumT):
+        for name, val in t.values.values():
+            if val == v:
+                return f"{t.name}#{name}"
+        return str(v)
+    k = kind(t)
+    if k == "bool":
+        return "TRUE" if v else "FALSE"
+    if k == "fp":
+        r = repr(float(v))
+        if "e" in r:
+            mant, exp = r.split("e")
+            if "." not in mant:
+                mant += ".0"
+            r = f"{mant}E{exp}"
+        return r
+    return str(v)
+
+
+def write_trace(out, result, path):
+    period = out.sym.period
+    leaves = {leaf.name: leaf for leaf, _, _ in out.system.inputs}
+    last = {}
+    lines = ["time,variable,value"]
+    for k, vals in input_values(out, result):
+        t = (k - 1) * period
+        for name in sorted(vals):
+            v = vals[name]
+            if name in last and _same(last[name], v):
+                continue
+            last[name] = v
+            lines.append(f"{t}ns,{name},{format_value(leaves[name], v)}")
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return len(lines) - 1
+
+
+def _same(a, b):
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b and math.copysign(1, a) == math.copysign(1, b) or (a != a and b != b)
+    return a == b
+
+
+def lookup(machine, keys):
+    """The (container, key) of a leaf in another Machine of the project."""
+    root, *rest = keys
+    if root == "G":
+        c = machine.globals
+    elif root.startswith("R:"):
+        c = machine.res_globals[root[2:]]
+    elif root == "%":
+        c = machine.directs
+    else:
+        c = dict(machine.instances)[rest[0]]
+        rest = rest[1:]
+        for k in rest[:-1]:
+            c = c.v[k] if isinstance(c, Instance) else c[k]
+        k = rest[-1]
+        if isinstance(k, tuple):
+            return c.e, k[1]
+        return (c.v if isinstance(c, Instance) else c), k
+    for k in rest[:-1]:
+        c = c.v[k] if isinstance(c, Instance) else c[k]
+    k = rest[-1]
+    return (c.v if isinstance(c, Instance) else c), k
+
+
+def leaf_value(machine, leaf, now):
+    """A leaf's value in an interpreter Machine (the hidden elapsed time of
+    a timer from its start time T0, as the encoding holds it)."""
+    if leaf.name.endswith(".$EL") and leaf.hidden:
+        c, _ = lookup(machine, leaf.keys[:-1] + ("$S",))
+        return now - c["$T0"] if c["$S"] == 1 else 0
+    c, k = lookup(machine, leaf.keys)
+    return c[k]
+
+
+def state_pairs(out, machine, now):
+    pairs = []
+    for leaf in out.sym.leaves:
+        if leaf.role == "const":
+            continue
+        pairs.append((leaf.var, const_of(leaf_value(machine, leaf, now), leaf.type)))
+    return pairs
+
+
+def replay(out, result, trace_path, vcd_path=None):
+    """Runs the trace in the reference interpreter; returns (confirmed,
+    message).  Confirmed: the interpreter faults in cycle K (a runtime
+    error) or the property is FALSE after cycle K."""
+    from .. import interp
+    from ..interp.machine import Machine
+    from ..sim import write_vcd
+    project = out.sym.project
+    period = out.sym.period
+    end = (result.cycle - 1) * period
+    m = Machine(project)
+    table = m.table()
+    watch = [e.path for e in table]
+    res = interp.run(project, end, watch=watch, inputs=trace_path, machine=m)
+    if vcd_path:
+        write_vcd(res, vcd_path, SimpleNamespace(table=table))
+    if result.name == "no runtime error":
+        hits = [f for f in res.faults if f[0] == end]
+        if hits:
+            t, task, kind_, pou, file, line = hits[0]
+            return True, f"{file}:{line}: runtime error: {kind_} in {pou}"
+        return False, "the interpreter ran the trace without a runtime error"
+    if res.faults:
+        return False, f"the interpreter faulted: {res.faults[0]}"
+    term = out.state_terms[result.name]
+    v = z3.simplify(z3.substitute(term, *state_pairs(out, m, end)))
+    if z3.is_false(v):
+        return True, "the property is FALSE after that cycle"
+    return False, f"the interpreter's state satisfies the property ({v})"

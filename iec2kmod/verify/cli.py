@@ -1,0 +1,92 @@
+"""`iec2kmod verify`: the command.
+
+Exit status: 0 every property proved; 1 source errors, or a construct that
+cannot be encoded (an error naming it); 2 usage or I/O errors; 3 a property
+violated (its counterexample written and replayed); 4 no violation up to
+--depth cycles but not every property proved; 70 internal error."""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE, EXIT_VIOLATED, EXIT_BOUNDED, EXIT_INTERNAL = \
+    0, 1, 2, 3, 4, 70
+
+
+def _fmt_time(ns):
+    if ns % 1_000_000_000 == 0:
+        return f"{ns // 1_000_000_000} s"
+    if ns % 1_000_000 == 0:
+        return f"{ns // 1_000_000} ms"
+    return f"{ns / 1e6:g} ms"
+
+
+def run_verify(args) -> int:
+    from ..cli import front_end, print_diagnostics
+    from ..diagnostics import Diagnostics
+    from . import Refuse, verify
+    from .cex import replay, write_trace
+    if args.depth < 1:
+        print("iec2kmod: error: --depth must be at least 1", file=sys.stderr)
+        return EXIT_USAGE
+    project = front_end(args.files)
+    if project is None:
+        return EXIT_SOURCE
+    diags = Diagnostics()
+    try:
+        out = verify(project, args.property, args.assume, depth=args.depth,
+                     instance=args.instance, diags=diags, timeout_ms=int(args.timeout * 1000))
+    except Refuse as exc:
+        diags.error(exc.src, exc.pos if exc.pos is not None else 0, exc.message)
+        out = None
+    print_diagnostics(diags)
+    if out is None:
+        return EXIT_SOURCE
+    sym = out.sym
+    print(f"configuration {sym.cfg.name}: task {sym.task.name} every "
+          f"{_fmt_time(sym.period)}; {out.leaves} state variables, {out.inputs} inputs; "
+          f"{len(out.props)} properties")
+    cex_dir = Path(args.cex_dir)
+    worst = EXIT_PROVED
+    faulty = any(r.status == "violated" for r in out.results[:1])
+    width = max(len(r.name) for r in out.results)
+    for r in out.results:
+        if r.status == "proved":
+            text = f"proved (induction over {r.k} cycle{'s' if r.k != 1 else ''}, " \
+                   f"{r.seconds:.2f} s)"
+        elif r.status == "bounded":
+            text = f"holds up to {r.cycle} cycles"
+            worst = max(worst, EXIT_BOUNDED) if worst != EXIT_VIOLATED else worst
+        elif r.status == "violated":
+            worst = EXIT_VIOLATED
+            text = f"violated at cycle {r.cycle}"
+            if r.fault is not None:
+                kind, pou, src, pos = r.fault
+                where = ""
+                if src is not None and pos is not None:
+                    line, col = src.linecol(pos)
+                    where = f" at {src.path}:{line}:{col}"
+                text += f": {kind} in {pou}{where}"
+            try:
+                cex_dir.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                print(f"iec2kmod: error: {cex_dir}: {exc.strerror}", file=sys.stderr)
+                return EXIT_USAGE
+            stem = "cex_" + re.sub(r"[^A-Za-z0-9_]+", "_", r.name).strip("_")
+            csv_path, vcd_path = cex_dir / f"{stem}.csv", cex_dir / f"{stem}.vcd"
+            write_trace(out, r, csv_path)
+            ok, why = replay(out, r, str(csv_path), str(vcd_path))
+            if not ok:
+                print(f"iec2kmod: internal error: the counterexample of '{r.name}' does not "
+                      f"replay in the interpreter: {why}", file=sys.stderr)
+                return EXIT_INTERNAL
+            text += f"\n{'':{width + 4}}counterexample: {csv_path} (sim --inputs), {vcd_path}"
+        else:
+            text = r.status
+        print(f"  {r.name:<{width}}  {text}")
+    if faulty and any(r.status != "violated" for r in out.results[1:]):
+        print("note: a runtime error is reachable; the other properties were checked on the "
+              "runs before it")
+    return worst

@@ -1,0 +1,227 @@
+"""Bounded model checking and k-induction over the transition system.
+
+    state    X: every leaf a cycle may change (z3 constants, one set per step)
+    inputs   U: the free leaves, fresh in every cycle, inside their domain
+    T(X, U)  the post-cycle value of each state leaf
+    F(X, U)  a runtime fault happens in the cycle (a violation)
+    P(X, U)  each property, on the state after the cycle
+    A(X, U)  the assumptions, on the state at the start of the cycle
+
+BMC unrolls from the initial state; cycle k is checked once every cycle
+before it held (so the first violation is the one reported).  k-induction
+proves "for every path of k+1 cycles from any state satisfying the proved
+invariants, if the first k cycles hold so does the last"; with the base case
+to depth k+1 this proves the property for every depth.  Paths in the
+induction step are kept simple (pairwise distinct states), which makes the
+method complete for finite state.  Invariants about hidden state (timer
+locations, enumeration ranges...) are candidates proved first by Houdini
+(one-step induction, dropping the ones that fail until the rest is
+inductive): only proved ones strengthen the induction."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import z3
+
+from .encode import FALSE, TRUE, land, lnot, lor
+
+
+@dataclass
+class Result:
+    name: str
+    status: str = "unknown"   # proved | bounded | violated | unknown
+    cycle: int = 0            # violated: the cycle; bounded: the depth
+    k: int = 0                # proved: the induction depth
+    seconds: float = 0.0
+    model: object = None      # violated: the z3 model of the path
+    fault: tuple | None = None
+
+
+@dataclass
+class System:
+    state: list               # [(leaf, var, init term, post term)]
+    inputs: list              # [(leaf, var, domain term)]
+    faults: list              # [(cond, kind, pou, src, pos)]
+    props: list               # [(name, term)]
+    assume: object            # term
+    invariants: list = field(default_factory=list)   # [(name, term over state vars)]
+
+
+class Unroller:
+    def __init__(self, ts: System, tag: str):
+        self.ts = ts
+        self.tag = tag
+        self.X = []     # per step: {var: term}
+        self.U = []
+
+    def vars_at(self, k, initial=None):
+        if initial is not None:
+            m = {var: init for _, var, init, _ in self.ts.state}
+        else:
+            m = {var: z3.Const(f"{var}@{self.tag}{k}", var.sort())
+                 for _, var, _, _ in self.ts.state}
+        self.X.append(m)
+        return m
+
+    def step(self, k):
+        """Adds step k (1-based): inputs U_k, state X_k; returns (constraints,
+        subst pairs for evaluating terms of cycle k)."""
+        ts = self.ts
+        U = {var: z3.Const(f"{var}@{self.tag}{k}", var.sort()) for _, var, _ in ts.inputs}
+        self.U.append(U)
+        pre = self.X[k - 1]
+        pairs = list(pre.items()) + list(U.items())
+        X = {}
+        cons = []
+        for _, var, _, post in ts.state:
+            nv = z3.Const(f"{var}@{self.tag}{k}", var.sort())
+            X[var] = nv
+            cons.append(nv == z3.substitute(post, *pairs) if pairs else nv == post)
+        self.X.append(X)
+        for _, var, dom in ts.inputs:
+            if not z3.is_true(dom):
+                cons.append(z3.substitute(dom, (var, U[var])))
+        if not z3.is_true(ts.assume):
+            cons.append(z3.substitute(ts.assume, *pairs) if pairs else ts.assume)
+        return cons, pairs
+
+    @staticmethod
+    def sub(term, pairs):
+        return z3.substitute(term, *pairs) if pairs else term
+
+
+def _fault_term(ts, pairs):
+    return lor(*[Unroller.sub(c, pairs) for c, *_ in ts.faults])
+
+
+def houdini(ts: System, timeout_ms: int):
+    """The subset of ts.invariants that holds initially and is inductive."""
+    cands = []
+    init_pairs = [(var, init) for _, var, init, _ in ts.state]
+    for name, term in ts.invariants:
+        v = z3.simplify(z3.substitute(term, *init_pairs)) if init_pairs else term
+        if z3.is_true(v):
+            cands.append((name, term))
+    if not cands:
+        return []
+    u = Unroller(ts, "h")
+    u.vars_at(0)
+    s = z3.Solver()
+    s.set("timeout", timeout_ms)
+    cons, pairs = u.step(1)
+    s.add(*cons)
+    s.add(lnot(_fault_term(ts, pairs)))
+    pre_pairs = [(var, u.X[0][var]) for _, var, _, _ in ts.state]
+    post_pairs = [(var, u.X[1][var]) for _, var, _, _ in ts.state]
+    while cands:
+        s.push()
+        for _, term in cands:
+            s.add(Unroller.sub(term, pre_pairs))
+        bad = []
+        for i, (name, term) in enumerate(cands):
+            s.push()
+            s.add(lnot(Unroller.sub(term, post_pairs)))
+            r = s.check()
+            s.pop()
+            if r != z3.unsat:
+                bad.append(i)
+        s.pop()
+        if not bad:
+            return cands
+        cands = [c for i, c in enumerate(cands) if i not in bad]
+    return []
+
+
+def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
+    """Results for every property (the first one is 'no runtime error')."""
+    t0 = time.perf_counter()
+    names = ["no runtime error"] + [n for n, _ in ts.props]
+    results = [Result(n) for n in names]
+    open_ = set(range(len(names)))
+    inv = houdini(ts, timeout_ms)
+
+    def viol(i, pairs):
+        if i == 0:
+            return _fault_term(ts, pairs)
+        return lnot(Unroller.sub(ts.props[i - 1][1], pairs))
+
+    # --- base case, incrementally
+    base = z3.Solver()
+    base.set("timeout", timeout_ms)
+    bu = Unroller(ts, "b")
+    bu.vars_at(0, initial=True)
+    # --- induction step
+    ind = z3.Solver()
+    ind.set("timeout", timeout_ms)
+    iu = Unroller(ts, "i")
+    iu.vars_at(0)
+    y0 = [(var, iu.X[0][var]) for _, var, _, _ in ts.state]
+    for _, term in inv:
+        ind.add(Unroller.sub(term, y0))
+    ind_pairs = []
+    base_ok = 0           # cycles 1..base_ok hold for every open property
+    violated = set()
+    for k in range(1, depth + 1):
+        # base: cycle k
+        cons, pairs = bu.step(k)
+        base.add(*cons)
+        for i in sorted(open_):
+            base.push()
+            base.add(viol(i, pairs))
+            r = base.check()
+            if r == z3.sat:
+                res = results[i]
+                res.status, res.cycle, res.model = "violated", k, base.model()
+                res.seconds = time.perf_counter() - t0
+                res.fault = _which_fault(ts, pairs, res.model) if i == 0 else None
+                violated.add(i)
+            base.pop()
+        open_ -= violated
+        for i in range(len(names)):
+            if i not in violated or i == 0:   # a runtime error ends the run: never assumed
+                base.add(lnot(viol(i, pairs)))
+        base_ok = k
+        if not open_:
+            break
+        # induction step with k-1 hypothesis cycles: path of k cycles
+        cons, pairs = iu.step(k)
+        ind.add(*cons)
+        # simple path: X_k differs from every earlier state of the path
+        if ts.state:
+            for j in range(0, k):
+                ind.add(lor(*[iu.X[j][var] != iu.X[k][var] for _, var, _, _ in ts.state]))
+        if ind_pairs:
+            for i in range(len(names)):
+                if i not in violated or i == 0:
+                    ind.add(lnot(viol(i, ind_pairs)))
+        ind_pairs = pairs
+        for i in sorted(open_):
+            ind.push()
+            ind.add(viol(i, pairs))
+            r = ind.check()
+            ind.pop()
+            if r == z3.unsat and base_ok >= k:
+                res = results[i]
+                res.status, res.k = "proved", k
+                res.seconds = time.perf_counter() - t0
+        open_ = {i for i in open_ if results[i].status != "proved"}
+        if not open_:
+            break
+        if log:
+            log(k)
+    for i in open_:
+        results[i].status, results[i].cycle = "bounded", base_ok
+        results[i].seconds = time.perf_counter() - t0
+    return results, inv
+
+
+def _which_fault(ts, pairs, model):
+    for c, kind, pou, src, pos in ts.faults:
+        if z3.is_true(model.eval(Unroller.sub(c, pairs), model_completion=True)):
+            return kind, pou, src, pos
+    return None
+
+
+_ = (FALSE, TRUE, land)

@@ -1,0 +1,264 @@
+"""Properties and assumptions: ST boolean expressions, from the command line
+or from pragmas in the sources.
+
+Pragma syntax (anywhere a comment may stand; the keyword is case-insensitive):
+
+    {verify NAME: EXPR}     a property, checked after every cycle of the task
+    {verify: EXPR}          the same, named after its position
+    {assume: EXPR}          a constraint on the inputs (and state) at the start
+                            of every cycle
+
+Inside a PROGRAM (between PROGRAM and END_PROGRAM) names are the program's
+own variables -- inputs, outputs, internals, FB instances and their
+members -- and the property is checked for every instance of the program in
+the configuration.  Anywhere else names are configuration paths, the ones
+``iec2kmod sim --watch`` takes: globals, ``resource.global``,
+``instance.variable``, ``instance.fb.output``, ``%QX0.1``, enumeration
+values."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from .. import ast
+from ..checks.body import BodyChecker
+from ..checks.declare import Declarer
+from ..checks.symbols import POUInfo, Var
+from ..checks.types import BOOL, ERROR, EnumT, ErrorT, FBType, StructT
+from ..diagnostics import Diagnostics, SourceFile
+
+PRAGMA = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
+                    r"(\{\s*(verify|assume)\b\s*([A-Za-z_][A-Za-z0-9_]*)?\s*:([^}]*)\})",
+                    re.S | re.I)
+POU_SPAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
+                      r"\{[^}]*\}|\b(PROGRAM|END_PROGRAM|FUNCTION_BLOCK|END_FUNCTION_BLOCK|"
+                      r"FUNCTION|END_FUNCTION)\b(\s+([A-Za-z_][A-Za-z0-9_]*))?", re.S | re.I)
+
+HEADER = "FUNCTION F__ : BOOL F__ := "
+
+
+def is_verify_pragma(text: str) -> bool:
+    """True for the text of a {verify ...} or {assume ...} pragma."""
+    return re.match(r"\{\s*(verify|assume)\b", text, re.I) is not None
+
+
+@dataclass
+class Prop:
+    kind: str            # property | assume
+    name: str
+    text: str
+    src: SourceFile
+    start: int           # offset of the expression in src
+    program: str | None  # upper POU name when written inside a PROGRAM
+    expr: object = None  # checked AST (per scope, filled by check())
+
+
+def scan_pragmas(project) -> tuple[list, list]:
+    """Every {verify}/{assume} pragma of the project's source files."""
+    props, bad = [], []
+    seen = set()
+    for unit in project.units:
+        src = unit.src
+        if id(src) in seen:
+            continue
+        seen.add(id(src))
+        spans = _pou_spans(src.text)
+        n = 0
+        for m in PRAGMA.finditer(src.text):
+            if not m.group(1):
+                continue
+            kind = m.group(2).lower()
+            start = m.start(4)
+            text = m.group(4)
+            program = None
+            inside = None
+            for kw, name, a, b in spans:
+                if a <= m.start(1) < b:
+                    inside = (kw, name)
+            if inside is not None:
+                if inside[0] == "PROGRAM":
+                    program = inside[1].upper()
+                else:
+                    bad.append((src, m.start(1), f"a {{{kind}}} pragma inside a "
+                                f"{inside[0].replace('_', ' ').lower()} (write it in a "
+                                "PROGRAM or in the configuration)"))
+                    continue
+            n += 1
+            line, _ = src.linecol(m.start(1))
+            name = m.group(3) or f"{src.path.rsplit('/', 1)[-1]}:{line}"
+            props.append(Prop("property" if kind == "verify" else "assume", name, text, src,
+                              start, program))
+    return props, bad
+
+
+def _pou_spans(text):
+    out = []
+    stack = None
+    for m in POU_SPAN.finditer(text):
+        kw = m.group(1)
+        if not kw:
+            continue
+        kw = kw.upper()
+        if kw.startswith("END_"):
+            if stack is not None:
+                out.append((stack[0], stack[1], stack[2], m.end()))
+            stack = None
+        elif m.group(3):
+            stack = (kw, m.group(3), m.start())
+    return out
+
+
+# ----------------------------------------------------------- parsing
+def parse_expr(text: str, src: SourceFile, start: int, diags: Diagnostics):
+    """The expression AST of ``text`` (found at offset ``start`` of src),
+    its positions those of src; None after a syntax error (in diags)."""
+    from ..parser import parse_source
+    synth = SourceFile(src.path, HEADER + text + "\n;\nEND_FUNCTION\n")
+    d = Diagnostics()
+    unit = parse_source(synth, d)
+    delta = start - len(HEADER)
+    if unit is None or d.errors or len(unit.pous) != 1 or len(unit.pous[0].body) != 1 or \
+            not isinstance(unit.pous[0].body[0], ast.Assign):
+        for e in d.errors or [None]:
+            if e is None:
+                diags.error(src, start, "a property must be one expression")
+                continue
+            off = synth.offset(e.line, e.col) + delta
+            off = min(max(off, start), start + len(text))
+            diags.error(src, off, f"in a property: {e.message}")
+        return None
+    e = unit.pous[0].body[0].value
+    _shift(e, delta)
+    return e
+
+
+def _shift(e, d):
+    if e is None:
+        return
+    if isinstance(e, ast.Expr) and e.pos is not None:
+        e.pos += d
+    if isinstance(e, ast.BinOp):
+        _shift(e.left, d)
+        _shift(e.right, d)
+    elif isinstance(e, ast.UnOp):
+        _shift(e.operand, d)
+    elif isinstance(e, ast.Ref):
+        acc = []
+        for k, val, pos in e.accessors:
+            if k == "index":
+                for x in val:
+                    _shift(x, d)
+            acc.append((k, val, pos + d if pos is not None else pos))
+        e.accessors = acc
+    elif isinstance(e, ast.Call):
+        for a in e.args:
+            if a.pos is not None:
+                a.pos += d
+            _shift(a.value, d)
+
+
+# ---------------------------------------------------------- checking
+class PropChecker(BodyChecker):
+    """Type checks a property in a scope: a PROGRAM's variables, or the
+    configuration's paths.  Members of function block and program instances
+    may be read whatever their section (as `sim --watch` reads them)."""
+
+    def __init__(self, project, diags, scope_pou, src, directs):
+        decl = Declarer(project, diags)
+        for t in project.types.values():
+            if isinstance(t, EnumT):
+                for k in t.values:
+                    decl.enum_values.setdefault(k, []).append(t)
+        super().__init__(project, decl, diags, scope_pou)
+        self.src = src
+        self.directs = directs
+
+    def member(self, t, name, pos):
+        if isinstance(t, FBType):
+            v = t.pou.var(name)
+            if v is None or v.section in ("VAR_TEMP", "RESULT") or (
+                    t.pou.standard and name.startswith("$")):
+                self.error(pos, f"{t.name} has no variable '{name}'")
+                return ERROR, None
+            return v.type, None
+        return super().member(t, name, pos)
+
+    def _expr(self, e):
+        if isinstance(e, ast.Direct):
+            t = self.directs.get(e.address.upper()) or self.directs.get(e.address)
+            if t is None:
+                self.error(e.pos, f"{e.address} is not connected in the configuration")
+                return ERROR
+            return t
+        if isinstance(e, ast.Call) and e.target is None and self.pou.var(e.name) is not None \
+                and isinstance(self.pou.var(e.name).type, FBType):
+            self.error(e.pos, "a property cannot call a function block")
+            return ERROR
+        return super()._expr(e)
+
+    def check_expr(self, e):
+        t = self.expr(e)
+        if isinstance(t, ErrorT):
+            return False
+        if t.base is not BOOL:
+            self.error(e.pos, f"a property must be BOOL, not {t.name}")
+            return False
+        return True
+
+
+def config_scope(sym):
+    """A pseudo POU whose variables are the configuration's paths: globals
+    (references), resources (named ones) and program instances."""
+    m = sym.machine
+    cfg = sym.cfg
+    scope = POUInfo("PROGRAM", cfg.name)
+    scope.src = cfg.src
+    from ..interp.model import Instance
+    inst = Instance(scope)
+    named = any(r.node.name for r in cfg.resources)
+
+    def add(pou, holder, name, t, section, cell=None, value=None):
+        v = Var(name, t, section, owner=pou)
+        pou.vars[v.key] = v
+        if section == "VAR_IN_OUT":
+            holder.r[v.key] = cell
+        else:
+            holder.v[v.key] = value
+        return v
+
+    for g in cfg.globals.values():
+        add(scope, inst, g.name, g.type, "VAR_IN_OUT", cell=(m.globals, g.key))
+    insts = {path: i for path, i in m.instances}
+    for r in cfg.resources:
+        if r.node.name:
+            rp = POUInfo("FUNCTION_BLOCK", r.name)
+            rp.src = cfg.src
+            ri = Instance(rp)
+            for g in r.globals.values():
+                add(rp, ri, g.name, g.type, "VAR_IN_OUT", cell=(m.res_globals[r.name], g.key))
+            for pi in r.programs:
+                add(rp, ri, pi.name, FBType(pi.pou.name, pi.pou), "VAR",
+                    value=insts[f"{r.name}.{pi.name}"])
+            add(scope, inst, r.name, FBType(r.name, rp), "VAR", value=ri)
+        else:
+            for g in r.globals.values():
+                add(scope, inst, g.name, g.type, "VAR_IN_OUT",
+                    cell=(m.res_globals[r.name], g.key))
+            for pi in r.programs:
+                add(scope, inst, pi.name, FBType(pi.pou.name, pi.pou), "VAR",
+                    value=insts[pi.name])
+    del named
+    return scope, inst
+
+
+def instance_of_path(sym, path):
+    """(POUInfo, Instance) of a program instance path (``crossing`` or
+    ``plc.crossing``), or None."""
+    for p, inst in sym.machine.instances:
+        if p.upper() == path.upper() or p.upper().split(".")[-1] == path.upper():
+            return inst.pou, inst
+    return None
+
+
+_ = (StructT, BOOL)
