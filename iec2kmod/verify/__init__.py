@@ -5,10 +5,14 @@ What is encoded (exactly, as the reference interpreter iec2kmod.interp
 executes it; the encoder walks the same checked AST and reuses the
 interpreter's storage layout and initial values):
 
-  * the cycle of the configuration's one periodic task: every program
-    instance of the task in declaration order -- connected inputs copied in
-    (with their subrange checks), the body, connected outputs copied out --
-    as one transition T(state, inputs) over z3 terms (model.py, encode.py);
+  * the scheduler of the configuration's periodic tasks, one instant per
+    step: the step is the greatest common divisor of the periods, a hidden
+    counter modulo the hyperperiod tells which tasks are released, and the
+    released tasks run in priority order (declaration order on ties), each
+    running its program instances in declaration order -- connected inputs
+    copied in (with their subrange checks), the body, connected outputs
+    copied out; with one task a step is one cycle.  One step is one
+    transition T(state, inputs) over z3 terms (model.py, encode.py);
   * state: every variable a cycle can change -- globals, %Q/%M addresses,
     program and FB instance variables at every depth, the hidden state of
     the standard FBs (edge memories, counters' edges, the timers' automaton
@@ -54,8 +58,7 @@ STRING/WSTRING values and the string functions, WHILE and REPEAT loops,
 FOR loops whose bounds are not constant, IL backward jumps, EXPT and the
 transcendental functions (LN LOG EXP SIN COS TAN ASIN ACOS ATAN ATAN2),
 date and time-of-day arithmetic, conversions between REAL and TIME or of
-enumerations and BCD, event tasks (SINGLE), and configurations with more
-than one task.
+enumerations and BCD, and event tasks (SINGLE).
 
 Properties are ST boolean expressions over the configuration's variables,
 from the command line or from {verify NAME: EXPR} pragmas in the sources
@@ -100,7 +103,7 @@ def _scopes(sym, prop, instance, diags):
     if prop.program is not None:
         out = []
         for (path, inst), pi in zip(sym.machine.instances, sym.programs):
-            if pi.pou.key == prop.program and pi.task is sym.task:
+            if pi.pou.key == prop.program and pi.task is not None:
                 out.append((f"{path}.{prop.name}", pi.pou, inst))
         return out
     if instance is not None and prop.src.path.startswith("<"):

@@ -105,11 +105,17 @@ def lookup(machine, keys):
 def leaf_value(machine, leaf, now):
     """A leaf's value in an interpreter Machine (the hidden elapsed time of
     a timer from its start time T0, as the encoding holds it)."""
+    if leaf.keys == ("T",):
+        return ((now // out_period(leaf)) + 1) % leaf.ticks
     if leaf.name.endswith(".$EL") and leaf.hidden:
         c, _ = lookup(machine, leaf.keys[:-1] + ("$S",))
         return now - c["$T0"] if c["$S"] == 1 else 0
     c, k = lookup(machine, leaf.keys)
     return c[k]
+
+
+def out_period(leaf):
+    return leaf.period
 
 
 def state_pairs(out, machine, now):

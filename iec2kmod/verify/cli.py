@@ -45,8 +45,10 @@ def run_verify(args) -> int:
     if out is None:
         return EXIT_SOURCE
     sym = out.sym
-    print(f"configuration {sym.cfg.name}: task {sym.task.name} every "
-          f"{_fmt_time(sym.period)}; {out.leaves} state variables, {out.inputs} inputs; "
+    tasks = ", ".join(f"{t.name} every {_fmt_time(t.interval_ns)}" for t in sym.tasks)
+    step = f"; a step is {_fmt_time(sym.period)}" if len(sym.tasks) > 1 else ""
+    print(f"configuration {sym.cfg.name}: task{'s' if len(sym.tasks) > 1 else ''} {tasks}"
+          f"{step}; {out.leaves} state variables, {out.inputs} inputs; "
           f"{len(out.props)} properties")
     cex_dir = Path(args.cex_dir)
     worst = EXIT_PROVED

@@ -486,7 +486,10 @@ class Encoder:
         if not r.accessors and sym.section == "VAR_INPUT" and sym.edge and \
                 sym.owner is frame.pou:
             return frame.inst.e[sym.key]
-        return self.place(r, frame, g).get()
+        v = self.place(r, frame, g).get()
+        if not z3.is_expr(v) and not isinstance(v, (list, dict, Instance)):
+            self.refuse(frame.pou, r.pos, f"reading '{r.name}' (a STRING)")
+        return v
 
     def store_value(self, v, src_t, dst_t, frame, g, pos):
         """v prepared for storage in dst_t: converted, range-checked."""
@@ -1213,47 +1216,47 @@ class Encoder:
     # ---------------------------------------------------------------- IL
     def cr_get(self, frame, t):
         cr = frame.inst.cr
-        if t is None or isinstance(t, LiteralT):
-            for key in ("lit", "int"):
-                if cr is not None and key in cr:
-                    return cr[key]
-        s = sort_of(t) if t is not None and not isinstance(t, LiteralT) else None
         if cr is None:
             raise AssertionError("IL current result read before it is set")
-        if s is not None and s in cr:
-            return cr[s]
-        # a literal current result (LD 5) read as a typed value
-        if "lit" in cr:
-            return cr["lit"]
-        if "int" in cr:
-            return cr["int"]
-        return next(iter(cr.values()))
-
-    def cr_set(self, frame, g, val):
-        inst = frame.inst
-        cr = inst.cr if inst.cr is not None else {}
-        if isinstance(val, (int, float, bool)) and not isinstance(val, z3.ExprRef):
-            if z3.is_true(g):
-                inst.cr = {"lit": val}
-                return
-            if isinstance(val, float):
-                self.refuse(frame.pou, None, "an untyped REAL current result on a conditional path")
-            val = z3.IntVal(int(val))
-        if z3.is_int(val):
-            key = "int"
-            old = cr.get("int")
-            if old is None and "lit" in cr and not isinstance(cr["lit"], float):
-                old = z3.IntVal(int(cr["lit"]))
+        if t is None or isinstance(t, LiteralT):
+            for key in ("lit", "int"):
+                if key in cr:
+                    return cr[key]
         else:
-            key = val.sort()
-            old = cr.get(key)
-        new = dict(cr) if not z3.is_true(g) else {}
-        new.pop("lit", None) if not z3.is_true(g) else None
-        if "lit" in cr and not z3.is_true(g) and not isinstance(cr["lit"], float):
-            new["int"] = z3.IntVal(int(cr["lit"])) if key != "int" else new.get("int")
-            if new["int"] is None:
-                del new["int"]
-        new[key] = ite(g, val, old) if old is not None else val
+            s = sort_of(t)
+            if s is not None and "s:" + s.sexpr() in cr:
+                return cr["s:" + s.sexpr()]
+        # the most recently set value (a literal loaded into a typed register)
+        return list(cr.values())[-1]
+
+    def cr_set(self, frame, rel, val):
+        """Sets the current result on the paths of ``rel`` (relative to the
+        start of the body: the current result is local to one execution)."""
+        inst = frame.inst
+        if z3.is_true(rel):
+            if isinstance(val, (int, float, bool)) and not isinstance(val, z3.ExprRef):
+                inst.cr = {"lit": val}
+            elif z3.is_int(val):
+                inst.cr = {"int": val}
+            else:
+                inst.cr = {"s:" + val.sort().sexpr(): val}
+            return
+        new = {}
+        for k, v in (inst.cr or {}).items():
+            if k == "lit":
+                if isinstance(v, float):
+                    self.refuse(frame.pou, None, "an untyped REAL current result on a "
+                                                 "conditional path")
+                k, v = "int", z3.IntVal(int(v))
+            new[k] = v
+        if isinstance(val, (int, float, bool)) and not isinstance(val, z3.ExprRef):
+            if isinstance(val, float):
+                self.refuse(frame.pou, None, "an untyped REAL current result on a conditional "
+                                             "path")
+            val = z3.IntVal(int(val))
+        key = "int" if z3.is_int(val) else "s:" + val.sort().sexpr()
+        old = new.pop(key, None)
+        new[key] = ite(rel, val, old) if old is not None else val
         inst.cr = new
 
     def il_body(self, instrs, frame, g):
@@ -1262,7 +1265,8 @@ class Encoder:
             if i.label:
                 labels[i.label.upper()] = n
         incoming = {}
-        live = g
+        live = TRUE          # relative to the start of the body
+        frame.inst.cr = None
         for n, i in enumerate(instrs):
             if n in incoming:
                 live = lor(live, *incoming.pop(n))
@@ -1291,14 +1295,16 @@ class Encoder:
                 frame.ret = lor(frame.ret, land(live, c))
                 live = land(live, lnot(c))
                 continue
-            self.il_instr(i, frame, live)
+            self.il_instr(i, frame, land(g, live), live)
 
-    def il_instr(self, i, frame, g):
+    def il_instr(self, i, frame, g, rel):
+        """One IL instruction: variables written under g, the current
+        result under rel (g relative to the start of the body)."""
         op = i.op
         cr_in = i.cr_in
         pou = frame.pou
         if op is None:
-            self.cr_set(frame, g, self.call_expr(i.call, frame, g))
+            self.cr_set(frame, rel, self.call_expr(i.call, frame, g))
             return
         if i.deferred:
             outer = self.cr_get(frame, cr_in) if frame.inst.cr is not None else None
@@ -1310,11 +1316,11 @@ class Encoder:
             for j in i.nested:
                 if j.op in ("JMP", "JMPC", "JMPCN", "RET", "RETC", "RETCN"):
                     self.refuse(pou, j.pos, "a jump inside a parenthesised IL operation")
-                self.il_instr(j, frame, g)
+                self.il_instr(j, frame, g, TRUE)
             inner = self.cr_get(frame, inner_t)
             frame.inst.cr = saved
             val = self.il_combine(op, outer, cr_in, inner, inner_t, frame, g, i.pos)
-            self.cr_set(frame, g, val)
+            self.cr_set(frame, rel, val)
             return
         if op in ("LD", "LDN"):
             t = i.cr_out
@@ -1325,7 +1331,7 @@ class Encoder:
                 val = const_of(val, concrete(tt))
             if op == "LDN":
                 val = z3.Not(val) if z3.is_bool(val) else ~val
-            self.cr_set(frame, g, val)
+            self.cr_set(frame, rel, val)
             return
         if op in ("ST", "STN"):
             val = self.cr_get(frame, cr_in)
@@ -1350,13 +1356,13 @@ class Encoder:
             return
         if op == "NOT":
             val = self.conv(self.cr_get(frame, cr_in), cr_in, concrete(cr_in))
-            self.cr_set(frame, g, z3.Not(val) if z3.is_bool(val) else ~val)
+            self.cr_set(frame, rel, z3.Not(val) if z3.is_bool(val) else ~val)
             return
         if op in ("AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ADD", "SUB", "MUL", "DIV",
                   "MOD", "GT", "GE", "EQ", "NE", "LE", "LT"):
             b = self.expr(i.operand, frame, g)
             a = self.cr_get(frame, cr_in)
-            self.cr_set(frame, g, self.il_combine(op, a, cr_in, b, i.operand.type, frame, g,
+            self.cr_set(frame, rel, self.il_combine(op, a, cr_in, b, i.operand.type, frame, g,
                                                   i.pos))
             return
         if op in ("CAL", "CALC", "CALCN"):

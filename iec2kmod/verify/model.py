@@ -10,6 +10,7 @@ after the cycle, as a function of those constants: the transition relation.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import z3
@@ -18,7 +19,7 @@ from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, c
 from ..interp.machine import Machine
 from ..interp.model import Instance
 from ..interp.values import base_of
-from .encode import (FALSE, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, kind,
+from .encode import (FALSE, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
                      land, lnot, sort_of)
 
 INT64_MAX = (1 << 63) - 1
@@ -79,6 +80,13 @@ class SymbolicMachine:
             connected = {c.name.upper() for c in pi.node.connections}
             self._instance(inst, path, keys=("I", path), unconnected={
                 v.key for v in pi.pou.inputs if v.key not in connected})
+        self.clock = {"$tick": 0}
+        if self.ticks > 1:
+            self._hidden(self.clock, "$tick", Elementary("$TICK", "uint",
+                                                         max(1, (self.ticks - 1).bit_length()),
+                                                         None), "$tick", ("T",))
+            leaf = self.by_name["$tick"]
+            leaf.period, leaf.ticks = self.period, self.ticks
 
     # ------------------------------------------------------------ shape
     def _check_shape(self):
@@ -92,13 +100,34 @@ class SymbolicMachine:
             if t.single is not None or not t.interval_ns:
                 raise Refuse(src, t.pos, f"verify: the event task '{t.name}' (SINGLE) "
                                          "cannot be encoded (only periodic tasks)")
-        if len(tasks) > 1:
-            raise Refuse(src, tasks[1][1].pos,
-                         f"verify: a second task ('{tasks[1][1].name}'): only configurations "
-                         "with one periodic task can be encoded")
-        self.task = tasks[0][1]
-        self.period = self.task.interval_ns
-        self.task_run = self.machine.tasks[0]
+        periods = [t.interval_ns for _, t in tasks]
+        base = 0
+        for p in periods:
+            base = math.gcd(base, p)
+        hyper = 1
+        for p in periods:
+            hyper = hyper * p // math.gcd(hyper, p)
+        if hyper // base > 1 << 16:
+            raise Refuse(src, tasks[0][1].pos, "verify: task periods whose hyperperiod is more "
+                                               f"than 65536 steps of {base} ns")
+        self.period = base                 # the step: one instant of the scheduler
+        self.ticks = hyper // base
+        # tasks as the scheduler runs them at one instant: priority, then declaration
+        order = sorted(range(len(tasks)), key=lambda i: (tasks[i][1].priority, i))
+        self.tasks = [tasks[i][1] for i in order]
+        self.task = self.tasks[0]
+
+    def task_runs(self, tick):
+        """[(TaskInfo, guard)] in the order they run at an instant."""
+        out = []
+        for t in self.tasks:
+            r = t.interval_ns // self.period
+            if r == 1 or tick is None:
+                out.append((t, TRUE))
+            else:
+                w = tick.size()
+                out.append((t, z3.URem(tick, z3.BitVecVal(r, w)) == z3.BitVecVal(0, w)))
+        return out
 
     def _root_of(self, container):
         m = self.machine
@@ -266,26 +295,36 @@ class SymbolicMachine:
                           el + bv_lit(P, 64))
             inst.v["$EL"] = z3.If(inst.v["$S"] == z3.BitVecVal(WORK, 2), grown, bv_lit(0, 64))
         insts = {id(pi): inst for (_, inst), pi in zip(m.instances, self.programs)}
-        for pi in self.programs:
-            if pi.task is None or pi.task is not self.task:
-                continue
-            inst = insts[id(pi)]
-            frame = Frame(inst, pi.pou)
-            for param, value in pi.inputs:
-                val, vt = self.connection_value(value, param, enc, frame)
-                inst.v[param.key] = enc.store_value(val, vt, param.type, frame, TRUE,
-                                                    getattr(value, "pos", None))
-            enc.run_body(pi.pou, inst, TRUE)
-            for param, target in pi.outputs:
-                val = inst.v[param.key]
-                if hasattr(target, "address"):
-                    c, k = m._direct(target.address, param.type)
-                    tt = param.type
-                else:
-                    c, k = m.cells[id(target.symbol)]
-                    tt = target.symbol.type
-                c[k] = enc.store_value(val, param.type, tt, frame, TRUE,
-                                       getattr(target, "pos", None))
+        tick = self.clock["$tick"] if self.ticks > 1 else None
+        for task, g in self.task_runs(tick):
+            for pi in self.programs:
+                if pi.task is not task:
+                    continue
+                self.run_program(enc, pi, insts[id(pi)], g)
+        if tick is not None:
+            w = tick.size()
+            self.clock["$tick"] = z3.If(tick == z3.BitVecVal(self.ticks - 1, w),
+                                        z3.BitVecVal(0, w), tick + z3.BitVecVal(1, w))
+
+    def run_program(self, enc, pi, inst, g):
+        m = self.machine
+        frame = Frame(inst, pi.pou)
+        iv = inst.v
+        for param, value in pi.inputs:
+            val, vt = self.connection_value(value, param, enc, frame)
+            new = enc.store_value(val, vt, param.type, frame, g, getattr(value, "pos", None))
+            iv[param.key] = ite(g, new, iv[param.key])
+        enc.run_body(pi.pou, inst, g)
+        for param, target in pi.outputs:
+            val = iv[param.key]
+            if hasattr(target, "address"):
+                c, k = m._direct(target.address, param.type)
+                tt = param.type
+            else:
+                c, k = m.cells[id(target.symbol)]
+                tt = target.symbol.type
+            new = enc.store_value(val, param.type, tt, frame, g, getattr(target, "pos", None))
+            c[k] = ite(g, new, c[k])
 
     def connection_value(self, value, param, enc, frame):
         m = self.machine
