@@ -483,11 +483,16 @@ _PRAGMA_SCAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)
                           re.S)
 
 
+# {verify NAME: EXPR} and {assume: EXPR}: read by `iec2kmod verify` (iec2kmod/verify/props.py)
+_VERIFY_PRAGMA = re.compile(r"\{\s*(verify|assume)\b", re.I)
+
+
 def _warn_pragmas(src: SourceFile, diags: Diagnostics) -> None:
     if "{" not in src.text:
         return
     for m in _PRAGMA_SCAN.finditer(src.text):
-        if m.group(1) and not re.match(r"\{\s*selective\b", m.group(1), re.I):
+        if m.group(1) and not re.match(r"\{\s*selective\b", m.group(1), re.I) and \
+                not _VERIFY_PRAGMA.match(m.group(1)):
             # {selective ...} is read by iec2kmod/codegen/selective.py
             diags.warning(src, m.start(1), "pragma ignored")
 

@@ -100,6 +100,8 @@ def ite(c, a, b):
         return {k: ite(c, a[k], b[k]) for k in a}
     if isinstance(a, Instance):
         return a
+    if isinstance(a, Opaque) or isinstance(b, Opaque):
+        return a if a is b else Opaque("merged", getattr(a, "type", None))
     if a is b or (z3.is_expr(a) and z3.is_expr(b) and a.eq(b)):
         return a
     return z3.If(c, a, b)
@@ -218,6 +220,16 @@ def to_bv(x, w):
     if z3.is_int(x):
         return z3.Int2BV(x, w)
     return x
+
+
+class Opaque:
+    """A value the encoding does not represent (a STRING): reading it refuses."""
+
+    __slots__ = ("name", "type")
+
+    def __init__(self, name, t):
+        self.name = name
+        self.type = t
 
 
 class Cell:
@@ -1182,12 +1194,16 @@ class Encoder:
         seq = []
         i = a
         up = st >= 0
+        final = None     # the value stored by the step that ends the loop
         while not ((i > e_) if up else (i < e_)):
             seq.append(i)
             if len(seq) > LOOP_BUDGET:
                 break
             i = i + st
             if i < lo_t or i > hi_t:
+                break
+            if (i > e_) if up else (i < e_):
+                final = i
                 break
         if len(seq) > LOOP_BUDGET:
             # the loop budget runs out whenever the loop is reached
@@ -1211,6 +1227,8 @@ class Encoder:
             if n > 0:
                 cell.put(gi, bv_lit(i, w))
             self.block(s.body, frame, gi)
+        if final is not None and seq:
+            cell.put(land(g, lnot(frame.brk), lnot(frame.ret)), bv_lit(final, w))
         frame.brk = saved
 
     # ---------------------------------------------------------------- IL

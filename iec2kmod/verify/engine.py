@@ -37,6 +37,7 @@ class Result:
     seconds: float = 0.0
     model: object = None      # violated: the z3 model of the path
     fault: tuple | None = None
+    invariants: list = field(default_factory=list)
 
 
 @dataclass
@@ -134,25 +135,89 @@ def houdini(ts: System, timeout_ms: int):
     return []
 
 
+def free_consts(terms):
+    """The uninterpreted constants the terms read."""
+    seen = set()
+    out = {}
+    stack = [t for t in terms if z3.is_expr(t)]
+    while stack:
+        t = stack.pop()
+        i = t.get_id()
+        if i in seen:
+            continue
+        seen.add(i)
+        if z3.is_const(t) and t.decl().kind() == z3.Z3_OP_UNINTERPRETED:
+            out[i] = t
+            continue
+        stack.extend(t.children())
+    return out
+
+
+def restrict(ts: System, roots):
+    """The cone of influence of the root terms: the state variables they
+    read, the ones those are computed from, and so on; the inputs read."""
+    post = {var.get_id(): (leaf, var, init, p) for leaf, var, init, p in ts.state}
+    need = {}
+    todo = list(free_consts(list(roots) + [ts.assume]).values())
+    while todo:
+        v = todo.pop()
+        i = v.get_id()
+        if i in need or i not in post:
+            continue
+        need[i] = post[i]
+        todo.extend(free_consts([post[i][3]]).values())
+    state = [x for x in ts.state if x[1].get_id() in need]
+    used = free_consts([x[3] for x in state] + list(roots) + [ts.assume])
+    inputs = [x for x in ts.inputs if x[1].get_id() in used]
+    inv = [(n, t) for n, t in ts.invariants
+           if all(i in need for i in free_consts([t]))]
+    return System(state, inputs, ts.faults, ts.props, ts.assume, inv)
+
+
 def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
-    """Results for every property (the first one is 'no runtime error')."""
+    """Results for every property, the first one 'no runtime error'.  Each
+    one is decided on its own cone of influence; the properties are checked
+    on runs without a runtime error unless none can happen (proved)."""
+    fault_roots = [c for c, *_ in ts.faults]
     t0 = time.perf_counter()
-    names = ["no runtime error"] + [n for n, _ in ts.props]
-    results = [Result(n) for n in names]
-    open_ = set(range(len(names)))
+    sub = restrict(ts, fault_roots)
+    first = check_one(sub, "no runtime error", None, depth, timeout_ms, no_fault=False)
+    first.seconds = time.perf_counter() - t0
+    results = [first]
+    invs = set()
+    for name, term in ts.props:
+        t0 = time.perf_counter()
+        no_fault = first.status != "proved" and bool(ts.faults)
+        sub = restrict(ts, [term] + (fault_roots if no_fault else []))
+        r = check_one(sub, name, term, depth, timeout_ms, no_fault=no_fault)
+        r.seconds = time.perf_counter() - t0
+        results.append(r)
+        invs.update(n for n, _ in r.invariants)
+    return results, sorted(invs)
+
+
+def check_one(ts: System, name, prop, depth, timeout_ms, no_fault):
+    """BMC to ``depth`` cycles and k-induction of one property (prop None:
+    no runtime error)."""
+    res = Result(name)
     inv = houdini(ts, timeout_ms)
+    res.invariants = inv
 
-    def viol(i, pairs):
-        if i == 0:
+    def viol(pairs):
+        if prop is None:
             return _fault_term(ts, pairs)
-        return lnot(Unroller.sub(ts.props[i - 1][1], pairs))
+        return lnot(Unroller.sub(prop, pairs))
 
-    # --- base case, incrementally
+    def good(pairs):
+        g = [lnot(viol(pairs))]
+        if no_fault:
+            g.append(lnot(_fault_term(ts, pairs)))
+        return g
+
     base = z3.Solver()
     base.set("timeout", timeout_ms)
     bu = Unroller(ts, "b")
     bu.vars_at(0, initial=True)
-    # --- induction step
     ind = z3.Solver()
     ind.set("timeout", timeout_ms)
     iu = Unroller(ts, "i")
@@ -160,61 +225,46 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
     y0 = [(var, iu.X[0][var]) for _, var, _, _ in ts.state]
     for _, term in inv:
         ind.add(Unroller.sub(term, y0))
-    ind_pairs = []
-    base_ok = 0           # cycles 1..base_ok hold for every open property
-    violated = set()
+    ind_pairs = None
     for k in range(1, depth + 1):
-        # base: cycle k
         cons, pairs = bu.step(k)
         base.add(*cons)
-        for i in sorted(open_):
-            base.push()
-            base.add(viol(i, pairs))
-            r = base.check()
-            if r == z3.sat:
-                res = results[i]
-                res.status, res.cycle, res.model = "violated", k, base.model()
-                res.seconds = time.perf_counter() - t0
-                res.fault = _which_fault(ts, pairs, res.model) if i == 0 else None
-                violated.add(i)
+        base.push()
+        base.add(viol(pairs))
+        if no_fault and prop is not None:
+            base.add(lnot(_fault_term(ts, pairs)))
+        r = base.check()
+        if r == z3.sat:
+            res.status, res.cycle, res.model = "violated", k, base.model()
+            if prop is None:
+                res.fault = _which_fault(ts, pairs, res.model)
             base.pop()
-        open_ -= violated
-        for i in range(len(names)):
-            if i not in violated or i == 0:   # a runtime error ends the run: never assumed
-                base.add(lnot(viol(i, pairs)))
-        base_ok = k
-        if not open_:
-            break
-        # induction step with k-1 hypothesis cycles: path of k cycles
+            return res
+        base.pop()
+        if r == z3.unknown:
+            res.status, res.cycle = "bounded", k - 1
+            return res
+        base.add(*good(pairs))
+        # induction: a path of k cycles from any state of the invariants
         cons, pairs = iu.step(k)
         ind.add(*cons)
-        # simple path: X_k differs from every earlier state of the path
-        if ts.state:
-            for j in range(0, k):
+        for j in range(0, k):
+            if ts.state:
                 ind.add(lor(*[iu.X[j][var] != iu.X[k][var] for _, var, _, _ in ts.state]))
-        if ind_pairs:
-            for i in range(len(names)):
-                if i not in violated or i == 0:
-                    ind.add(lnot(viol(i, ind_pairs)))
+        if ind_pairs is not None:
+            ind.add(*good(ind_pairs))
         ind_pairs = pairs
-        for i in sorted(open_):
-            ind.push()
-            ind.add(viol(i, pairs))
-            r = ind.check()
-            ind.pop()
-            if r == z3.unsat and base_ok >= k:
-                res = results[i]
-                res.status, res.k = "proved", k
-                res.seconds = time.perf_counter() - t0
-        open_ = {i for i in open_ if results[i].status != "proved"}
-        if not open_:
-            break
-        if log:
-            log(k)
-    for i in open_:
-        results[i].status, results[i].cycle = "bounded", base_ok
-        results[i].seconds = time.perf_counter() - t0
-    return results, inv
+        ind.push()
+        ind.add(viol(pairs))
+        if no_fault and prop is not None:
+            ind.add(lnot(_fault_term(ts, pairs)))
+        r = ind.check()
+        ind.pop()
+        if r == z3.unsat:
+            res.status, res.k = "proved", k
+            return res
+    res.status, res.cycle = "bounded", depth
+    return res
 
 
 def _which_fault(ts, pairs, model):

@@ -19,20 +19,10 @@ from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, c
 from ..interp.machine import Machine
 from ..interp.model import Instance
 from ..interp.values import base_of
-from .encode import (FALSE, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
+from .encode import (FALSE, Opaque, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
                      land, lnot, sort_of)
 
 INT64_MAX = (1 << 63) - 1
-
-
-class Opaque:
-    """A value the encoding does not represent (a STRING): reading it refuses."""
-
-    __slots__ = ("name", "type")
-
-    def __init__(self, name, t):
-        self.name = name
-        self.type = t
 
 
 @dataclass
