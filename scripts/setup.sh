@@ -12,7 +12,8 @@
 #   2. download the RT kernel image that matches the installed headers and
 #      extract it (NOT install it) into $IEC2KMOD_CACHE/kernel/<kver>/, which is
 #      what the QEMU test guest boots (vmlinuz + lib/modules/<kver>/kernel/...);
-#   3. pip install -e .[test] of this repository (re-run when pyproject.toml changes);
+#   3. pip install -e .[test] of this repository (re-run when pyproject.toml changes;
+#      it brings z3-solver and pyuppaal, which `iec2kmod verify` / `export --uppaal` use);
 #      and extract the PVH-bootable kernel for fast QEMU boots;
 #   4. start dockerd if it is not running and build the project's module-build
 #      container image if it is missing (skipped with --no-container).

@@ -41,7 +41,7 @@ def run_verify(args) -> int:
     except Refuse as exc:
         diags.error(exc.src, exc.pos if exc.pos is not None else 0, exc.message)
         out = None
-    print_diagnostics(diags)
+    print_diagnostics(diags, sys.stderr)
     if out is None:
         return EXIT_SOURCE
     sym = out.sym

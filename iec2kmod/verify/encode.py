@@ -81,6 +81,12 @@ def lor(*xs):
     return out[0] if len(out) == 1 else z3.Or(*out)
 
 
+def smt_eq(a, b):
+    """Equality of terms as values (for REAL: the same datum, NaN equal to
+    NaN, -0.0 different from +0.0), not IEEE comparison."""
+    return z3.BoolRef(z3.Z3_mk_eq(a.ctx_ref(), a.as_ast(), b.as_ast()), a.ctx)
+
+
 def lnot(x):
     if z3.is_true(x):
         return FALSE

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import z3
 
-from .encode import FALSE, TRUE, land, lnot, lor
+from .encode import FALSE, TRUE, land, lnot, lor, smt_eq
 
 
 @dataclass
@@ -79,7 +79,7 @@ class Unroller:
         for _, var, _, post in ts.state:
             nv = z3.Const(f"{var}@{self.tag}{k}", var.sort())
             X[var] = nv
-            cons.append(nv == z3.substitute(post, *pairs) if pairs else nv == post)
+            cons.append(smt_eq(nv, z3.substitute(post, *pairs) if pairs else post))
         self.X.append(X)
         for _, var, dom in ts.inputs:
             if not z3.is_true(dom):
@@ -250,7 +250,7 @@ def check_one(ts: System, name, prop, depth, timeout_ms, no_fault):
         ind.add(*cons)
         for j in range(0, k):
             if ts.state:
-                ind.add(lor(*[iu.X[j][var] != iu.X[k][var] for _, var, _, _ in ts.state]))
+                ind.add(lor(*[lnot(smt_eq(iu.X[j][var], iu.X[k][var])) for _, var, _, _ in ts.state]))
         if ind_pairs is not None:
             ind.add(*good(ind_pairs))
         ind_pairs = pairs

@@ -17,7 +17,7 @@ from iec2kmod.checks.types import EnumT, SubrangeT, concrete
 from iec2kmod.interp.machine import LOOP_BUDGET, Machine
 from iec2kmod.verify import build
 from iec2kmod.verify.cex import leaf_value, lookup
-from iec2kmod.verify.encode import base_of, const_of, kind, py_value, signed, width
+from iec2kmod.verify.encode import smt_eq, base_of, const_of, kind, py_value, signed, width
 from iec2kmod.diagnostics import Diagnostics
 
 
@@ -59,6 +59,15 @@ def same(a, b):
     return a == b
 
 
+def _model(pairs):
+    """A z3 model giving each pre-state and input constant its value."""
+    s = z3.Solver()
+    for var, val in pairs:
+        s.add(smt_eq(var, val))
+    assert s.check() == z3.sat
+    return s.model()
+
+
 def run(project, cycles, seed):
     """Returns a list of differences (empty when the engines agree) and
     the number of cycles compared."""
@@ -91,7 +100,8 @@ def run(project, cycles, seed):
             if fault is not None:
                 break
         pairs = list(state.items()) + list(ins.items())
-        mine_fault = any(z3.is_true(z3.simplify(z3.substitute(c, *pairs)))
+        model = _model(pairs)
+        mine_fault = any(z3.is_true(model.eval(c, model_completion=True))
                          for c, *_ in ts.faults)
         if (fault is not None) != mine_fault:
             diffs.append((k, "fault", fault.kind if fault else None, mine_fault))
@@ -100,7 +110,7 @@ def run(project, cycles, seed):
             break
         new = {}
         for leaf, var, _, post in ts.state:
-            v = z3.simplify(z3.substitute(post, *pairs))
+            v = model.eval(post, model_completion=True)
             new[var] = v
             mine = py_value(v, leaf.type)
             theirs = leaf_value(m, leaf, now)
