@@ -229,6 +229,7 @@ class Gen:
         self.named_strings = []
         self.enums, self.subs, self.structs, self.arrays = [], [], [], []
         self.nres = 1
+        self.sfc_r = random.Random(f"sfc{seed}")
 
     # ------------------------------------------------------------ helpers
     def uid(self, stem):
@@ -1278,6 +1279,113 @@ class Gen:
         if self.chance(0.5):
             pou.vars.append(Var(self.uid("fz"), self.pick(REALS), "var", sink=True))
 
+    # ------------------------------------------------------------- SFC
+    QUALIFIERS = ("N", "N", "", "R", "S", "P", "P0", "P1", "L", "D", "SD", "DS", "SL")
+
+    def sfc_condition(self, scope, steps):
+        """The lines of a transition condition, ST (``:= e;``) or IL (``:``
+        and a simple instruction list), sometimes on a step's X or T."""
+        r = self.r
+        st = self.pick(steps)
+        on_step = self.chance(0.3)
+        ms = r.randint(0, 6) * 10
+        if self.chance(0.3):
+            self.feat("sfc_il_condition")
+            if not on_step:
+                return [" :"] + ["    " + ln for ln in self.expr_il_bool(scope)]
+            self.feat("sfc_step_t")
+            lines = [f"    LD {st}.T", f"    GE T#{ms}ms"] if self.chance(0.6) else \
+                [f"    LDN {st}.X"]
+            if self.chance(0.5):
+                lines.append(f"    {self.pick(['AND', 'OR'])} {self.il_operand(BOOL, scope)}")
+            return [" :"] + lines
+        if not on_step:
+            return [f" := {self.expr(BOOL, scope)};"]
+        self.feat("sfc_step_t")
+        cond = f"{st}.T >= T#{ms}ms" if self.chance(0.6) else f"NOT {st}.X"
+        if self.chance(0.5):
+            cond = f"({cond}) {self.pick(['AND', 'OR'])} ({self.expr(BOOL, scope)})"
+        return [f" := {cond};"]
+
+    def sfc_body(self, scope, pou):
+        """An SFC body: a ring of steps from the initial one (every step
+        reachable), extra divergent transitions (some with PRIORITY), a
+        simultaneous divergence and its convergence, ACTIONs in ST and IL,
+        BOOL variables as actions, every qualifier with literal or variable
+        times."""
+        r = self.r
+        ring = [self.uid("st") for _ in range(r.randint(2, 5))]
+        steps = list(ring)
+        trans = []                        # (name|None, priority|None, [from], [to])
+        for i, st in enumerate(ring):
+            trans.append((None, None, [st], [ring[(i + 1) % len(ring)]]))
+        for _ in range(r.randint(0, 2)):
+            a, b = self.pick(ring), self.pick(ring)
+            prio = r.randint(0, 3) if self.chance(0.5) else None
+            trans.append((self.uid("tr") if self.chance(0.5) else None, prio, [a], [b]))
+            self.feat("sfc_divergence")
+            if prio is not None:
+                self.feat("sfc_priority")
+        if self.chance(0.5):
+            k = r.randint(0, len(ring) - 1)
+            pa, pb = self.uid("st"), self.uid("st")
+            steps += [pa, pb]
+            trans.append((None, None, [ring[k]], [pa, pb]))
+            trans.append((None, None, [pa, pb], [ring[(k + 1) % len(ring)]]))
+            self.feat("sfc_simultaneous")
+        actions = []
+        for _ in range(r.randint(1, 3)):
+            name = self.uid("ac")
+            self.for_ranges = []
+            if self.chance(0.3):
+                body = self.il_body(scope, pou)
+                self.feat("sfc_il_action")
+            else:
+                body = self.stmts(scope, 0, r.randint(1, int(4 * self.size) + 1), {})
+            actions.append((name, body))
+        bool_vars = [v.name for v in scope if v.ty is BOOL and v.sec in ("var", "out")
+                     and not v.ro and not v.reserved and not v.sink]
+        times = [p for p, t in self.readable(scope, TIME) if self.plain(p)]
+        assocs = {st: [] for st in steps}
+        for st in steps:
+            for _ in range(r.randint(0, 3)):
+                if bool_vars and self.chance(0.2):
+                    target = self.pick(bool_vars)
+                    self.feat("sfc_variable_action")
+                else:
+                    target = self.pick(actions)[0]
+                q = self.pick(self.QUALIFIERS)
+                self.feat(f"sfc_q_{q or 'none'}")
+                if q in ("L", "D", "SD", "DS", "SL"):
+                    tm = "".join(self.pick(times)) if times and self.chance(0.3) else \
+                        f"T#{r.randint(0, 5) * 10}ms"
+                    assocs[st].append(f"{target}({q}, {tm})")
+                else:
+                    assocs[st].append(f"{target}({q})")
+        out = []
+        for i, st in enumerate(steps):
+            kw = "INITIAL_STEP" if i == 0 else "STEP"
+            out.append(f"{kw} {st}:")
+            out += [f"    {a};" for a in assocs[st]]
+            out.append("END_STEP")
+        for name, prio, src, dst in trans:
+            head = "TRANSITION"
+            if name:
+                head += f" {name}"
+            if prio is not None:
+                head += f" (PRIORITY := {prio})"
+            fr = src[0] if len(src) == 1 else f"({', '.join(src)})"
+            to = dst[0] if len(dst) == 1 else f"({', '.join(dst)})"
+            cond = self.sfc_condition(scope, steps)
+            out.append(f"{head} FROM {fr} TO {to}{cond[0]}")
+            out += cond[1:]
+            out.append("END_TRANSITION")
+        for name, body in actions:
+            out.append(f"ACTION {name}:")
+            out += body
+            out.append("END_ACTION")
+        return out
+
     def make_function(self):
         r = self.r
         name = self.uid(self.p + "fn")
@@ -1379,7 +1487,13 @@ class Gen:
     def pou_body(self, pou):
         scope = list(pou.vars)
         self.for_ranges = []
-        if self.chance(0.25):
+        # SFC is decided by a generator of its own, so that projects without
+        # SFC stay those the seeds gave before SFC was added
+        if self.sfc_r.random() < 0.12:
+            pou.lang = "SFC"
+            self.feat("sfc")
+            pou.body = self.sfc_body(scope, pou)
+        elif self.chance(0.25):
             pou.lang = "IL"
             self.feat("il_body")
             pou.body = self.il_body(scope, pou)
