@@ -316,7 +316,8 @@ def _expand(path, lvalue, t, writable, owner, out, budget):
             if v.section in ("VAR_INPUT", "VAR_OUTPUT") or (not pou.standard and
                                                              v.section == "VAR"):
                 _expand(f"{path}.{v.name}", f"{lvalue}.{N.member(pou, v.name)}", v.type,
-                        writable and v.section != "VAR_OUTPUT", owner, out, budget)
+                        writable and v.section != "VAR_OUTPUT" and v.step is None, owner, out,
+                        budget)
 
 
 def variable_table(globals_, instances) -> list[TableEntry]:
@@ -328,8 +329,9 @@ def variable_table(globals_, instances) -> list[TableEntry]:
         for v in ip.pou.vars.values():
             if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
                 continue
+            # an SFC step changes only by its transitions: read-only
             _expand(f"{ip.path}.{v.name}", f"{ip.c_name}.{N.var(v.name)}", v.type,
-                    not v.constant, ip.path, out, len(out) + 4096)
+                    not v.constant and v.step is None, ip.path, out, len(out) + 4096)
     return out
 
 

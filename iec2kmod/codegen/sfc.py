@@ -31,7 +31,9 @@ its own, iec2kmod/interp/sfc.py):
      without interruption (its T keeps counting); so does an active step
      that is activated again.  A step activated here is active for at least
      this cycle's actions and the next cycle's transition evaluation: it is
-     active for one cycle at least.
+     active for one cycle at least.  Transitions come first in every cycle:
+     an initial step whose transition is TRUE in the first cycle is left
+     before its actions ever run (as in MatIEC's generated code).
   5. Action control: for every action, each qualifier input of its
      ACTION_CONTROL block is the OR of the X flags (after clearing) of the
      steps that associate it with that qualifier (no qualifier is N; P and

@@ -318,7 +318,8 @@ class Machine:
             for v in inst.pou.vars.values():
                 if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
                     continue
-                self._expand(f"{path}.{v.name}", v.type, not v.constant, path, inst.v,
+                self._expand(f"{path}.{v.name}", v.type, not v.constant and v.step is None,
+                             path, inst.v,
                              (v.key,), out, len(out) + 4096)
         for address in sorted(self.directs):
             t = self.direct_types[address]
@@ -376,7 +377,8 @@ class Machine:
                 if v.section in ("VAR_INPUT", "VAR_OUTPUT") or (not pou.standard and
                                                              v.section == "VAR"):
                     self._expand(f"{path}.{v.name}", v.type,
-                                 writable and v.section != "VAR_OUTPUT", owner, root,
+                                 writable and v.section != "VAR_OUTPUT" and v.step is None,
+                                 owner, root,
                                  keys + (v.key,), out, budget)
 
 

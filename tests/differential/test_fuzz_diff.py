@@ -35,7 +35,10 @@ MUST_REACH = {
     "located_I", "located_Q", "located_M", "var_constant", "var_temp", "std_fb_TON",
     "std_fb_TOF", "std_fb_TP", "std_fb_CTUD", "std_fb_R_TRIG", "std_fb_F_TRIG", "std_fb_SR",
     "std_fb_RS", "fuzzy_real", "edge_input", "user_function", "global_constant",
-    "fb_inout_instance",
+    "fb_inout_instance", "sfc", "sfc_simultaneous", "sfc_divergence", "sfc_priority",
+    "sfc_il_condition", "sfc_il_action", "sfc_step_t", "sfc_variable_action", "sfc_q_none",
+    "sfc_q_N", "sfc_q_R", "sfc_q_S", "sfc_q_P", "sfc_q_P0", "sfc_q_P1", "sfc_q_L", "sfc_q_D",
+    "sfc_q_SD", "sfc_q_DS", "sfc_q_SL",
 }
 
 
