@@ -1102,6 +1102,10 @@ class Encoder:
                 inst.e[v.key] = ite(g, e, inst.e.get(v.key, FALSE))
                 inst.e["$" + v.key] = ite(g, cur, prev)
         node = pou.node
+        if node.language == "SFC":
+            # steps, transitions and action control are not encoded: an
+            # empty body here would give verdicts about a different program
+            self.refuse(pou, node.pos, "an SFC body (steps, transitions, actions)")
         if node.language == "IL":
             self.il_body(node.body, frame, g)
         else:

@@ -230,6 +230,7 @@ class Gen:
         self.enums, self.subs, self.structs, self.arrays = [], [], [], []
         self.nres = 1
         self.sfc_r = random.Random(f"sfc{seed}")
+        self.sfc = True
 
     # ------------------------------------------------------------ helpers
     def uid(self, stem):
@@ -1489,7 +1490,7 @@ class Gen:
         self.for_ranges = []
         # SFC is decided by a generator of its own, so that projects without
         # SFC stay those the seeds gave before SFC was added
-        if self.sfc_r.random() < 0.12:
+        if self.sfc and self.sfc_r.random() < 0.12:
             pou.lang = "SFC"
             self.feat("sfc")
             pou.body = self.sfc_body(scope, pou)
@@ -1757,8 +1758,12 @@ class Gen:
         raise AssertionError(t)
 
 
-def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0) -> Unit:
+def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
+                  sfc: bool = True) -> Unit:
+    """``sfc=False``: no SFC bodies -- the same project the seed gave before
+    the generator knew SFC (SFC is decided by a random generator of its own)."""
     g = Gen(seed, k, size)
+    g.sfc = sfc
     g._dims = {}
     g.for_ranges = []
     return g.unit(cycles)

@@ -250,5 +250,31 @@ def test_differential_progen(tmp_path):
     picked = random.Random(0).sample(PROGEN_SEEDS, 8)
     for seed in picked:
         f = tmp_path / f"seed{seed}.st"
-        f.write_text(progen.generate_unit(seed, 0, size=0.5).standalone())
+        # the encoding refuses SFC bodies: the seeds' projects without them
+        f.write_text(progen.generate_unit(seed, 0, size=0.5, sfc=False).standalone())
         _check([f], 20, [seed])
+
+
+def test_sfc_body_is_refused(tmp_path, capsys):
+    # the encoding has no steps or action control: a verdict would be about
+    # an empty body, so an SFC body is refused with its position
+    proj = project(tmp_path, """
+        PROGRAM Seq
+        VAR_OUTPUT n : INT; END_VAR
+        {verify bounded: n <= 10}
+        INITIAL_STEP S0: Count(N); END_STEP
+        TRANSITION FROM S0 TO S0 := n > 5; END_TRANSITION
+        ACTION Count: n := n + 1; END_ACTION
+        END_PROGRAM
+        CONFIGURATION C
+            RESOURCE R ON CPU0
+                TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+                PROGRAM s WITH t : Seq;
+            END_RESOURCE
+        END_CONFIGURATION
+    """)
+    rc, out, err = verify(capsys, proj)
+    assert rc == 1, err
+    assert "p.st:2:1: error: verify: an SFC body (steps, transitions, actions) cannot be " \
+           "encoded exactly" in err, err
+    assert "Traceback" not in err
