@@ -3,8 +3,10 @@
 live variables.
 
     plc-manager load DIR [--no-start]      insert a built project, start its tasks
-    plc-manager swap NEW                   hot code change (a rebuilt program-type
-                                           module, its directory, or a rebuilt project)
+    plc-manager swap NEW [--restart]       hot code change (a rebuilt program-type
+                                           module, its directory, or a rebuilt project);
+                                           --restart: then restart the tasks stopped on
+                                           a fault that run the swapped program types
     plc-manager stop [--keep-loaded] [--resource R]
     plc-manager start [--resource R]
     plc-manager status [--json]
@@ -89,6 +91,13 @@ def fmt_since(since_ns: int, now_ns: int) -> str:
     return f"{t:%Y-%m-%d %H:%M:%S} ({ago})"
 
 
+def fmt_time(ns: Optional[int]) -> str:
+    """A CLOCK_REALTIME time of the kernel, to the millisecond."""
+    if not ns:
+        return "-"
+    return _dt.datetime.fromtimestamp(ns / 1e9).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3]
+
+
 def status_text(st) -> str:
     out = [f"configuration {st.configuration}  module {st.module}  sources {st.source_hash}  "
            f"interface {st.interface_hash}  forced variables {st.forced}", ""]
@@ -107,20 +116,28 @@ def status_text(st) -> str:
                      f"{fmt_us(t.exec_min_ns)}/{fmt_us(t.exec_avg_ns)}/{fmt_us(t.exec_max_ns)}"
                      if ran else "-",
                      f"{fmt_us(t.latency_avg_ns)}/{fmt_us(t.latency_max_ns)}" if ran else "-",
-                     t.overruns, t.faults])
+                     t.overruns, t.faults, max(t.starts - 1, 0),
+                     fmt_time(t.started_ns) if t.starts > 1 else "-"])
         if t.fault:
-            faults.append(f"  {t.path}: {t.fault} in {t.fault_pou} line {t.fault_line}")
+            when = f" at {fmt_time(t.fault_ns)}" if t.fault_ns else ""
+            what = f"{t.fault} in {t.fault_pou} line {t.fault_line}{when}"
+            if t.state == "fault":
+                faults.append(f"  {t.path}: stopped on a fault: {what}")
+            else:
+                faults.append(f"  {t.path}: last fault: {what}; restarted at "
+                              f"{fmt_time(t.started_ns)}")
         if (t.in_cycle_ns or 0) >= 100_000_000:
             long.append(f"  {t.path}: inside one cycle for {t.in_cycle_ns // 1_000_000} ms")
     if rows:
         out += ["", table(["TASK", "STATE", "PERIOD", "PRIO", "CPU", "CYCLES",
-                           "EXEC us min/avg/max", "JITTER us avg/max", "OVERRUNS", "FAULTS"],
-                          rows, right=(3, 4, 5, 8, 9))]
+                           "EXEC us min/avg/max", "JITTER us avg/max", "OVERRUNS", "FAULTS",
+                           "RESTARTS", "LAST RESTART"],
+                          rows, right=(3, 4, 5, 8, 9, 10))]
     if sel:
         out += ["", table(["TASK", "BLOCKS EVALUATED", "SKIPPED", "SKIPPED %"], sel,
                           right=(1, 2, 3))]
     if faults:
-        out += ["", "faults:"] + faults
+        out += ["", "faults (the last one of each task since the load):"] + faults
     if long:
         out += ["", "tasks inside a long cycle (stop and unload wait for them, with a bound):"] + long
     out += ["", table(["SLOT", "PROGRAM TYPE", "MODULE", "BUILD", "SINCE"],
@@ -173,10 +190,11 @@ def cmd_load(a) -> int:
 
 def cmd_swap(a) -> int:
     from . import ops
-    rep = ops.swap(a.new, progress=_quiet if a.json else _say)
+    rep = ops.swap(a.new, restart=a.restart, progress=_quiet if a.json else _say)
     if a.json:
         print(json.dumps({"check_ms": rep.check_ms, "total_ms": rep.total_ms,
-                          "steps": [s.__dict__ for s in rep.steps]}))
+                          "steps": [s.__dict__ for s in rep.steps],
+                          "restarted": rep.restarted}))
     elif rep.steps:
         _say(f"swap done in {rep.total_ms:.1f} ms (checks {rep.check_ms:.1f} ms)")
     return 0
@@ -325,6 +343,9 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("swap", help="hot code change of program types")
     s.add_argument("new", help="a rebuilt program-type module (.ko or its directory) or a "
                                "rebuilt project directory")
+    s.add_argument("--restart", action="store_true",
+                   help="then restart the tasks of the swapped program types that are "
+                        "stopped on a fault (their state is kept)")
     s.add_argument("--json", action="store_true", help="timings as JSON")
     s.set_defaults(func=cmd_swap)
 

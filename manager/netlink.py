@@ -79,6 +79,9 @@ ATTRIBUTES = [
     ("IEC_A_IN_CYCLE_NS", "int64"),
     ("IEC_A_SEL_EVALUATED", "uint64"),
     ("IEC_A_SEL_SKIPPED", "uint64"),
+    ("IEC_A_STARTS", "uint64"),
+    ("IEC_A_STARTED_NS", "int64"),
+    ("IEC_A_FAULT_NS", "int64"),
 ]
 
 STATES = {0: "stopped", 1: "running", 2: "fault"}
@@ -129,12 +132,17 @@ class Task:
     latency_avg_ns: int
     latency_max_ns: int
     histogram: List[int]
+    # the last fault since the load (kept across a restart; the state says
+    # whether the task is stopped on it), when it happened (CLOCK_REALTIME)
     fault: Optional[str] = None
     fault_pou: Optional[str] = None
     fault_line: Optional[int] = None
     in_cycle_ns: Optional[int] = None    # inside a cycle now, for so long
     sel_evaluated: Optional[int] = None  # --selective modules: blocks evaluated
     sel_skipped: Optional[int] = None    # and skipped
+    fault_ns: Optional[int] = None
+    starts: int = 0                      # since the load: more than one, restarted
+    started_ns: int = 0                  # CLOCK_REALTIME of the last start
 
     @property
     def path(self) -> str:
@@ -234,7 +242,9 @@ def _task_from(nl, resource: str) -> Task:
         histogram=[int.from_bytes(hist[i:i + 8], "little") for i in range(0, len(hist), 8)],
         fault=a.get("IEC_A_FAULT_NAME"), fault_pou=a.get("IEC_A_FAULT_POU"),
         fault_line=a.get("IEC_A_FAULT_LINE"), in_cycle_ns=a.get("IEC_A_IN_CYCLE_NS"),
-        sel_evaluated=a.get("IEC_A_SEL_EVALUATED"), sel_skipped=a.get("IEC_A_SEL_SKIPPED"))
+        sel_evaluated=a.get("IEC_A_SEL_EVALUATED"), sel_skipped=a.get("IEC_A_SEL_SKIPPED"),
+        fault_ns=a.get("IEC_A_FAULT_NS"), starts=a.get("IEC_A_STARTS", 0),
+        started_ns=a.get("IEC_A_STARTED_NS", 0))
 
 
 def _status_from(msg) -> Status:

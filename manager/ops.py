@@ -369,6 +369,7 @@ class SwapReport:
     check_ms: float = 0.0
     steps: List[SwapStep] = field(default_factory=list)
     total_ms: float = 0.0
+    restarted: List[str] = field(default_factory=list)     # tasks restarted (--restart)
 
 
 def _tasks_running_type(manifest: Optional[dict], type_name: str) -> List[str]:
@@ -379,7 +380,11 @@ def _tasks_running_type(manifest: Optional[dict], type_name: str) -> List[str]:
                    if i["type"].upper() == type_name.upper() and i.get("task")})
 
 
-def swap(new: str, progress: Progress = _quiet) -> SwapReport:
+def swap(new: str, restart: bool = False, progress: Progress = _quiet) -> SwapReport:
+    """Hot code change of the program types NEW names.  *restart*: then
+    restart every task that is stopped on a fault and runs an instance of a
+    swapped type (one command from a fault to running again: the program
+    instances keep their state), and wait for a cycle of each."""
     kmod.require(kmod.CAP_SYS_MODULE, "swap")
     t_cmd = time.perf_counter()
     t_wall = time.time_ns()
@@ -398,14 +403,68 @@ def swap(new: str, progress: Progress = _quiet) -> SwapReport:
             _check_interface(cand, st, state)
         for cand in cands:
             _check_candidate(cand, st, loaded)
+        manifest = state.manifest if state is not None else cands[0].manifest
+        if restart and not (manifest and "instances" in manifest):
+            raise UsageError("swap --restart needs the manifest of the running configuration "
+                             "(saved by plc-manager load, or beside the new modules) to know "
+                             "which tasks run the swapped program types")
         rep.check_ms = _ms(t_cmd, time.perf_counter())
         for cand in cands:
             step, st = _swap_one(c, cand, st, state, t_cmd, t_wall, progress)
             rep.steps.append(step)
         if state is not None:
             state.save()
+        if restart:
+            rep.restarted = _restart_faulted(c, manifest, [x.type_name for x in cands],
+                                             progress)
     rep.total_ms = _ms(t_cmd, time.perf_counter())
     return rep
+
+
+def _restart_faulted(c: Client, manifest: dict, types: Sequence[str],
+                     progress: Progress) -> List[str]:
+    """Starts, one by one, the tasks stopped on a fault that run one of
+    *types*; waits until each completed a cycle since.  A task that faults
+    again fails the command, naming the fault."""
+    using = set()
+    for t in types:
+        using.update(_tasks_running_type(manifest, t))
+    st = c.status()
+    faulted = [t for t in st.tasks() if t.state == "fault" and t.path.lower() in using]
+    if not faulted:
+        progress("no task running " + ", ".join(types) + " is stopped on a fault: nothing "
+                 "to restart")
+        return []
+    before = {t.path: t.cycles for t in faulted}
+    for t in faulted:
+        progress(f"restarting task {t.path} (stopped on a fault: {t.fault} in {t.fault_pou} "
+                 f"line {t.fault_line})")
+        c.start(t.path)
+    paths = set(before)
+
+    def ran(s: Status) -> bool:
+        return all(t.state == "running" and (t.cycles > before[t.path] or not t.interval_ns)
+                   for t in s.tasks() if t.path in paths)
+    timeout = 5.0 + 4 * max((t.interval_ns for t in faulted), default=0) / 1e9
+    deadline = time.monotonic() + timeout
+    while True:
+        st = c.status()
+        again = [t for t in st.tasks() if t.path in paths and t.state == "fault"]
+        if again:
+            t = again[0]
+            raise PLCError(f"task {t.path} faulted again after the restart: {t.fault} in "
+                           f"{t.fault_pou} line {t.fault_line}")
+        if ran(st):
+            break
+        if time.monotonic() > deadline:
+            raise PLCError(f"the restarted tasks ({', '.join(sorted(paths))}) completed no "
+                           f"cycle within {timeout:.0f} s")
+        time.sleep(0.005)
+    for t in st.tasks():
+        if t.path in paths:
+            progress(f"  task {t.path} runs again ({t.cycles - before[t.path]} cycles since "
+                     f"the restart, state kept)")
+    return sorted(paths)
 
 
 def _check_interface(cand: Candidate, st: Status, state: Optional[State]) -> None:

@@ -5,6 +5,9 @@
  * sysfs, for people and shell scripts (root-only, 0400 / 0200):
  *   /sys/kernel/iec2kmod/<configuration>/status    resources, tasks, slots
  *   /sys/kernel/iec2kmod/<configuration>/control   "start <resource>|all",
+ *                                                   "start <resource>.<task>"
+ *                                                   (that task alone: a
+ *                                                   restart after a fault),
  *                                                   "stop <resource>|all",
  *                                                   "run <resource>|all MS"
  *                                                   (start; every periodic
@@ -18,7 +21,8 @@
  *                                                   "clear <slot>|all"
  *
  * Generic netlink family "iec2kmod" (iec_nl.h), for plc-manager: status,
- * variable list/read/write/force/unforce, resource start/stop, slot clear.
+ * variable list/read/write/force/unforce, resource (or task) start, resource
+ * stop, slot clear.
  * Every command needs CAP_NET_ADMIN in the initial namespace and is checked
  * strictly against its own policy.  Commands run one at a time
  * (iec_ctl_mutex); they may sleep, but never while holding a raw lock.
@@ -499,7 +503,11 @@ static int iec_put_task(struct sk_buff *skb, struct iec_task *t)
 	if (s->fault_code &&
 	    (nla_put_string(skb, IEC_A_FAULT_NAME, iec_fault_name(s->fault_code)) ||
 	     nla_put_string(skb, IEC_A_FAULT_POU, s->fault_pou_name) ||
-	     nla_put_s32(skb, IEC_A_FAULT_LINE, s->fault_line)))
+	     nla_put_s32(skb, IEC_A_FAULT_LINE, s->fault_line) ||
+	     nla_put_s64(skb, IEC_A_FAULT_NS, ktime_to_ns(s->fault_time), IEC_A_PAD)))
+		goto cancel;
+	if (nla_put_u64_64bit(skb, IEC_A_STARTS, s->starts, IEC_A_PAD) ||
+	    nla_put_s64(skb, IEC_A_STARTED_NS, ktime_to_ns(s->started), IEC_A_PAD))
 		goto cancel;
 	nla_nest_end(skb, nest);
 	return 0;
@@ -1002,8 +1010,33 @@ out:
 	return err;
 }
 
+/* The task "<resource>.<task>" names, or NULL; *r is its resource. */
+static struct iec_task *iec_task_find(const char *name, struct iec_resource **r)
+{
+	const char *dot = strchr(name, '.');
+	struct iec_resource *res;
+	u32 i;
+
+	if (!dot)
+		return NULL;
+	list_for_each_entry(res, &iec_resources, node) {
+		if (strlen(res->name) != dot - name ||
+		    strncasecmp(name, res->name, dot - name))
+			continue;
+		for (i = 0; i < res->ntasks; i++) {
+			if (!strcasecmp(dot + 1, res->tasks[i].name)) {
+				*r = res;
+				return &res->tasks[i];
+			}
+		}
+	}
+	return NULL;
+}
+
 /*
- * start/stop one resource by name, or all of them (name NULL or "all").
+ * start/stop one resource by name, or all of them (name NULL or "all");
+ * start also takes one task, "<resource>.<task>" (a restart: the other
+ * tasks of its resource are left as they are).
  * A stop returns once every task it stopped acknowledged (its thread is
  * idle: no cycle runs, the resource module may go), or -ETIMEDOUT after
  * the bound, naming the task that did not.
@@ -1013,6 +1046,7 @@ static int iec_control_resource(const char *name, bool start, u32 run_ms)
 	/* a common first release, late enough for every task to be asleep */
 	ktime_t epoch = ktime_add_ms(ktime_get(), IEC_START_DELAY_MS);
 	struct iec_resource *r;
+	struct iec_task *t;
 	unsigned long deadline;
 	s64 longest = 0;
 	int ret = -ENOENT;
@@ -1021,6 +1055,18 @@ static int iec_control_resource(const char *name, bool start, u32 run_ms)
 	if (name && !strcmp(name, "all"))
 		name = NULL;
 	mutex_lock(&iec_resources_lock);
+	if (name && strchr(name, '.')) {
+		t = iec_task_find(name, &r);
+		if (t && start) {
+			r->epoch = epoch;
+			r->until = run_ms ? ktime_add_ms(epoch, run_ms) : 0;
+			ret = r->start_task(r, t - r->tasks);
+		} else if (t) {
+			ret = -EOPNOTSUPP;	/* a stop is per resource */
+		}
+		mutex_unlock(&iec_resources_lock);
+		return ret;
+	}
 	list_for_each_entry(r, &iec_resources, node) {
 		if (name && strcasecmp(name, r->name))
 			continue;
@@ -1065,7 +1111,10 @@ static int iec_nl_res(struct genl_info *info, bool start)
 	mutex_unlock(&iec_ctl_mutex);
 	if (err == -ENOENT)
 		NL_SET_ERR_MSG_ATTR(info->extack, info->attrs[IEC_A_NAME],
-				    "no such resource");
+				    "no such resource or task");
+	else if (err == -EOPNOTSUPP)
+		NL_SET_ERR_MSG_ATTR(info->extack, info->attrs[IEC_A_NAME],
+				    "tasks are stopped by resource");
 	else if (err == -ETIMEDOUT)
 		NL_SET_ERR_MSG(info->extack,
 			       "a task does not come back from its cycle (kernel log, status: in_cycle)");
@@ -1239,7 +1288,7 @@ static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
 			int st = READ_ONCE(t->state);
 
 			iec_emit(buf, &len,
-				 "task %s.%s state %s interval_ns %lld priority %d cycles %llu overruns %llu exec_min_ns %lld exec_max_ns %lld exec_avg_ns %lld latency_max_ns %lld faults %llu fault %s pou %s line %d in_cycle_ms %lld\n",
+				 "task %s.%s state %s interval_ns %lld priority %d cycles %llu overruns %llu exec_min_ns %lld exec_max_ns %lld exec_avg_ns %lld latency_max_ns %lld faults %llu fault %s pou %s line %d in_cycle_ms %lld starts %llu\n",
 				 r->name, t->name,
 				 st >= 0 && st <= IEC_TASK_FAULT ? iec_state_names[st] : "?",
 				 t->interval_ns, t->priority, s->cycles,
@@ -1250,7 +1299,8 @@ static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
 				 s->fault_code ? s->fault_pou_name : "-",
 				 s->fault_line,
 				 (smp_load_acquire(&t->cycle_seq) & 1) ?
-				 ktime_ms_delta(ktime_get(), READ_ONCE(t->cycle_start)) : -1LL);
+				 ktime_ms_delta(ktime_get(), READ_ONCE(t->cycle_start)) : -1LL,
+				 s->starts);
 		}
 	}
 	mutex_unlock(&iec_resources_lock);

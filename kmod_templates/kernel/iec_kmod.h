@@ -86,7 +86,14 @@ struct iec_task_stats {
 	s64 latency_max_ns;	/* release jitter: wake-up minus deadline */
 	s64 latency_sum_ns;
 	u64 hist[IEC_HIST_BUCKETS];	/* latency, 1 us buckets, last: more */
-	/* the first fault since the last start */
+	u64 starts;		/* since the load; more than one: restarted */
+	ktime_t started;	/* CLOCK_REALTIME of the last start */
+	/*
+	 * The last fault (one per start: a fault stops the task), kept
+	 * across a restart; the task's state says whether it is stopped on
+	 * it.  fault_code 0: none since the load.
+	 */
+	ktime_t fault_time;	/* CLOCK_REALTIME of it */
 	int fault_code;
 	const char *fault_pou;	/* points into a program module: use the copy */
 	int fault_line;
@@ -169,6 +176,8 @@ struct iec_resource {
 	struct module *owner;
 	/* control, implemented by the resource runtime (static there) */
 	int (*start)(struct iec_resource *res);
+	/* starts tasks[i] alone if it is not running (a restart) */
+	int (*start_task)(struct iec_resource *res, u32 i);
 	void (*stop)(struct iec_resource *res);
 	/*
 	 * First release of the periodic tasks at the next start, set by the

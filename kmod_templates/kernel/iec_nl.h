@@ -16,7 +16,7 @@
  *   IEC_CMD_VAR_SET     VAR{PATH | TABLE+INDEX, VALUE}...
  *   IEC_CMD_VAR_FORCE   VAR{PATH | TABLE+INDEX, VALUE}...
  *   IEC_CMD_VAR_UNFORCE VAR{PATH | TABLE+INDEX}... or ALL
- *   IEC_CMD_RES_START   [NAME]  (no NAME: every resource)
+ *   IEC_CMD_RES_START   [NAME]  (no NAME: every resource; "res.task": one task)
  *   IEC_CMD_RES_STOP    [NAME]
  *   IEC_CMD_SLOT_CLEAR  [SLOT_INDEX]  (none: every slot)
  *
@@ -75,7 +75,7 @@ enum iec_nl_attr {
 	IEC_A_LAT_AVG_NS,	/* s64: release jitter */
 	IEC_A_LAT_MAX_NS,	/* s64 */
 	IEC_A_HIST,		/* binary: u64[IEC_HIST_BUCKETS] latency, 1 us */
-	IEC_A_FAULT_NAME,	/* string: first fault since the last start */
+	IEC_A_FAULT_NAME,	/* string: the last fault (kept across a restart) */
 	IEC_A_FAULT_POU,	/* string */
 	IEC_A_FAULT_LINE,	/* s32 */
 	IEC_A_BUILD_ID,		/* string */
@@ -98,6 +98,9 @@ enum iec_nl_attr {
 	IEC_A_IN_CYCLE_NS,	/* s64: time inside the current cycle, if in one */
 	IEC_A_SEL_EVALUATED,	/* u64: blocks evaluated (--selective modules) */
 	IEC_A_SEL_SKIPPED,	/* u64: blocks skipped (--selective modules) */
+	IEC_A_STARTS,		/* u64: starts of a task since the load */
+	IEC_A_STARTED_NS,	/* s64: CLOCK_REALTIME of its last start */
+	IEC_A_FAULT_NS,		/* s64: CLOCK_REALTIME of its last fault */
 	__IEC_A_MAX
 };
 #define IEC_A_MAX (__IEC_A_MAX - 1)

@@ -111,6 +111,7 @@ static void iec_task_cycle(struct iec_task *t, ktime_t release)
 			t->ctx.fault_pou ? t->ctx.fault_pou : "?",
 			sizeof(t->stats.fault_pou_name));
 		t->stats.fault_line = t->ctx.fault_line;
+		t->stats.fault_time = ktime_get_real();
 		smp_store_release(&t->state, IEC_TASK_FAULT);
 		pr_warn("iec2kmod: task %s.%s stopped: %s in %s line %d\n",
 			t->res->name, t->name, iec_fault_name(t->ctx.fault),
@@ -295,26 +296,34 @@ static int iec_task_create(struct iec_resource *res, struct iec_task *t)
 	return 0;
 }
 
+/* Starts a task that is stopped or stopped on a fault; its fault stays
+ * recorded (the last fault), its program instances keep their state. */
+static int iec_resource_start_task(struct iec_resource *res, u32 i)
+{
+	struct iec_task *t;
+
+	if (i >= res->ntasks)
+		return -EINVAL;
+	t = &res->tasks[i];
+	if (smp_load_acquire(&t->state) == IEC_TASK_RUNNING)
+		return 0;
+	iec_fault_clear(&t->ctx);
+	t->stats.starts++;
+	t->stats.started = ktime_get_real();
+	WRITE_ONCE(t->event_pending, false);
+	t->first = res->epoch;
+	t->until = res->until;
+	smp_store_release(&t->state, IEC_TASK_RUNNING);
+	wake_up_process(t->thread);
+	return 0;
+}
+
 static int iec_resource_start(struct iec_resource *res)
 {
 	u32 i;
 
-	for (i = 0; i < res->ntasks; i++) {
-		struct iec_task *t = &res->tasks[i];
-
-		if (smp_load_acquire(&t->state) == IEC_TASK_RUNNING)
-			continue;
-		iec_fault_clear(&t->ctx);
-		t->stats.fault_code = 0;
-		t->stats.fault_pou = NULL;
-		t->stats.fault_pou_name[0] = '\0';
-		t->stats.fault_line = 0;
-		WRITE_ONCE(t->event_pending, false);
-		t->first = res->epoch;
-		t->until = res->until;
-		smp_store_release(&t->state, IEC_TASK_RUNNING);
-		wake_up_process(t->thread);
-	}
+	for (i = 0; i < res->ntasks; i++)
+		iec_resource_start_task(res, i);
 	return 0;
 }
 
@@ -352,6 +361,7 @@ static int iec_resource_init(struct iec_resource *res)
 	int ret;
 
 	res->start = iec_resource_start;
+	res->start_task = iec_resource_start_task;
 	res->stop = iec_resource_stop;
 	for (i = 0; i < res->ntasks; i++) {
 		ret = iec_task_create(res, &res->tasks[i]);

@@ -194,3 +194,67 @@ def test_stop_removes_what_a_killed_load_left(guest, faults, partial):
     finally:
         for name in reversed(want):
             guest.run(f"rmmod {name} 2>/dev/null")
+
+
+@pytest.fixture(scope="module")
+def fixed(faults, kdir):
+    """Faulty rebuilt to divide by MAX(divisor, 1) (same interface): only
+    its program-type module is built, a project directory to swap in."""
+    import subprocess
+    import sys
+    from iec2kmod import kbuild
+    work, tree, manifest, _ = faults
+    src = work / "src_fixed"
+    src.mkdir(exist_ok=True)
+    text = (PROJECT / "faults.st").read_text()
+    assert "1000 / divisor;" in text
+    (src / "faults.st").write_text(text.replace("1000 / divisor;", "1000 / MAX(divisor, 1);"))
+    out = work / "fixed"
+    if out.exists():
+        shutil.rmtree(out)
+    p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "gen", str(src), "-o", str(out)],
+                       cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stdout + p.stderr
+    (d,) = [p for p in out.iterdir() if p.name.startswith("iec_faults_p_faulty_")]
+    kbuild.build_modules(str(d), kdir=kdir, extra_args=[
+        f"KBUILD_EXTRA_SYMBOLS={tree / 'Module.symvers'}"]).check()
+    return out
+
+
+def read(guest, pmdir, *names) -> dict:
+    out = ok(guest, pmdir, "read", "--json", *names)
+    return {v["path"]: v["value"] for v in json.loads(out)}
+
+
+def test_swap_restart_recovers_a_faulted_task_in_one_command(guest, faults, fixed):
+    work, tree, manifest, pmdir = faults
+    assert loaded_modules(guest) == []
+    ok(guest, pmdir, "load", tree)
+    try:
+        ok(guest, pmdir, "write", "divisor", "0")
+        ts = wait_state(guest, pmdir, "r0.ta", "fault")
+        runs = read(guest, pmdir, "r0.pf.runs")["r0.pf.runs"]
+        assert runs > 0 and ts["r0.ta"]["starts"] == 1 and ts["r0.ta"]["faults"] == 1
+        t_fault = ts["r0.ta"]["fault_ns"]
+
+        out = ok(guest, pmdir, "swap", "--restart", fixed)
+        assert f"restarting task r0.ta (stopped on a fault: {FAULT})" in out, out
+        assert "task r0.ta runs again" in out, out
+        ts = tasks(guest, pmdir)
+        ta = ts["r0.ta"]
+        assert ta["state"] == "running" and ts["r1.tb"]["state"] == "running", ts
+        # the fault stays known: count, what, when; the restart's time
+        assert ta["faults"] == 1 and ta["starts"] == 2, ta
+        assert f'{ta["fault"]} in {ta["fault_pou"]} line {ta["fault_line"]}' == FAULT, ta
+        assert ta["fault_ns"] == t_fault and ta["started_ns"] > t_fault, ta
+        # the new body runs, the instance kept its state
+        v = read(guest, pmdir, "r0.pf.runs", "quotient")
+        assert v["quotient"] == 1000 and v["r0.pf.runs"] > runs, (v, runs)
+        text = ok(guest, pmdir, "status")
+        line = next(ln for ln in text.splitlines() if ln.strip().startswith("r0.ta:"))
+        assert f"last fault: {FAULT} at " in line and "; restarted at " in line, text
+        # the same build again: nothing to swap, nothing restarted
+        rc, out = pm(guest, pmdir, "swap", "--restart", fixed)
+        assert rc == 0 and "runs already" in out and "restart" not in out, out
+    finally:
+        stop_clean(guest, pmdir)

@@ -106,3 +106,18 @@ def test_status_shows_a_long_cycle():
     assert "tasks inside a long cycle" in text
     assert "rheavy.heavy: inside one cycle for 3456 ms" in text
     assert "rbeat.beat: inside" not in text
+
+
+def test_status_shows_the_last_fault_and_the_restart():
+    st = _status()
+    t = st.resources[0].tasks[0]
+    t.state, t.fault, t.fault_pou, t.fault_line = "fault", "division by zero", "Faulty", 15
+    t.fault_ns, t.starts, t.started_ns = 1_700_000_000_123_000_000, 1, 1_699_999_990_000_000_000
+    text = cli.status_text(st)
+    assert f"{t.path}: stopped on a fault: division by zero in Faulty line 15 at " \
+           f"{cli.fmt_time(t.fault_ns)}" in text, text
+    t.state, t.starts, t.started_ns = "running", 2, 1_700_000_005_000_000_000
+    text = cli.status_text(st)
+    assert f"{t.path}: last fault: division by zero in Faulty line 15 at " \
+           f"{cli.fmt_time(t.fault_ns)}; restarted at {cli.fmt_time(t.started_ns)}" in text, text
+    assert "RESTARTS" in text and "LAST RESTART" in text
