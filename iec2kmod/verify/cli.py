@@ -86,7 +86,9 @@ def run_verify(args) -> int:
                 return EXIT_INTERNAL
             text += f"\n{'':{width + 4}}counterexample: {csv_path} (sim --inputs), {vcd_path}"
         else:
-            text = r.status
+            text = f"holds up to {r.cycle} cycles; cycle {r.cycle + 1} undecided (solver " \
+                   "time limit, see --timeout)"
+            worst = max(worst, EXIT_BOUNDED) if worst != EXIT_VIOLATED else worst
         print(f"  {r.name:<{width}}  {text}")
     if faulty and any(r.status != "violated" for r in out.results[1:]):
         print("note: a runtime error is reachable; the other properties were checked on the "

@@ -32,8 +32,9 @@ PRAGMA = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\
                     r"(\{\s*(verify|assume)\b\s*([A-Za-z_][A-Za-z0-9_]*)?\s*:([^}]*)\})",
                     re.S | re.I)
 POU_SPAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
-                      r"\{[^}]*\}|\b(PROGRAM|END_PROGRAM|FUNCTION_BLOCK|END_FUNCTION_BLOCK|"
-                      r"FUNCTION|END_FUNCTION)\b(\s+([A-Za-z_][A-Za-z0-9_]*))?", re.S | re.I)
+                      r"\{[^}]*\}|\b(END_PROGRAM|END_FUNCTION_BLOCK|END_FUNCTION)\b|"
+                      r"\b(PROGRAM|FUNCTION_BLOCK|FUNCTION)\s+([A-Za-z_][A-Za-z0-9_]*)",
+                      re.S | re.I)
 
 HEADER = "FUNCTION F__ : BOOL F__ := "
 
@@ -96,16 +97,12 @@ def _pou_spans(text):
     out = []
     stack = None
     for m in POU_SPAN.finditer(text):
-        kw = m.group(1)
-        if not kw:
-            continue
-        kw = kw.upper()
-        if kw.startswith("END_"):
+        if m.group(1):
             if stack is not None:
                 out.append((stack[0], stack[1], stack[2], m.end()))
             stack = None
-        elif m.group(3):
-            stack = (kw, m.group(3), m.start())
+        elif m.group(2):
+            stack = (m.group(2).upper(), m.group(3), m.start())
     return out
 
 
