@@ -93,8 +93,10 @@ def render_sim(project, selective=None):
         for ip in tp.instances:
             cf, lines = pe.connection_inputs(ip)
             block = cf.pre + lines
-            run = "_run" if selective is not None and selective.has_layout(ip.pou) else "_body"
-            block.append(f"{N.pou_prefix(ip.pou)}{run}(&{ip.c_name}, ctx);")
+            if selective is not None and selective.has_layout(ip.pou):
+                block.append(f"{N.pou_prefix(ip.pou)}_run(&{ip.c_name}, ctx, true);")
+            else:
+                block.append(f"{N.pou_prefix(ip.pou)}_body(&{ip.c_name}, ctx);")
             block.append("if (ctx->fault != IEC_FAULT_NONE)")
             block.append("\treturn;")
             block += pe.connection_outputs(ip)

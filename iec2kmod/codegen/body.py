@@ -603,7 +603,10 @@ class BodyEmitter:
             else:
                 kind = self.sel.call_kind(self.pou, inst)
             if kind == "sel":
-                lines.append(f"{N.pou_prefix(pou)}_run(&{base}, ctx);")
+                # fb: the caller may read the instance's state from before the
+                # call (selective.py, rule 4)
+                fb = "true" if self.sel.feedback(self.pou, inst) else "false"
+                lines.append(f"{N.pou_prefix(pou)}_run(&{base}, ctx, {fb});")
             else:
                 lines.append(f"{body_fn}(&{base}, ctx);")
             if kind == "plain":

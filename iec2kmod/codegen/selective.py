@@ -52,15 +52,28 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
 4. Settling.  An evaluation settles (the next call may skip) when it
    changed nothing it could read again: its written state (the members the
    body may write: outputs, internals, inputs it assigns, edge memories;
-   nested instances called selectively report instead, through
-   ``ctx->sel_changed``), the externals and the in-outs' targets are as
-   they were when it started, no nested evaluation reported a change, and
-   it was not the first evaluation after an epoch change.  Then running it
-   again would read the same values and, being deterministic, write the
-   same values: skipping it is invisible.  A counter (``n := n + 1``) never
-   settles and is evaluated every time.  A nested call whose inputs
-   changed reports a change to its caller (the caller's state is the
-   nested instance).
+   not those an ST body assigns as a whole before anything reads them,
+   whose value at the start is never read; nested instances called
+   selectively report instead, through ``ctx->sel_changed``), the
+   externals and in-outs' targets that anything in it writes are as they
+   were when it started, no nested evaluation
+   reported a change, and it was not the first evaluation after an epoch
+   change.  Then running it again would read the same values and, being
+   deterministic, write the same values: skipping it is invisible.  A
+   counter (``n := n + 1``) never settles and is evaluated every time.
+   Only a *full* evaluation checks this (it copies the written state first
+   and compares it after): the first one after a skip, or one on arguments
+   equal to the last evaluation's.  A block whose arguments keep changing
+   gets *fast* evaluations, which copy only the arguments and count as a
+   change, so that a block changing every cycle pays little more than
+   plain execution; once its arguments stop changing, the next evaluation
+   is a full one.  What a nested block reports to its caller: that its
+   state may have changed (it was evaluated: its outputs are state the caller
+   may write: any evaluation counts), or, when the caller provably reads
+   nothing of it from before the call (SelectivePlan.feedback), only that
+   it ended unsettled.  A block that is evaluated fast three times in a row
+   is then evaluated plainly IEC_SEL_BUSY times (no comparison, no copy)
+   before it is checked again.
 5. Faults.  A block is skipped only after an evaluation that ended without
    fault, on the same arguments: it would run without fault again.  The
    loop budget is the one thing outside the argument set that an
@@ -138,6 +151,9 @@ class SelectivePlan:
         self.pou_mark = {}                # POU key -> True/False
         self.var_mark = {}                # id(Var) -> True/False
         self.inst_mark = {}               # id(ProgramInstance) -> True/False
+        self._feedback = {}
+        self._ext_w = {}
+        self._param_w = {}
         self._read_pragmas()
         self.blocks = {}
         for pou in project.pous.values():
@@ -254,26 +270,41 @@ class SelectivePlan:
         b.inputs = [v for v in pou.vars.values() if v.section == "VAR_INPUT"]
         if pou.kind == "FUNCTION_BLOCK":
             b.inouts = [v for v in pou.vars.values() if v.section == "VAR_IN_OUT"]
+        seen = set()
         for c, v, counts in _pointers(pou):
             if counts:
                 b.reason = b.reason or (f"VAR_EXTERNAL {v.name} inside an array of function "
                                         "block instances")
+            # every VAR_EXTERNAL of one name in an instance, at any depth,
+            # is the same global (names resolve in the program's scope)
+            if (v.section, v.name.upper()) in seen:
+                continue
+            seen.add((v.section, v.name.upper()))
             b.exts.append((c, v))
         return b
 
     def _written(self, pou) -> list:
-        """The members of an instance of pou that its body may write."""
+        """The state an evaluation of pou may change and read again (rule
+        4): the members its body may write, except those it provably
+        assigns before it reads them (their value at the start of an
+        evaluation is never read, so a change of theirs cannot make the
+        next evaluation differ) and nested instances called selectively
+        (they report).  An IL body: every member it may write."""
         stmts = pou.node.body if pou.node is not None else []
         il = getattr(pou.node, "language", "ST") == "IL"
+        from .pou import has_fb
         out = []
         for v in pou.vars.values():
             if v.section in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
                 continue
-            if v.section == "VAR_INPUT" and not il and not writes(stmts, v):
+            w = writes(stmts, v, self.param_written)
+            if has_fb(v.type) or isinstance(v.type, FBType):
+                if v.section == "VAR" and self.call_kind(pou, v) == "sel" and not w:
+                    continue      # reports its changes itself (ctx->sel_changed)
+                if not il and not w and not _called(stmts, v):
+                    continue      # never called, never written
+            elif not il and (not w or _assigned_first(stmts, v)):
                 continue
-            if v.section == "VAR" and self.call_kind(pou, v) == "sel" and \
-                    not writes(stmts, v):
-                continue      # reports its changes itself (ctx->sel_changed)
             out.append((N.var(v.name), v.type))
         for v in pou.inputs:
             if v.edge:
@@ -306,6 +337,20 @@ class SelectivePlan:
             return "plain"
         return "sel"
 
+    def feedback(self, caller, inst: Var) -> bool:
+        """May *caller* read the state of instance *inst* from before its
+        call (so that a change of that state in an evaluation changes what
+        the caller reads the next time)?  False only when provably not:
+        *inst* is called exactly once, by a statement of the top level of
+        an ST body that is the first to mention it and does not mention it
+        in its arguments, and nothing inside a loop mentions it.  Then the
+        call only reports whether the instance ended unsettled (rule 4)."""
+        key = (caller.key, id(inst))
+        if key in self._feedback:
+            return self._feedback[key]
+        self._feedback[key] = result = _feedback(caller, inst)
+        return result
+
     def instance_selective(self, inst) -> bool:
         """A program instance (ProgramInstance of the checked model)."""
         if not self.has_layout(inst.pou):
@@ -332,13 +377,15 @@ class SelectivePlan:
         name = f"{N.pou_struct(pou)}_sel"
         lines = [f"/* selective execution state of {pou.name} (iec2kmod/codegen/selective.py) */",
                  f"{name} {{", "\tiec_u32 tok;\t\t/* IEC_SEL_TOKEN: settled */",
-                 "\tiec_u32 epoch;\t\t/* ctx->sel_epoch of the last evaluation */"]
+                 "\tiec_u32 epoch;\t\t/* ctx->sel_epoch of the last evaluation */",
+                 "\tiec_u8 busy;\t\t/* plain evaluations left before the next check */",
+                 "\tiec_u8 fast;\t\t/* the last evaluation was a fast one */"]
         if b.loops:
             lines.append("\tiec_u32 cost;\t\t/* loop budget used by the last evaluation */")
         if pou.kind == "PROGRAM":
             lines.append("\tiec_u8 plain;\t\t/* this instance is always evaluated */")
-        for v in b.inputs:
-            lines.append(f"\t{N.declare(v.type, 'i_' + v.name.lower())};")
+        if b.inputs:
+            lines.append(f"\t{N.pou_struct(pou)}_in i;\t/* the inputs at the last evaluation */")
         for k, (_, v) in enumerate(b.exts):
             lines.append(f"\t{N.declare(v.type, f'e{k}')};")
         for v in b.inouts:
@@ -348,60 +395,90 @@ class SelectivePlan:
             decl = f"{t} w_{member}" if isinstance(t, str) else N.declare(t, f"w_{member}")
             lines.append(f"\t{decl};")
         lines.append("};")
+        if b.inputs:
+            # the inputs lead the instance struct (pou.SECTION_ORDER): this
+            # struct has their layout, and the span of the inputs is compared
+            # and copied in one piece
+            lines = [f"/* the inputs of {pou.name}, laid out as in its instance */",
+                     f"{N.pou_struct(pou)}_in {{"] + \
+                [f"\t{N.declare(v.type, N.var(v.name))};" for v in b.inputs] + ["};", ""] + lines
         return lines
 
     def run_function(self, pou) -> list[str]:
-        """``<prefix>_run(self, ctx)``: skip, or evaluate and settle."""
+        """``<prefix>_check`` (inline: skip, or why not), ``<prefix>_eval``
+        (out of line: evaluate, and settle when the evaluation is a full
+        one) and ``<prefix>_run(self, ctx, fb)`` (what a selective call
+        calls; *fb*: the caller may read the instance's state from before
+        the call, SelectivePlan.feedback)."""
         b = self.blocks[pou.key]
         prefix = N.pou_prefix(pou)
+        st = N.pou_struct(pou)
         s = "self->sel"
 
         def ne(a, b_, size):
             return f"iec_sel_ne({a}, {b_}, sizeof({size}))"
 
-        in_ne = [ne(f"&self->{N.var(v.name)}", f"&{s}.i_{v.name.lower()}",
-                    f"{s}.i_{v.name.lower()}") for v in b.inputs]
-        ext_ne = [ne(f"self->{c}", f"&{s}.e{k}", f"{s}.e{k}") for k, (c, _) in enumerate(b.exts)]
-        io_ptr_ne = [f"self->{N.var(v.name)} != {s}.p_{v.name.lower()}" for v in b.inouts]
-        io_ne = [ne(f"self->{N.var(v.name)}", f"&{s}.d_{v.name.lower()}",
-                    f"{s}.d_{v.name.lower()}") for v in b.inouts]
-        w_ne = [ne(f"&self->{m}", f"&{s}.w_{m}", f"{s}.w_{m}") for m, _ in b.written]
-        out = [f"IEC_POU_SCOPE void {prefix}_run({N.pou_struct(pou)} *self, "
-               "struct iec_ctx *ctx)", "{",
-               "\tbool sel_changed;", "\tbool sel_saved;", "\tbool sel_settle;"]
-        if b.loops:
-            out.append("\tiec_u32 sel_budget;")
-        out.append("")
-        if pou.kind == "PROGRAM":
-            out += ["\tif (self->sel.plain) {",
-                    f"\t\t{prefix}_body(self, ctx);",
-                    "\t\tself->sel.tok = 0;",
-                    "\t\treturn;",
-                    "\t}"]
-        out.append("\tsel_changed = " + _disjunction(in_ne, "\t\t") + ";")
+        span = None
+        if b.inputs:
+            span = f"IEC_SEL_SPAN({st}, {N.var(b.inputs[-1].name)})"
+        args_ne = [f"iec_sel_ne(self, &{s}.i, {span})"] if span else []
+        args_ne += [f"self->{N.var(v.name)} != {s}.p_{v.name.lower()}" for v in b.inouts]
+        args_ne += [ne(f"self->{N.var(v.name)}", f"&{s}.d_{v.name.lower()}",
+                       f"{s}.d_{v.name.lower()}") for v in b.inouts]
+        args_ne += [ne(f"self->{c}", f"&{s}.e{k}", f"{s}.e{k}")
+                    for k, (c, _) in enumerate(b.exts)]
+        after = [ne(f"self->{c}", f"&{s}.e{k}", f"{s}.e{k}")
+                 for k, (c, v) in enumerate(b.exts) if self._ext_written(pou, v)]
+        after += [ne(f"self->{N.var(v.name)}", f"&{s}.d_{v.name.lower()}",
+                     f"{s}.d_{v.name.lower()}") for v in b.inouts
+                  if self.param_written(pou, v)]
+        after += [ne(f"&self->{m}", f"&{s}.w_{m}", f"{s}.w_{m}") for m, _ in b.written]
+        # the check: 0 skipped, 1 the arguments changed, 2 they did not
+        out = ["static inline __attribute__((__always_inline__)) int",
+               f"{prefix}_check({st} *self, struct iec_ctx *ctx)", "{",
+               "\tbool sel_changed = " + _disjunction(args_ne, "\t\t") + ";", ""]
         cond = ["!sel_changed", f"{s}.tok == IEC_SEL_TOKEN", f"{s}.epoch == ctx->sel_epoch"]
-        cond += [f"!({x})" for x in io_ptr_ne] + [f"!{x}" for x in ext_ne + io_ne]
         if b.loops:
             cond.append(f"ctx->loop_budget > {s}.cost")
         out.append("\tif (" + " &&\n\t    ".join(cond) + ") {")
         if b.loops:
             out.append(f"\t\tctx->loop_budget -= {s}.cost;")
-        out += ["\t\tctx->sel_skipped++;", "\t\treturn;", "\t}",
+        out += ["\t\tctx->sel_skipped++;", "\t\treturn 0;", "\t}",
+                "\treturn sel_changed ? 1 : 2;", "}", ""]
+        # the evaluation
+        out += ["static __attribute__((__noinline__, __unused__)) void",
+                f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why, bool fb)", "{",
+                "\tbool sel_full, sel_settle, sel_saved = false;"]
+        if b.loops:
+            out.append("\tiec_u32 sel_budget;")
+        out += ["",
                 "\tctx->sel_evaluated++;",
+                "\t/* a full evaluation checks whether it settles: after a skip, or",
+                "\t * again on unchanged arguments; arguments that keep changing get",
+                "\t * fast ones (selective.py, rule 4) */",
+                f"\tsel_full = why == 2 || {s}.tok == IEC_SEL_TOKEN;",
                 f"\tsel_settle = {s}.epoch == ctx->sel_epoch;",
                 f"\t{s}.epoch = ctx->sel_epoch;",
                 f"\t{s}.tok = 0;"]
-        for v in b.inputs:
-            out.append("\t" + _copy(f"{s}.i_{v.name.lower()}", f"self->{N.var(v.name)}", v.type))
-        for k, (c, v) in enumerate(b.exts):
-            out.append(f"\tiec_memcpy(&{s}.e{k}, self->{c}, sizeof({s}.e{k}));")
+        if span:
+            out.append(f"\tiec_memcpy(&{s}.i, self, {span});")
         for v in b.inouts:
             n = v.name.lower()
             out.append(f"\t{s}.p_{n} = self->{N.var(v.name)};")
             out.append(f"\tiec_memcpy(&{s}.d_{n}, self->{N.var(v.name)}, sizeof({s}.d_{n}));")
+        for k, (c, v) in enumerate(b.exts):
+            out.append(f"\tiec_memcpy(&{s}.e{k}, self->{c}, sizeof({s}.e{k}));")
+        out.append("\tif (sel_full) {")
         for m, t in b.written:
-            out.append("\t" + _copy(f"{s}.w_{m}", f"self->{m}", t))
-        out += ["\tsel_saved = ctx->sel_changed;", "\tctx->sel_changed = false;"]
+            out.append("\t\t" + _copy(f"{s}.w_{m}", f"self->{m}", t))
+        out += ["\t\tsel_saved = ctx->sel_changed;", "\t\tctx->sel_changed = false;",
+                f"\t\t{s}.fast = 0;",
+                "\t} else if (" + s + ".fast) {",
+                "\t\t/* changed at three evaluations in a row */",
+                f"\t\t{s}.busy = IEC_SEL_BUSY;",
+                "\t} else {",
+                f"\t\t{s}.fast = 1;",
+                "\t}"]
         if b.loops:
             out.append("\tsel_budget = ctx->loop_budget;")
         out += [f"\t{prefix}_body(self, ctx);",
@@ -409,14 +486,113 @@ class SelectivePlan:
                 "\t\treturn;"]
         if b.loops:
             out.append(f"\t{s}.cost = sel_budget - ctx->loop_budget;")
-        after = ["ctx->sel_changed"] + w_ne + ext_ne + io_ne
-        out += ["\tif (" + _disjunction(after, "\t    ") + ")",
-                "\t\tsel_changed = true;",
-                "\telse if (sel_settle)",
+        out += ["\tif (!sel_full) {",
+                "\t\tctx->sel_changed = true;",
+                "\t\treturn;",
+                "\t}",
+                "\tif (!(" + _disjunction(["ctx->sel_changed"] + after, "\t      ") + ") &&",
+                "\t    sel_settle)",
                 f"\t\t{s}.tok = IEC_SEL_TOKEN;",
-                "\tctx->sel_changed = sel_saved || sel_changed;",
+                "\t/* to a caller that may read this state from before the call:",
+                "\t * every evaluation may have changed it; to one that does not:",
+                "\t * whether this block would be evaluated again */",
+                f"\tctx->sel_changed = sel_saved || fb || {s}.tok != IEC_SEL_TOKEN;",
+                "}", ""]
+        out += ["static inline __attribute__((__always_inline__, __unused__)) void",
+                f"{prefix}_run({st} *self, struct iec_ctx *ctx, bool fb)", "{", "\tint why;", ""]
+        if pou.kind == "PROGRAM":
+            out += ["\tif (self->sel.plain) {",
+                    f"\t\t{prefix}_body(self, ctx);",
+                    "\t\tself->sel.tok = 0;",
+                    "\t\treturn;",
+                    "\t}"]
+        out += ["\t/* arguments that kept changing: evaluated plainly for a while,",
+                "\t * then checked again (the next check makes a fast or a full",
+                "\t * evaluation, and the shadows are taken anew) */",
+                f"\tif ({s}.busy && --{s}.busy) {{",
+                "\t\tctx->sel_evaluated++;",
+                f"\t\t{prefix}_body(self, ctx);",
+                "\t\tctx->sel_changed = true;",
+                "\t\treturn;",
+                "\t}",
+                f"\twhy = {prefix}_check(self, ctx);",
+                "\tif (why)",
+                f"\t\t{prefix}_eval(self, ctx, why, fb);",
                 "}"]
         return out
+
+    def _ext_written(self, pou, ext_var) -> bool:
+        """Does anything in pou's closure write the global that VAR_EXTERNAL
+        (or a program's VAR_IN_OUT) *ext_var* names?"""
+        key = (pou.key, ext_var.section, ext_var.name.upper())
+        if key not in self._ext_w:
+            closure, _ = self._closure(pou)
+            hit = False
+            for q in closure:
+                v = q.vars.get(ext_var.name.upper())
+                if v is None or v.section != ext_var.section:
+                    continue
+                if q.node is None or getattr(q, "sfc", None) is not None or \
+                        writes(q.node.body or [], v, self.param_written):
+                    hit = True
+                    break
+            self._ext_w[key] = hit
+        return self._ext_w[key]
+
+    def param_written(self, pou, v) -> bool:
+        """May a call of *pou* write through its VAR_IN_OUT *v*?"""
+        key = (pou.key, v.name.upper())
+        if key not in self._param_w:
+            self._param_w[key] = True       # (no recursion in IEC; but be safe)
+            if pou.standard or pou.node is None or getattr(pou, "sfc", None) is not None:
+                self._param_w[key] = True
+            else:
+                self._param_w[key] = writes(pou.node.body or [], v, self.param_written)
+        return self._param_w[key]
+
+
+def _mentions(node, var) -> bool:
+    return any(getattr(n, "symbol", None) is var or getattr(n, "target", None) is var
+               for n in analysis.walk(node))
+
+
+def _called(stmts, var) -> bool:
+    return any(isinstance(n, ast.Call) and (n.target is var or getattr(
+        getattr(n, "ref", None), "symbol", None) is var) for n in analysis.walk(stmts))
+
+
+def _assigned_first(stmts, var) -> bool:
+    """Is the first top-level statement that mentions *var* an assignment
+    of the whole variable that does not read it?  (Then no evaluation reads
+    the value it had when the evaluation started.)"""
+    for st in stmts:
+        if not _mentions(st, var):
+            continue
+        t = getattr(st, "target", None)
+        return isinstance(st, ast.Assign) and getattr(t, "symbol", None) is var and \
+            not t.accessors and not _mentions(st.value, var)
+    return False
+
+
+def _feedback(caller, inst) -> bool:
+    node = caller.node
+    if node is None or getattr(node, "language", "ST") != "ST" or \
+            getattr(caller, "sfc", None) is not None:
+        return True
+    body = node.body or []
+    calls = [n for n in analysis.walk(body) if isinstance(n, ast.Call) and n.target is inst
+             and getattr(n, "ref", None) is None]
+    if len(calls) != 1:
+        return True
+    loops = [n for n in analysis.walk(body) if isinstance(n, (ast.For, ast.While, ast.Repeat))]
+    if any(_mentions(lp, inst) for lp in loops):
+        return True
+    first = next((st for st in body if _mentions(st, inst)), None)
+    if not isinstance(first, ast.CallStmt) or first.call is not calls[0]:
+        return True
+    if any(_mentions(a, inst) for a in first.call.args):
+        return True
+    return False
 
 
 def token_of(texts) -> int:
@@ -520,7 +696,7 @@ def _pointers_in(t, c, counts):
 _IL_STORES = {"ST", "STN", "S", "R"}
 
 
-def writes(stmts, var) -> bool:
+def writes(stmts, var, inout_written=None) -> bool:
     """May the statements (ST or IL) write variable *var* or a part of it
     other than by calling it: an assignment, a FOR over it, an IL store,
     passing it (or a part) to a call as an output or VAR_IN_OUT."""
@@ -551,6 +727,11 @@ def writes(stmts, var) -> bool:
                     if hasattr(pou, "var"):        # a user POU: unknown binding
                         return True
                     continue                       # a standard function's input
+                if p.section == "VAR_IN_OUT" and inout_written is not None and \
+                        getattr(pou, "node", None) is not None:
+                    if inout_written(pou, p):
+                        return True
+                    continue
                 if p.section != "VAR_INPUT":
                     return True
     return False

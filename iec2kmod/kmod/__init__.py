@@ -195,7 +195,8 @@ def generate_tree(project, out: Path, selective=None) -> dict:
         body = env.get_template("program_body.c.j2").render(
             type=pou.name, header=gen.header_name, bodies=[gen.bodies[p.key][0] for p in deps],
             prefix=prefix, uses_fpu=fpu, version=__version__, sel_token=sel_token,
-            run="_run" if sel is not None and sel.has_layout(pou) else "_body")
+            call=f"{prefix}_run(self, ctx, true)" if sel is not None and sel.has_layout(pou)
+            else f"{prefix}_body(self, ctx)")
         # the code only: comments name the sources and change with any edit
         build_id = _sha(*[_code(t) for t in [body, gen.header] +
                           [gen.bodies[p.key][1] for p in deps]])[:8]

@@ -57,4 +57,15 @@ iec_sel_ne(const void *a, const void *b, iec_size_t n)
 	return n && *p != *q;
 }
 
+/*
+ * A block whose arguments changed at three evaluations in a row is evaluated
+ * plainly (no comparison, no copy) this many times before it is checked
+ * again: what selective execution costs when everything changes.
+ */
+#define IEC_SEL_BUSY	32
+
+/* Bytes from the start of an instance to the end of its last input. */
+#define IEC_SEL_SPAN(type, last)					\
+	(__builtin_offsetof(type, last) + sizeof(((type *)0)->last))
+
 #endif /* IEC_SEL_H */

@@ -60,8 +60,9 @@ def _both(tmp_path, text, rows, duration_ms, mode="all"):
                                                                            len(b.changes))
         ca = a.changes[first] if first < len(a.changes) else None
         cb = b.changes[first] if first < len(b.changes) else None
-        pytest.fail(f"traces differ at change {first}: plain {ca and (ca[0], a.names[ca[1]], ca[2])}"
-                    f", selective {cb and (cb[0], b.names[cb[1]], cb[2])}")
+        pytest.fail(f"traces differ at change {first}: plain "
+                    f"{ca and (ca[0], a.names[ca[1]], ca[2])}, selective "
+                    f"{cb and (cb[0], b.names[cb[1]], cb[2])}")
     return a, b
 
 
