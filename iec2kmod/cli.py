@@ -90,6 +90,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help="where counterexamples are written (default: .)")
     v.add_argument("--timeout", type=float, default=120, metavar="S",
                    help="solver time limit per query in seconds (default 120)")
+    x = sub.add_parser("export", help="write a model of a configuration for another tool")
+    x.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
+    x.add_argument("--uppaal", action="store_true", required=True,
+                   help="a network of UPPAAL timed automata (XML) with the properties as "
+                        "queries")
+    x.add_argument("-o", "--output", required=True, metavar="MODEL.xml")
+    x.add_argument("--property", "-p", action="append", default=[], metavar="EXPR",
+                   help="also export this property as a query (repeatable)")
+    x.add_argument("--instance", metavar="PATH",
+                   help="resolve --property names in this program instance")
     return p
 
 
@@ -247,12 +257,17 @@ def cmd_build(args) -> int:
     return EXIT_OK
 
 
+def cmd_export(args) -> int:
+    from .verify.cli import run_export
+    return run_export(args)
+
+
 def cmd_verify(args) -> int:
     from .verify.cli import run_verify
     return run_verify(args)
 
 
-COMMANDS = {"verify": cmd_verify, "check": cmd_check, "sim": cmd_sim, "gen": cmd_gen, "build": cmd_build}
+COMMANDS = {"export": cmd_export, "verify": cmd_verify, "check": cmd_check, "sim": cmd_sim, "gen": cmd_gen, "build": cmd_build}
 
 
 def main(argv=None) -> int:

@@ -94,3 +94,36 @@ def run_verify(args) -> int:
         print("note: a runtime error is reachable; the other properties were checked on the "
               "runs before it")
     return worst
+
+
+def run_export(args) -> int:
+    """`iec2kmod export --uppaal`: 0 written, 1 source errors or a construct
+    that cannot be exported, 2 usage or I/O errors."""
+    from ..cli import front_end, print_diagnostics
+    from ..diagnostics import Diagnostics
+    from . import Refuse
+    from .uppaal import export
+    project = front_end(args.files)
+    if project is None:
+        return EXIT_SOURCE
+    diags = Diagnostics()
+    try:
+        text, warnings = export(project, args.property, args.instance)
+    except Refuse as exc:
+        diags.error(exc.src, exc.pos if exc.pos is not None else 0, exc.message)
+        print_diagnostics(diags, sys.stderr)
+        return EXIT_SOURCE
+    if text is None:
+        print_diagnostics(warnings, sys.stderr)
+        return EXIT_SOURCE
+    for w in warnings:
+        print(f"iec2kmod: warning: {w}", file=sys.stderr)
+    try:
+        Path(args.output).write_text(text)
+    except OSError as exc:
+        print(f"iec2kmod: error: {args.output}: {exc.strerror}", file=sys.stderr)
+        return EXIT_USAGE
+    n = text.count("<query>")
+    print(f"wrote {args.output}: UPPAAL network with {text.count('<template>')} templates, "
+          f"{n} quer{'y' if n == 1 else 'ies'}")
+    return EXIT_PROVED
