@@ -71,9 +71,9 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
    state may have changed (it was evaluated: its outputs are state the caller
    may write: any evaluation counts), or, when the caller provably reads
    nothing of it from before the call (SelectivePlan.feedback), only that
-   it ended unsettled.  A block that is evaluated fast three times in a row
-   is then evaluated plainly IEC_SEL_BUSY times (no comparison, no copy)
-   before it is checked again.
+   it ended unsettled.  A block evaluated fast IEC_SEL_BUSY_AFTER times in
+   a row is then evaluated plainly IEC_SEL_BUSY times (no comparison, no
+   copy) before it is checked again.
 5. Faults.  A block is skipped only after an evaluation that ended without
    fault, on the same arguments: it would run without fault again.  The
    loop budget is the one thing outside the argument set that an
@@ -379,7 +379,7 @@ class SelectivePlan:
                  f"{name} {{", "\tiec_u32 tok;\t\t/* IEC_SEL_TOKEN: settled */",
                  "\tiec_u32 epoch;\t\t/* ctx->sel_epoch of the last evaluation */",
                  "\tiec_u8 busy;\t\t/* plain evaluations left before the next check */",
-                 "\tiec_u8 fast;\t\t/* the last evaluation was a fast one */"]
+                 "\tiec_u8 fast;\t\t/* fast evaluations in a row */"]
         if b.loops:
             lines.append("\tiec_u32 cost;\t\t/* loop budget used by the last evaluation */")
         if pou.kind == "PROGRAM":
@@ -473,11 +473,10 @@ class SelectivePlan:
             out.append("\t\t" + _copy(f"{s}.w_{m}", f"self->{m}", t))
         out += ["\t\tsel_saved = ctx->sel_changed;", "\t\tctx->sel_changed = false;",
                 f"\t\t{s}.fast = 0;",
-                "\t} else if (" + s + ".fast) {",
-                "\t\t/* changed at three evaluations in a row */",
+                f"\t}} else if (++{s}.fast >= IEC_SEL_BUSY_AFTER) {{",
+                "\t\t/* the arguments changed at every evaluation for a while */",
                 f"\t\t{s}.busy = IEC_SEL_BUSY;",
-                "\t} else {",
-                f"\t\t{s}.fast = 1;",
+                f"\t\t{s}.fast = 0;",
                 "\t}"]
         if b.loops:
             out.append("\tsel_budget = ctx->loop_budget;")

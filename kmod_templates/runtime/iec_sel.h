@@ -58,11 +58,13 @@ iec_sel_ne(const void *a, const void *b, iec_size_t n)
 }
 
 /*
- * A block whose arguments changed at three evaluations in a row is evaluated
- * plainly (no comparison, no copy) this many times before it is checked
- * again: what selective execution costs when everything changes.
+ * A block whose arguments changed at IEC_SEL_BUSY_AFTER evaluations in a
+ * row is evaluated plainly (no comparison, no copy) IEC_SEL_BUSY times
+ * before it is checked again: what selective execution costs when
+ * everything changes.
  */
-#define IEC_SEL_BUSY	32
+#define IEC_SEL_BUSY_AFTER	2
+#define IEC_SEL_BUSY		32
 
 /* Bytes from the start of an instance to the end of its last input. */
 #define IEC_SEL_SPAN(type, last)					\
