@@ -121,11 +121,14 @@ class SFCChecker:
         info = SFCInfo()
         self.pou.sfc = info
         steps = {}
+        self.refused = set()    # steps refused at declaration: no second error
         for s in sfc.steps:
             v = self.pou.vars.get(s.name.upper())
             if v is not None and v.step is s:
                 steps[s.name.upper()] = v
                 info.steps.append(v)
+            else:
+                self.refused.add(s.name.upper())
         if not sfc.steps:
             self.error(sfc.pos, "an SFC body needs an INITIAL_STEP")
         actions = {}
@@ -174,7 +177,8 @@ class SFCChecker:
         for name, pos in names:
             v = steps.get(name.upper())
             if v is None:
-                self.error(pos, f"undeclared step '{name}' in {what}")
+                if name.upper() not in self.refused:
+                    self.error(pos, f"undeclared step '{name}' in {what}")
                 ok = False
                 continue
             if name.upper() in seen:
