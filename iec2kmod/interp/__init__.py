@@ -18,6 +18,7 @@ A pipeline a person can read, one module per stage:
     conv.py      the type conversions and the textual forms of values
     fbs.py       the standard function blocks (bistables, edges, counters,
                  timers after seed 002's automata)
+    sfc.py       SFC bodies: steps, transitions, ACTION_CONTROL, actions
     compiler.py  expressions, statements, calls and IL (with its current
                  result) turned into closures, once
     machine.py   configuration, variable table, input traces and the
@@ -53,7 +54,12 @@ oracle is explicit about what it checks):
   * F_TRIG's memory starts as "CLK was FALSE" (M := 1), so a FALSE CLK on
     the first call is no edge; R_EDGE/F_EDGE inputs of user blocks likewise.
   * Conversions between time types and numbers count TIME and TOD in
-    milliseconds, DATE and DT in seconds, the L forms in nanoseconds."""
+    milliseconds, DATE and DT in seconds, the L forms in nanoseconds.
+  * SFC bodies (sfc.py): transitions first, on the situation at the start
+    of the call, cleared together (PRIORITY, then source order, decides a
+    divergence), then every action's ACTION_CONTROL (no final scan), then
+    the bodies of the actions whose Q is TRUE; the cycle model is written
+    out in iec2kmod/codegen/sfc.py and implemented here on its own."""
 
 from .errors import Fault, VMError
 from .machine import LOOP_BUDGET, Machine, VMResult, run
