@@ -238,3 +238,73 @@ def test_counters_match_reference(lib, suffix, data):
         ud.cu, ud.cd, ud.r, ud.ld, ud.pv = cu, cd, r, ld, pv
         lib["iec_fb_ctud" + suffix](C.byref(ud), C.byref(ctx))
         assert (bool(ud.qu), bool(ud.qd), ud.cv) == mud.step(cu, cd, r, ld, pv)
+
+
+# ------------------------------------------------------ SFC ACTION_CONTROL
+
+QUALS = ("n", "r", "s0", "l", "d", "p", "p1", "p0", "sd", "ds", "sl")
+
+
+class ActionControl(C.Structure):
+    _fields_ = [(q, C.c_uint8) for q in QUALS] + [
+        ("t", C.c_int64), ("q", C.c_uint8),
+        ("s_ff", C.c_uint8), ("sd_ff", C.c_uint8), ("ds_ff", C.c_uint8), ("sl_ff", C.c_uint8),
+        ("p_prev", C.c_uint8), ("p1_prev", C.c_uint8), ("p0_prev", C.c_uint8),
+        ("l_tmr", Timer), ("d_tmr", Timer), ("sd_tmr", Timer), ("ds_tmr", Timer),
+        ("sl_tmr", Timer)]
+
+
+def test_action_control_mirror_matches_c_layout(lib):
+    L = lambda k: lib.iec_test_layout(k.encode())
+    assert L("action_control") == C.sizeof(ActionControl)
+    for f in ("t", "q", "p0_prev", "l_tmr", "sl_tmr"):
+        assert L("action_control." + f) == getattr(ActionControl, f).offset
+
+
+@st.composite
+def action_traces(draw):
+    """Qualifier inputs as step activity flags (each held for a few calls,
+    as steps are), a T that sometimes changes, 0-20 ms between calls."""
+    used = draw(st.lists(st.sampled_from(QUALS), min_size=1, max_size=4, unique=True))
+    n = draw(st.integers(1, 50))
+    state = dict.fromkeys(QUALS, False)
+    t = draw(st.sampled_from([0, 10, 30, 50]))
+    steps = []
+    for _ in range(n):
+        for q in used:
+            if draw(st.integers(0, 3)) == 0:
+                state[q] = not state[q]
+        if draw(st.integers(0, 9)) == 0:
+            t = draw(st.sampled_from([0, 10, 30, 50]))
+        steps.append((dict(state), t, draw(st.sampled_from([0, 5, 10, 20]))))
+    return steps
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(trace=action_traces())
+def test_action_control_matches_the_interpreter(lib, trace):
+    """The runtime's ACTION_CONTROL (kmod_templates/runtime/iec_std_fb.c)
+    against the reference interpreter's own (iec2kmod/interp/sfc.py), call
+    by call: Q for every qualifier, timers included."""
+    from iec2kmod.interp.sfc import ActionControl as Ref
+
+    class Rt:
+        now = 0
+    # a context of the C struct's own size (only now_ns is read here)
+    size, at = lib.iec_test_layout(b"ctx"), lib.iec_test_layout(b"ctx.now_ns")
+    ctx = (C.c_uint8 * size)()
+    now_ns = C.c_int64.from_buffer(ctx, at)
+    fb, ref, rt_ = ActionControl(), Ref(), Rt()
+    key = {"s0": "S"}
+    now = 0
+    for i, (inputs, t_ms, dt) in enumerate(trace):
+        now += dt * 1_000_000
+        now_ns.value = now
+        rt_.now = now
+        for q in QUALS:
+            setattr(fb, q, inputs[q])
+        fb.t = ref.T = t_ms * 1_000_000
+        ref.inputs = {key.get(q, q.upper()): inputs[q] for q in QUALS}
+        lib.iec_fb_action_control(C.byref(fb), C.byref(ctx))
+        ref.run(rt_)
+        assert bool(fb.q) == ref.Q, f"call {i}: inputs {inputs}, T={t_ms} ms, now={now}"
