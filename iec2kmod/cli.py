@@ -88,6 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="resolve --property/--assume names in this program instance")
     v.add_argument("--cex-dir", default=".", metavar="DIR",
                    help="where counterexamples are written (default: .)")
+    v.add_argument("--unroll", type=int, default=16, metavar="N",
+                   help="iterations a WHILE/REPEAT loop or a FOR loop with variable bounds is "
+                        "unrolled (default 16); a run that needs more is reported undecided")
     v.add_argument("--timeout", type=float, default=120, metavar="S",
                    help="solver time limit per query in seconds (default 120)")
     x = sub.add_parser("export", help="write a model of a configuration for another tool")

@@ -30,7 +30,8 @@ interpreter's storage layout and initial values):
     comparisons, MIN/MAX/LIMIT/SEL/MUX/ABS, and conversions to and from
     integers (rounded to nearest even and saturated, NaN -> 0; TRUNC);
     TIME/LTIME as signed 64-bit nanoseconds (ADD/SUB/MUL/DIV with integers,
-    conversions to and from integers); BOOL and the bit strings with
+    conversions to and from integers); DATE, TOD and DT arithmetic (ADD/SUB
+    with TIME, differences, CONCAT_DATE_TOD); BOOL and the bit strings with
     AND/OR/XOR/NOT, SHL/SHR/ROL/ROR and bit access; enumerations; subranges
     (a store outside the range is a fault); arrays of any element type with
     constant or variable indexes (an index out of range is a fault);
@@ -39,7 +40,11 @@ interpreter's storage layout and initial values):
     F_EDGE inputs, arrays of instances); IF, CASE (an invalid enumeration
     selector is a fault), FOR with constant start/end/step (unrolled, at
     most 4096 iterations a loop and 100000 a cycle; a loop longer than the
-    kernel's loop budget is the budget fault), EXIT, RETURN; IL with its
+    kernel's loop budget is the budget fault), WHILE and REPEAT loops and
+    FOR loops with variable bounds (unrolled --unroll times, 16 by default:
+    a run that needs more iterations is reported undecided -- "holds up to
+    K cycles; undecided at cycle K+1" --, never cut short), EXIT, RETURN;
+    IL with its
     current result, deferred operators `OP(`, S/R, the FB input operators,
     CAL/CALC/CALCN, forward jumps JMP/JMPC/JMPCN and RET/RETC/RETCN;
   * the standard FBs SR, RS, R_TRIG, F_TRIG, CTU/CTD/CTUD (every width) and
@@ -54,11 +59,10 @@ interpreter's storage layout and initial values):
     without a runtime error.
 
 What is refused, with an error naming the construct (never approximated):
-STRING/WSTRING values and the string functions, WHILE and REPEAT loops,
-FOR loops whose bounds are not constant, IL backward jumps, EXPT and the
+STRING/WSTRING values and the string functions, FOR loops whose step is
+not constant, IL backward jumps, EXPT and the
 transcendental functions (LN LOG EXP SIN COS TAN ASIN ACOS ATAN ATAN2),
-date and time-of-day arithmetic, conversions between REAL and TIME or of
-enumerations and BCD, and event tasks (SINGLE).
+conversions between REAL and TIME, of enumerations, and BCD, and event tasks (SINGLE).
 
 Properties are ST boolean expressions over the configuration's variables,
 from the command line or from {verify NAME: EXPR} pragmas in the sources
@@ -116,10 +120,11 @@ def _scopes(sym, prop, instance, diags):
     return [(prop.name, pou, inst)]
 
 
-def build(project, cli_props, cli_assumes, instance, diags):
+def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     """The transition system of the project's configuration with its
     properties; None when diags got errors."""
     sym = SymbolicMachine(project)
+    sym.max_iter = unroll
     props, bad = scan_pragmas(project)
     for src, pos, msg in bad:
         diags.error(src, pos, msg)
@@ -209,12 +214,12 @@ def fix_all(t, pairs):
 
 
 def verify(project, cli_props=(), cli_assumes=(), depth=20, instance=None, diags=None,
-           timeout_ms=60000):
+           timeout_ms=60000, unroll=16):
     """Builds and checks; returns an Outcome (None on source errors, in
     diags).  Raises Refuse for a construct that cannot be encoded."""
     diags = diags if diags is not None else Diagnostics()
     t0 = time.perf_counter()
-    out = build(project, list(cli_props), list(cli_assumes), instance, diags)
+    out = build(project, list(cli_props), list(cli_assumes), instance, diags, unroll)
     if out is None:
         return None
     out.results, out.invariants = check(out.system, depth, timeout_ms)

@@ -28,6 +28,9 @@ def run_verify(args) -> int:
     from ..diagnostics import Diagnostics
     from . import Refuse, verify
     from .cex import replay, write_trace
+    if args.unroll < 1:
+        print("iec2kmod: error: --unroll must be at least 1", file=sys.stderr)
+        return EXIT_USAGE
     if args.depth < 1:
         print("iec2kmod: error: --depth must be at least 1", file=sys.stderr)
         return EXIT_USAGE
@@ -37,7 +40,8 @@ def run_verify(args) -> int:
     diags = Diagnostics()
     try:
         out = verify(project, args.property, args.assume, depth=args.depth,
-                     instance=args.instance, diags=diags, timeout_ms=int(args.timeout * 1000))
+                     instance=args.instance, diags=diags, timeout_ms=int(args.timeout * 1000),
+                     unroll=args.unroll)
     except Refuse as exc:
         diags.error(exc.src, exc.pos if exc.pos is not None else 0, exc.message)
         out = None
@@ -85,14 +89,24 @@ def run_verify(args) -> int:
                       f"replay in the interpreter: {why}", file=sys.stderr)
                 return EXIT_INTERNAL
             text += f"\n{'':{width + 4}}counterexample: {csv_path} (sim --inputs), {vcd_path}"
+        elif r.fault is not None:
+            kind, pou, src, pos = r.fault
+            where = ""
+            if src is not None and pos is not None:
+                line, col = src.linecol(pos)
+                where = f" at {src.path}:{line}:{col}"
+            text = f"holds up to {r.cycle} cycles; undecided at cycle {r.cycle + 1}: " \
+                   f"{kind[len('unroll: '):]} in {pou}{where}"
+            worst = max(worst, EXIT_BOUNDED) if worst != EXIT_VIOLATED else worst
+            faulty = True
         else:
             text = f"holds up to {r.cycle} cycles; cycle {r.cycle + 1} undecided (solver " \
                    "time limit, see --timeout)"
             worst = max(worst, EXIT_BOUNDED) if worst != EXIT_VIOLATED else worst
         print(f"  {r.name:<{width}}  {text}")
     if faulty and any(r.status != "violated" for r in out.results[1:]):
-        print("note: a runtime error is reachable; the other properties were checked on the "
-              "runs before it")
+        print("note: a runtime error (or a loop longer than the unrolling) is reachable; the "
+              "other properties were checked on the runs before it")
     return worst
 
 

@@ -41,9 +41,11 @@ from ..interp.values import base_of
 TRUE = z3.BoolVal(True)
 FALSE = z3.BoolVal(False)
 INT64_MAX = (1 << 63) - 1
+NS_PER_DAY = 86_400_000_000_000
 MAX_UNROLL = 4096          # iterations of one FOR loop
 MAX_TOTAL_UNROLL = 100_000  # iterations of all loops of one cycle (below LOOP_BUDGET)
 INIT, WORK, TOUT, ON = 0, 1, 2, 3
+UNROLL = "unroll: "      # the kind of a fault site that marks an undecided loop
 
 
 class Refuse(Exception):
@@ -310,6 +312,7 @@ class Encoder:
         self.m = sym.machine
         self.faults = []          # (cond, kind, pou name, src, pos)
         self.unrolled = 0
+        self.max_iter = getattr(sym, "max_iter", 16)
         self._ipc = {}
         self.time_step = 0
 
@@ -665,16 +668,35 @@ class Encoder:
             return a + b if fam == "ADD_TIME" else a - b
         if fam in ("MUL_TIME", "DIV_TIME"):
             t2 = concrete(ptypes[1])
-            if kind(t2) != "bv":
-                self.refuse(pou, pos, f"{fam} with a REAL factor")
             a = self.expr_as(args[0], concrete(ptypes[0]), frame, g)
+            if kind(t2) == "fp":
+                # the time as a binary64, times (or divided by) the factor, rounded
+                # to nearest even and saturated into 64 bits (std.mul_time_real)
+                f = self.expr_as(args[1], t2, frame, g)
+                d = z3.Float64()
+                x = z3.fpSignedToFP(z3.RNE(), a, d)
+                y = z3.fpFPToFP(z3.RNE(), f, d) if f.sort() != d else f
+                if fam == "MUL_TIME":
+                    r = z3.fpMul(z3.RNE(), x, y)
+                else:
+                    self.fault(g, z3.fpIsZero(y), DIV_ZERO, frame, pos)
+                    r = z3.fpDiv(z3.RNE(), x, y)
+                return real_to_int(r, ELEM_LINT, z3.RNE())
             b = self.conv(self.expr_as(args[1], t2, frame, g), t2, concrete(ptypes[0]))
             if fam == "MUL_TIME":
                 return a * b
             self.fault(g, b == bv_lit(0, 64), DIV_ZERO, frame, pos)
             return z3.If(b == bv_lit(0, 64), bv_lit(0, 64), a / b)
         if fam in _TIME_FAMILIES:
-            self.refuse(pou, pos, f"the date/time function {fres.name}")
+            a = self.expr_as(args[0], concrete(ptypes[0]), frame, g)
+            b = self.expr_as(args[1], concrete(ptypes[1]), frame, g)
+            if fam in ("ADD_TOD_TIME", "SUB_TOD_TIME"):
+                day = bv_lit(NS_PER_DAY, 64)
+                x, y = a % day, b % day      # bvsmod, Python's %: the sign of the divisor
+                return (x + y if fam == "ADD_TOD_TIME" else x - y) % day
+            if fam in ("ADD_DT_TIME", "CONCAT_DATE_TOD"):
+                return a + b
+            return a - b          # SUB_DT_TIME SUB_DATE_DATE SUB_TOD_TOD SUB_DT_DT
         if fam == "EXPT":
             self.refuse(pou, pos, "EXPT (**)")
         if fam == "MOVE":
@@ -1141,9 +1163,9 @@ class Encoder:
         elif isinstance(s, ast.For):
             self.for_(s, frame, g)
         elif isinstance(s, ast.While):
-            self.refuse(frame.pou, s.pos, "a WHILE loop (unbounded)")
+            self.while_(s, frame, g)
         elif isinstance(s, ast.Repeat):
-            self.refuse(frame.pou, s.pos, "a REPEAT loop (unbounded)")
+            self.repeat(s, frame, g)
         elif isinstance(s, ast.Exit):
             frame.brk = lor(frame.brk, g)
         elif isinstance(s, ast.Return):
@@ -1190,15 +1212,20 @@ class Encoder:
         v = pou.var(s.var)
         vt = concrete(v.type)
         vals = []
+        terms = []
         for e in (s.start, s.end, s.step):
             if e is None:
                 vals.append(1)
+                terms.append(bv_lit(1, width(vt)))
                 continue
             x = self.expr_as(e, vt, frame, g)
             x = simplify_if_const(x)
-            if not z3.is_bv_value(x):
-                self.refuse(pou, e.pos, "a FOR loop whose start, end or step is not constant")
-            vals.append(py_value(x, vt))
+            terms.append(x)
+            vals.append(py_value(x, vt) if z3.is_bv_value(x) else None)
+        if vals[2] is None:
+            self.refuse(pou, s.step.pos, "a FOR loop whose step is not constant")
+        if vals[0] is None or vals[1] is None:
+            return self.for_bounded(s, frame, g, v, vt, terms, vals[2])
         a, e_, st = vals
         lo_t, hi_t = base_of(vt).range
         seq = []
@@ -1239,6 +1266,103 @@ class Encoder:
             self.block(s.body, frame, gi)
         if final is not None and seq:
             cell.put(land(g, lnot(frame.brk), lnot(frame.ret)), bv_lit(final, w))
+        frame.brk = saved
+
+    # --------------------------------------------- loops, unrolled a bounded number of times
+    def unroll_exceeded(self, g, cond, frame, pos):
+        """The loop may run more iterations than the encoding unrolls: not a
+        runtime error, an undecided case (reported as such, never assumed)."""
+        self.fault(g, cond, f"{UNROLL}more than {self.max_iter} iterations of a loop "
+                            "(the encoding's unrolling bound, --unroll)", frame, pos)
+
+    def _count(self, n, frame, pos):
+        self.unrolled += n
+        if self.unrolled > MAX_TOTAL_UNROLL:
+            self.refuse(frame.pou, pos, f"more than {MAX_TOTAL_UNROLL} loop iterations in one "
+                                        "cycle")
+
+    def while_(self, s, frame, g):
+        saved = frame.brk
+        frame.brk = FALSE
+        live = g
+        self._count(self.max_iter, frame, s.pos)
+        for _ in range(self.max_iter):
+            gi = land(live, lnot(frame.brk), lnot(frame.ret))
+            c = self.expr_as(s.cond, BOOL, frame, gi)
+            run = land(gi, c)
+            if z3.is_false(run) or z3.is_false(z3.simplify(run)):
+                break
+            self.block(s.body, frame, run)
+            live = run
+        else:
+            gi = land(live, lnot(frame.brk), lnot(frame.ret))
+            self.unroll_exceeded(gi, self.expr_as(s.cond, BOOL, frame, gi), frame, s.pos)
+        frame.brk = saved
+
+    def repeat(self, s, frame, g):
+        saved = frame.brk
+        frame.brk = FALSE
+        live = g
+        self._count(self.max_iter, frame, s.pos)
+        for _ in range(self.max_iter):
+            gi = land(live, lnot(frame.brk), lnot(frame.ret))
+            if z3.is_false(gi) or z3.is_false(z3.simplify(gi)):
+                break
+            self.block(s.body, frame, gi)
+            gi = land(gi, lnot(frame.brk), lnot(frame.ret))
+            c = self.expr_as(s.cond, BOOL, frame, gi)
+            live = land(gi, lnot(c))
+        else:
+            gi = land(live, lnot(frame.brk), lnot(frame.ret))
+            self.unroll_exceeded(gi, TRUE, frame, s.pos)
+        frame.brk = saved
+
+    def for_bounded(self, s, frame, g, v, vt, terms, st):
+        """A FOR loop with variable start or end (constant step), unrolled."""
+        a, e, _ = terms
+        w = width(vt)
+        sg = signed(vt)
+        lo_t, hi_t = base_of(vt).range
+        cell = Cell(frame.inst.v, v.key)
+        cell.put(g, a)
+        up = st >= 0
+        ww = w + 2
+
+        def ext(x):
+            return z3.SignExt(2, x) if sg else z3.ZeroExt(2, x)
+
+        def gt(x, y):
+            return x > y if sg else z3.UGT(x, y)
+
+        def lt(x, y):
+            return x < y if sg else z3.ULT(x, y)
+        if st == 0:
+            # never ends once started: the loop budget runs out
+            self.fault(land(g, lnot(gt(a, e))), TRUE, LOOP, frame, s.pos)
+            return
+        saved = frame.brk
+        frame.brk = FALSE
+        live = g
+        self._count(self.max_iter, frame, s.pos)
+        for _ in range(self.max_iter):
+            i = cell.get()
+            cont = lnot(gt(i, e)) if up else lnot(lt(i, e))
+            run = land(live, lnot(frame.brk), lnot(frame.ret), cont)
+            if z3.is_false(run) or z3.is_false(z3.simplify(run)):
+                live = FALSE
+                break
+            self.block(s.body, frame, run)
+            gi = land(run, lnot(frame.brk), lnot(frame.ret))
+            nxt = ext(cell.get()) + bv_lit(st, ww)
+            inside = z3.And(nxt >= bv_lit(lo_t, ww), nxt <= bv_lit(hi_t, ww)) if sg else \
+                z3.And(z3.UGE(nxt, bv_lit(lo_t, ww)), z3.ULE(nxt, bv_lit(hi_t, ww)))
+            cell.put(land(gi, inside), z3.Extract(w - 1, 0, nxt))
+            live = land(gi, inside)
+        else:
+            i = cell.get()
+            cont = lnot(gt(i, e)) if up else lnot(lt(i, e))
+            self.unroll_exceeded(land(live, lnot(frame.brk), lnot(frame.ret)), cont, frame,
+                                 s.pos)
         frame.brk = saved
 
     # ---------------------------------------------------------------- IL

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import z3
 
-from .encode import FALSE, TRUE, land, lnot, lor, smt_eq
+from .encode import FALSE, TRUE, UNROLL, land, lnot, lor, smt_eq
 
 
 @dataclass
@@ -242,6 +242,9 @@ def check_one(ts: System, name, prop, depth, timeout_ms, no_fault):
             res.status, res.cycle, res.model = "violated", k, base.model()
             if prop is None:
                 res.fault = _which_fault(ts, pairs, res.model)
+                if res.fault is not None and res.fault[0].startswith(UNROLL):
+                    # a loop longer than the unrolling: undecided, not a runtime error
+                    res.status, res.cycle, res.model = "unknown", k - 1, None
             base.pop()
             return res
         base.pop()

@@ -165,13 +165,47 @@ def test_timer_follows_seed_002(tmp_path, capsys):
     assert all(r[1] == "FALSE" for r in rows[:-1])
 
 
+def test_loops_are_unrolled_and_never_cut_short(tmp_path, capsys):
+    """WHILE runs at most 20 times here: decided with --unroll 20, undecided
+    (never assumed to end) with --unroll 8."""
+    proj = project(tmp_path, """
+        PROGRAM W
+        VAR_INPUT k : USINT; END_VAR
+        VAR_OUTPUT n : INT; m : INT; END_VAR
+        n := 0;
+        WHILE n < k MOD 21 DO
+            n := n + 1;
+        END_WHILE;
+        m := 0;
+        REPEAT
+            m := m + 2;
+        UNTIL m >= n END_REPEAT;
+        END_PROGRAM
+        CONFIGURATION C
+            RESOURCE R ON CPU0
+                TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+                PROGRAM w WITH t : W;
+            END_RESOURCE
+        END_CONFIGURATION
+    """)
+    rc, out, err = verify(capsys, proj, "--unroll", 21, "-p", "R.w.n <= 20 AND R.w.m >= R.w.n",
+                          "-p", "R.w.m <= R.w.n + 2")
+    assert rc == 0, out + err
+    rc, out, err = verify(capsys, proj, "--unroll", 8, "--depth", 3)
+    assert rc == 4, out + err
+    assert "holds up to 0 cycles; undecided at cycle 1: more than 8 iterations of a loop" in out
+    assert "p.st:6:1" in out
+
+
 def test_refusals_name_the_construct(tmp_path, capsys):
     proj = project(tmp_path, """
         PROGRAM W
         VAR_OUTPUT n : INT; END_VAR
-        WHILE n < 10 DO
+        VAR a : ARRAY[1..3] OF INT; i : INT; END_VAR
             n := n + 1;
-        END_WHILE;
+        FOR i := 1 TO 3 BY a[1] DO
+            a[i] := n;
+        END_FOR;
         END_PROGRAM
         CONFIGURATION C
             RESOURCE R ON CPU0
@@ -182,7 +216,8 @@ def test_refusals_name_the_construct(tmp_path, capsys):
     """)
     rc, out, err = verify(capsys, proj)
     assert rc == 1
-    assert "p.st:4:1: error: verify: a WHILE loop (unbounded) cannot be encoded exactly" in err
+    assert "p.st:6:20: error: verify: a FOR loop whose step is not constant cannot be " \
+           "encoded exactly" in err, err
     assert err.rstrip().endswith("^") and "Traceback" not in err
     proj = project(tmp_path, """
         PROGRAM S

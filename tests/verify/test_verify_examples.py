@@ -51,8 +51,6 @@ def test_example_properties_proved(example, capsys, tmp_path):
 
 @pytest.mark.parametrize("example, construct", [
     ("alarm_handler", "the string function FIND"),
-    ("elevator", "a REPEAT loop"),
-    ("hvac", "the date/time function ADD"),
     ("watchdog_event", "the event task"),
 ])
 def test_examples_outside_the_encoding_are_refused(example, construct, capsys):
