@@ -248,16 +248,24 @@ class SFCChecker:
                            f"qualifier {q} needs a time: write {assoc.action}({q}, T#1s)")
             else:
                 time = args.pop(0)
-                t = self.bc.expr(time)
-                if not isinstance(t, ErrorT) and t is not TIME:
-                    self.error(time.pos, f"the time of qualifier {q} must be TIME, not {t.name}")
+                if isinstance(time, ast.Ref) and time.accessors:
+                    # ed.2 B.1.6: action_time ::= duration | variable_name
+                    self.error(time.pos, f"the time of qualifier {q} is a TIME literal or the "
+                                         "name of a TIME variable")
+                    time = None
+                else:
+                    t = self.bc.expr(time)
+                    if not isinstance(t, ErrorT) and t is not TIME:
+                        self.error(time.pos, f"the time of qualifier {q} must be TIME, "
+                                             f"not {t.name}")
         elif args and _time_like(args[0]) and isinstance(args[0], ast.Lit):
             self.error(args[0].pos, f"qualifier {q} takes no time (only L, D, SD, DS and SL do)")
             args.pop(0)
         assoc.time = time
         for n, ind in enumerate(args):
-            if not isinstance(ind, ast.Ref):
-                self.error(ind.pos, "an indicator must be a BOOL variable")
+            if not isinstance(ind, ast.Ref) or ind.accessors:
+                # ed.2 B.1.6: indicator_name ::= variable_name
+                self.error(ind.pos, "an indicator is the name of a BOOL variable")
                 continue
             t = self.bc.expr(ind)
             if t is TIME and n == 0 and q not in TIMED:

@@ -53,7 +53,7 @@ from __future__ import annotations
 from ..checks.sfc import TIMED
 from ..checks.types import TIME
 from . import cnames as N
-from .expr import Frame
+from .expr import CodegenError, Frame
 
 # qualifier -> member of struct iec_fb_action_control
 INPUT = {"N": "n", "R": "r", "S": "s0", "L": "l", "D": "d", "P": "p", "P1": "p1",
@@ -155,6 +155,9 @@ class SFCEmitter:
             for n, s in enumerate(timed):
                 f = Frame(be, s.node.pos)
                 code = be.expr.emit(f, s.time, TIME)
+                if f.pre or f.decls or f.may_fault:
+                    # the checks allow a literal or a variable name only
+                    raise CodegenError(f"the time of {a.name}({s.qualifier}) needs code")
                 out.append(f"{'else ' if n else ''}if ({self.x(s.step)})")
                 out.append(ind + f"{ac}.t = {code};")
             out.append(f"iec_fb_action_control(&{ac}, ctx);")
