@@ -127,3 +127,23 @@ def test_c_of_the_cycle_model_is_deterministic():
         "if (self->v_run.v_x && self->v_watch.v_x) {")
     assert "struct iec_fb_action_control h_sfc_ac2;" in ca.header
     assert "struct t___sfc_step v_idle;" in ca.header
+
+
+def test_sfc_words_stay_usable_as_names():
+    # STEP, TRANSITION, FROM, INITIAL_STEP are keywords only inside an SFC
+    # body: ST and IL bodies may still use them as variable names
+    _, diags = check_text("""PROGRAM p
+VAR step, transition, from : INT; initial_step : BOOL; END_VAR
+step := 1;
+transition := step + 1;
+from := 2;
+initial_step := TRUE;
+END_PROGRAM
+PROGRAM q
+VAR step : INT; END_VAR
+  LD step
+  ADD 1
+  ST step
+END_PROGRAM
+""")
+    assert not diags.errors, [d.format() for d in diags.items]
