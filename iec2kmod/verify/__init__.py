@@ -11,8 +11,15 @@ interpreter's storage layout and initial values):
     released tasks run in priority order (declaration order on ties), each
     running its program instances in declaration order -- connected inputs
     copied in (with their subrange checks), the body, connected outputs
-    copied out; with one task a step is one cycle.  One step is one
-    transition T(state, inputs) over z3 terms (model.py, encode.py);
+    copied out; with one task a step is one cycle.  Event tasks (SINGLE)
+    as the interpreter's scheduler runs them: at each instant the rising
+    edges of their variables are looked for before every task run, the
+    highest-priority pending task runs, until none is pending (unrolled to
+    as many runs as tasks plus event tasks; an instant needing more is
+    reported undecided).  The inputs change at the step instants only, so
+    an event task triggered between two steps is not modelled (printed as
+    a note).  One step is one transition T(state, inputs) over z3 terms
+    (model.py, encode.py);
   * state: every variable a cycle can change -- globals, %Q/%M addresses,
     program and FB instance variables at every depth, the hidden state of
     the standard FBs (edge memories, counters' edges, the timers' automaton
@@ -62,7 +69,8 @@ What is refused, with an error naming the construct (never approximated):
 STRING/WSTRING values and the string functions, FOR loops whose step is
 not constant, IL backward jumps, EXPT and the
 transcendental functions (LN LOG EXP SIN COS TAN ASIN ACOS ATAN ATAN2),
-conversions between REAL and TIME, of enumerations, and BCD, and event tasks (SINGLE).
+conversions between REAL and TIME, of enumerations, and BCD, and
+configurations without a periodic task.
 
 Properties are ST boolean expressions over the configuration's variables,
 from the command line or from {verify NAME: EXPR} pragmas in the sources

@@ -105,6 +105,10 @@ def lookup(machine, keys):
 def leaf_value(machine, leaf, now):
     """A leaf's value in an interpreter Machine (the hidden elapsed time of
     a timer from its start time T0, as the encoding holds it)."""
+    if leaf.keys[0] == "E":
+        # the SINGLE variable as the last edge detection of the instant saw it
+        c, k = lookup(machine, leaf.single_keys)
+        return bool(c[k])
     if leaf.keys == ("T",):
         return ((now // out_period(leaf)) + 1) % leaf.ticks
     if leaf.name.endswith(".$EL") and leaf.hidden:

@@ -49,11 +49,16 @@ def run_verify(args) -> int:
     if out is None:
         return EXIT_SOURCE
     sym = out.sym
-    tasks = ", ".join(f"{t.name} every {_fmt_time(t.interval_ns)}" for t in sym.tasks)
+    tasks = ", ".join(f"{t.name} every {_fmt_time(t.interval_ns)}" if t.single is None
+                      else f"{t.name} on {t.single.name}" for t in sym.tasks)
     step = f"; a step is {_fmt_time(sym.period)}" if len(sym.tasks) > 1 else ""
     print(f"configuration {sym.cfg.name}: task{'s' if len(sym.tasks) > 1 else ''} {tasks}"
           f"{step}; {out.leaves} state variables, {out.inputs} inputs; "
           f"{len(out.props)} properties")
+    if sym.events:
+        print(f"note: the inputs change at the instants of the step "
+              f"({_fmt_time(sym.period)}); an event task triggered by an input between two "
+              "steps is not modelled")
     cex_dir = Path(args.cex_dir)
     worst = EXIT_PROVED
     faulty = any(r.status == "violated" for r in out.results[:1])

@@ -77,6 +77,16 @@ class SymbolicMachine:
                                                          None), "$tick", ("T",))
             leaf = self.by_name["$tick"]
             leaf.period, leaf.ticks = self.period, self.ticks
+        for t in self.events:
+            # the SINGLE variable's value at the last edge detection (its initial value)
+            c, k = self.machine.cells[id(t.single)]
+            init = c[k]
+            self.clock["$prev_" + t.name] = bool(init.init) if hasattr(init, "init") else \
+                self._initial_of(c, k)
+            self._hidden(self.clock, "$prev_" + t.name, _BOOL, "$prev_" + t.name,
+                         ("E", t.name))
+            single = next((lf for lf in self.leaves if lf.c is c and lf.k == k), None)
+            self.by_name["$prev_" + t.name].single_keys = single.keys if single else None
 
     # ------------------------------------------------------------ shape
     def _check_shape(self):
@@ -86,11 +96,11 @@ class SymbolicMachine:
         src = cfg.src
         if not tasks:
             raise Refuse(src, cfg.node.pos, "verify: the configuration has no TASK")
-        for r, t in tasks:
-            if t.single is not None or not t.interval_ns:
-                raise Refuse(src, t.pos, f"verify: the event task '{t.name}' (SINGLE) "
-                                         "cannot be encoded (only periodic tasks)")
-        periods = [t.interval_ns for _, t in tasks]
+        periods = [t.interval_ns for _, t in tasks if t.single is None and t.interval_ns]
+        if not periods:
+            raise Refuse(src, tasks[0][1].pos, "verify: a configuration without a periodic "
+                                               "task (the step of time) cannot be encoded")
+        self.events = [t for _, t in tasks if t.single is not None]
         base = 0
         for p in periods:
             base = math.gcd(base, p)
@@ -111,6 +121,8 @@ class SymbolicMachine:
         """[(TaskInfo, guard)] in the order they run at an instant."""
         out = []
         for t in self.tasks:
+            if t.single is not None:
+                continue
             r = t.interval_ns // self.period
             if r == 1 or tick is None:
                 out.append((t, TRUE))
@@ -118,6 +130,13 @@ class SymbolicMachine:
                 w = tick.size()
                 out.append((t, z3.URem(tick, z3.BitVecVal(r, w)) == z3.BitVecVal(0, w)))
         return out
+
+    def _initial_of(self, c, k):
+        v = c[k]
+        for leaf in self.leaves:
+            if leaf.c is c and leaf.k == k:
+                return bool(leaf.init)
+        return bool(v) if isinstance(v, bool) else False
 
     def _root_of(self, container):
         m = self.machine
@@ -286,15 +305,59 @@ class SymbolicMachine:
             inst.v["$EL"] = z3.If(inst.v["$S"] == z3.BitVecVal(WORK, 2), grown, bv_lit(0, 64))
         insts = {id(pi): inst for (_, inst), pi in zip(m.instances, self.programs)}
         tick = self.clock["$tick"] if self.ticks > 1 else None
-        for task, g in self.task_runs(tick):
+
+        def run_task(task, g):
             for pi in self.programs:
-                if pi.task is not task:
-                    continue
-                self.run_program(enc, pi, insts[id(pi)], g)
+                if pi.task is task:
+                    self.run_program(enc, pi, insts[id(pi)], g)
+        if not self.events:
+            for task, g in self.task_runs(tick):
+                run_task(task, g)
+        else:
+            self.schedule_with_events(enc, tick, run_task)
         if tick is not None:
             w = tick.size()
             self.clock["$tick"] = z3.If(tick == z3.BitVecVal(self.ticks - 1, w),
                                         z3.BitVecVal(0, w), tick + z3.BitVecVal(1, w))
+
+    def schedule_with_events(self, enc, tick, run_task):
+        """The interpreter's scheduler at one instant, unrolled: look for
+        rising edges of the SINGLE variables, run the highest-priority
+        pending task, again until nothing is pending.  An instant needing
+        more task runs than unrolled is reported undecided."""
+        pending = {id(t): g for t, g in self.task_runs(tick)}
+        for t in self.events:
+            pending[id(t)] = FALSE
+
+        def detect():
+            for t in self.events:
+                c, k = self.machine.cells[id(t.single)]
+                cur = c[k]
+                prev = self.clock["$prev_" + t.name]
+                pending[id(t)] = z3.Or(pending[id(t)], z3.And(cur, z3.Not(prev)))
+                self.clock["$prev_" + t.name] = cur
+        rounds = len(self.tasks) + len(self.events)
+        for _ in range(rounds):
+            detect()
+            higher = FALSE
+            runs = []
+            for t in self.tasks:
+                run = land(pending[id(t)], lnot(higher))
+                higher = z3.Or(higher, pending[id(t)])
+                runs.append((t, run))
+            if z3.is_false(z3.simplify(higher)):
+                return
+            for t, run in runs:
+                if z3.is_false(run):
+                    continue
+                run_task(t, run)
+                pending[id(t)] = land(pending[id(t)], lnot(run))
+        detect()
+        left = z3.Or(*[pending[id(t)] for t in self.tasks])
+        from .encode import UNROLL
+        enc.faults.append((left, f"{UNROLL}more than {rounds} task runs in one instant (the "
+                                 "encoding's unrolling of the scheduler)", "scheduler",
+                           self.cfg.src, self.tasks[0].pos))
 
     def run_program(self, enc, pi, inst, g):
         m = self.machine

@@ -77,6 +77,8 @@ def run(project, cycles, seed):
     rnd = random.Random(seed)
     m = Machine(project)
     order = sorted(range(len(m.tasks)), key=lambda i: (m.tasks[i].priority, i))
+    prev_single = [bool(t.single[0][t.single[1]]) if t.single is not None else False
+                   for t in m.tasks]
     P = sym.period
     state = {var: init for _, var, init, _ in ts.state}
     diffs = []
@@ -90,15 +92,24 @@ def run(project, cycles, seed):
             c[key] = v
             ins[var] = const_of(v, leaf.type)
         fault = None
-        for i in order:
-            task = m.tasks[i]
-            if now % task.interval:
-                continue
+        # the interpreter's scheduler at one instant (machine._schedule)
+        pending = [bool(t.interval) and now % t.interval == 0 for t in m.tasks]
+        while fault is None:
+            for n, t in enumerate(m.tasks):
+                if t.single is None:
+                    continue
+                c, key = t.single
+                cur = bool(c[key])
+                if cur and not prev_single[n]:
+                    pending[n] = True
+                prev_single[n] = cur
+            best = next((i for i in order if pending[i]), None)
+            if best is None:
+                break
+            pending[best] = False
             m.rt.now = now
             m.rt.budget = LOOP_BUDGET
-            fault = m._run_task(task)
-            if fault is not None:
-                break
+            fault = m._run_task(m.tasks[best])
         pairs = list(state.items()) + list(ins.items())
         model = _model(pairs)
         mine_fault = any(z3.is_true(model.eval(c, model_completion=True))

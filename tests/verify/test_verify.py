@@ -269,6 +269,10 @@ def test_differential_features():
     _check([HERE / "diff" / "features.st"], 30, [1, 2])
 
 
+def test_differential_event_tasks():
+    _check([HERE / "diff" / "events.st"], 40, [1, 2])
+
+
 @pytest.mark.parametrize("example", ["traffic_light", "motor_il", "conveyor_counter",
                                      "packaging_il_st", "pid_loop", "tank_level"])
 def test_differential_examples(example):

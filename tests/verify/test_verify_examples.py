@@ -51,7 +51,7 @@ def test_example_properties_proved(example, capsys, tmp_path):
 
 @pytest.mark.parametrize("example, construct", [
     ("alarm_handler", "the string function FIND"),
-    ("watchdog_event", "the event task"),
+    ("watchdog_event", "the string function CONCAT"),
 ])
 def test_examples_outside_the_encoding_are_refused(example, construct, capsys):
     rc = cli.main(["verify", str(ROOT / "examples" / example)])
