@@ -623,6 +623,11 @@ class Gen:
                 if c:
                     args.append(f"{v.name} => {self.render_path(self.pick(c)[0], scope, d)}")
                     self.feat("function_output")
+        if formal and getattr(f, "eno", False) and self.chance(0.6):
+            c = [x for x in self.readable(scope, BOOL, writable=True) if x[1] is BOOL]
+            if c:
+                args.append(f"ENO => {self.render_path(self.pick(c)[0], scope, d)}")
+                self.feat("function_eno_out")
         self.feat("user_function")
         return f"{f.name}({', '.join(args)})"
 
@@ -668,6 +673,9 @@ class Gen:
                 k = self.r.randint(1, min(hi, 9))
                 if t.signed and self.chance(0.3):
                     k = -k
+                if op == "MOD" and self.chance(0.3):
+                    self.feat("fn_form_MOD")        # the function form (issue 10)
+                    return f"MOD({x()}, {k})"
                 return f"({x()} {op} {k})"
             self.feat("div_risky")
             return f"({x()} {op} {x()})"
@@ -723,6 +731,10 @@ class Gen:
         x = lambda: self.expr(t, scope, d)   # noqa: E731
         if r < 0.35:
             self.feat("bitwise")
+            if self.chance(0.2):
+                self.feat("fn_form_bitwise")    # AND(a, b, ...) (issue 10)
+                return f"{self.pick(['AND', 'OR', 'XOR'])}" \
+                    f"({', '.join(x() for _ in range(self.r.randint(2, 3)))})"
             return f"({x()} {self.pick(['AND', 'OR', 'XOR', '&'])} {x()})"
         if r < 0.45:
             return f"NOT {x()}"
@@ -761,6 +773,11 @@ class Gen:
             return f"-{x()}" if self.chance(0.5) else f"ABS({x()})"
         if r < 0.58:
             self.feat("std_SQRT")
+            if self.chance(0.3):
+                # an untyped real literal typed by its context (issue 10):
+                # SQRT on REAL where t is REAL (sqrt is exact in both engines)
+                self.feat("real_literal_context")
+                return f"SQRT({self.r.randint(0, 400) / 4.0!r})"
             return f"SQRT({x()})"
         if r < 0.66:
             f = self.pick(["MAX", "MIN", "LIMIT", "SEL"])
@@ -845,6 +862,10 @@ class Gen:
         r = self.r.random()
         x = lambda: self.expr(BOOL, scope, d)   # noqa: E731
         if r < 0.25:
+            if self.chance(0.15):
+                self.feat("fn_form_bitwise")
+                return f"{self.pick(['AND', 'OR', 'XOR'])}" \
+                    f"({', '.join(x() for _ in range(self.r.randint(2, 3)))})"
             return f"({x()} {self.pick(['AND', 'OR', 'XOR', '&'])} {x()})"
         if r < 0.32:
             return f"NOT {x()}"
@@ -1077,10 +1098,20 @@ class Gen:
     def fb_call(self, scope, d):
         ind = "    " * (d + 1)
         insts = [v for v in scope if v.ty.kind == "fb" and not v.ty.is_array]
-        if not insts:
+        arrays = [v for v in scope if v.ty.kind == "array" and v.ty.elem.kind == "fb" and
+                  len(v.ty.dims) == 1]
+        if arrays and (not insts or self.chance(0.3)):
+            v = self.pick(arrays)
+            t = v.ty.elem
+            (lo, hi), = v.ty.dims
+            callee = f"{v.name}[{self.index(lo, hi, scope, d)}]"
+            self.feat("fb_array_call")          # t[i](...) (issue 10)
+        elif not insts:
             return None
-        v = self.pick(insts)
-        t = v.ty
+        else:
+            v = self.pick(insts)
+            t = v.ty
+            callee = v.name
         args = []
         self.safe = "fault_in_call_arg" in AVOID
         for name, it in t.inputs:
@@ -1105,7 +1136,7 @@ class Gen:
                     self.feat("fb_output_binding")
         self.feat("fb_call_std" if t.std else "fb_call_user")
         self.feat("std_fb_" + t.name) if t.std else None
-        return [f"{ind}{v.name}({', '.join(args)});"]
+        return [f"{ind}{callee}({', '.join(args)});"]
 
     # ----------------------------------------------------------------- IL
     def il_operand(self, t, scope):
@@ -1407,6 +1438,13 @@ class Gen:
         self.for_ranges = []
         self.cur_name = name
         body = self.stmts(scope, 0, r.randint(2, int(6 * self.size) + 2), {"fn": True})
+        if self.chance(0.3):
+            # ENO inside the body: the implicit output, TRUE when the body
+            # starts, received by a call's ENO => (issue 10)
+            body.insert(r.randint(0, len(body)), f"    IF {self.expr(BOOL, scope)} THEN "
+                        f"ENO := FALSE; END_IF;")
+            f.eno = True
+            self.feat("function_eno")
         body.append(f"    {name} := {self.expr(res, scope)};")
         self.cur_name = None
         f.body = body

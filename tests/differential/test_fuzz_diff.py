@@ -39,6 +39,8 @@ MUST_REACH = {
     "sfc_il_condition", "sfc_il_action", "sfc_step_t", "sfc_variable_action", "sfc_q_none",
     "sfc_q_N", "sfc_q_R", "sfc_q_S", "sfc_q_P", "sfc_q_P0", "sfc_q_P1", "sfc_q_L", "sfc_q_D",
     "sfc_q_SD", "sfc_q_DS", "sfc_q_SL",
+    "fn_form_MOD", "fn_form_bitwise", "real_literal_context", "fb_array_call",
+    "function_eno", "function_eno_out",
 }
 
 
