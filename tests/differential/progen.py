@@ -1441,8 +1441,9 @@ class Gen:
         if self.chance(0.3):
             # ENO inside the body: the implicit output, TRUE when the body
             # starts, received by a call's ENO => (issue 10)
-            body.insert(r.randint(0, len(body)), f"    IF {self.expr(BOOL, scope)} THEN "
-                        f"ENO := FALSE; END_IF;")
+            line = f"    IF {self.expr(BOOL, scope)} THEN ENO := FALSE; END_IF;"
+            # before or after the statements (a statement may span lines)
+            body.insert(0, line) if self.chance(0.5) else body.append(line)
             f.eno = True
             self.feat("function_eno")
         body.append(f"    {name} := {self.expr(res, scope)};")
