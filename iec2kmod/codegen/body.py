@@ -842,6 +842,11 @@ class BodyEmitter:
         lines = []
         self.il_labels_seen = set()
         self.il_label_cr = {i.label.upper(): i.cr_in for i in instrs if i.label}
+        # a label no jump names is not written out (an unused C label is an
+        # error with -Werror=unused-label, and valid IL labels any line)
+        self.il_jump_targets = {i.operand.name.upper() for i in instrs
+                                if i.op in ("JMP", "JMPC", "JMPCN") and
+                                isinstance(i.operand, ast.Ref)}
         prev = None
         for i in instrs:
             if i.label:
@@ -866,7 +871,7 @@ class BodyEmitter:
 
     def il(self, i, depth) -> list[str]:
         out = []
-        if i.label:
+        if i.label and i.label.upper() in getattr(self, "il_jump_targets", (i.label.upper(),)):
             out.append(f"L_{self.il_label_prefix}{i.label.lower()}:;")
         f = Frame(self, i.pos)
         op = i.op
