@@ -600,15 +600,19 @@ class Declarer:
             name = decl.names[0][0]
             where = owner.kind.lower().replace("_", " ") if isinstance(owner, POUInfo) else \
                 "this declaration"
+            arrow = "=>" if addr[1] == "Q" else ":="
+            if isinstance(owner, POUInfo) and owner.kind == "PROGRAM":
+                other = (f"or make '{name}' an input or output of the program and connect it: "
+                         f"PROGRAM inst WITH task : {owner.name} ({name} {arrow} {addr})")
+            else:
+                other = (f"or make '{name}' an input or output of the {where} and pass it from "
+                         "the program that calls it")
             self.error(src, decl.pos,
                        f"located variable '{name}' AT {addr} in a {where}: by the rule of "
                        "located variables, directly represented variables appear only in "
                        "configuration and resource declarations and in program connections; "
                        f"declare it there (VAR_GLOBAL {name} AT {addr} : {t.name}; END_VAR) "
-                       f"and reach it through VAR_EXTERNAL {name}, or make '{name}' an input "
-                       f"or output of the program and connect it: PROGRAM inst WITH task : "
-                       f"{owner.name if isinstance(owner, POUInfo) else 'type'} "
-                       f"({name} {'=>' if addr[1] == 'Q' else ':='} {addr})")
+                       f"and reach it through VAR_EXTERNAL {name}, {other}")
             return
         if addr.endswith("*"):
             self.error(src, decl.pos, f"incomplete address {addr} is allowed only in programs "

@@ -480,8 +480,9 @@ def simulate(project, end, watch=None, inputs=None, sanitize=False, engine="c"):
                    build_dir=build_root() / "sim")
 
 
-def run_group(name: str, cases, sanitize=False, engine="c") -> GroupRun:
-    """Builds and runs cases as one simulation (standalone cases: one each)."""
+def run_group(name: str, cases, sanitize=False, engine="c", extra_sources=()) -> GroupRun:
+    """Builds and runs cases as one simulation (standalone cases: one each);
+    *extra_sources*: more files of the project (a library the cases use)."""
     run = GroupRun(cases)
     try:
         out = build_root() / "exec"
@@ -499,7 +500,7 @@ def run_group(name: str, cases, sanitize=False, engine="c") -> GroupRun:
             text = wrapper_config(name, cases)
             if not cfg.exists() or cfg.read_text() != text:
                 cfg.write_text(text)
-            paths = [c.path for c in cases] + [cfg]
+            paths = [c.path for c in cases] + [cfg] + list(extra_sources)
             project = check_project(paths)
             for c in cases:
                 run.task_of[c.name] = f"t_{c.program}"
