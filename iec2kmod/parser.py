@@ -531,6 +531,7 @@ _TOKEN_NAMES = {
     "LITERAL": "literal", "DIRECT_ADDRESS": "direct address",
     "BINARY_OP": "operator", "UNARY_OP": "unary operator",
     "IL_OP": "IL operator", "IL_CALL_OP": "CAL", "EOL": "end of line",
+    "IL_SIGNED_NUMBER": "number",
     "EOF": "end of file",
 }
 
