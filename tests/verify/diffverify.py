@@ -112,10 +112,11 @@ def run(project, cycles, seed):
             fault = m._run_task(m.tasks[best])
         pairs = list(state.items()) + list(ins.items())
         model = _model(pairs)
-        mine_fault = any(z3.is_true(model.eval(c, model_completion=True))
-                         for c, *_ in ts.faults)
-        if (fault is not None) != mine_fault:
-            diffs.append((k, "fault", fault.kind if fault else None, mine_fault))
+        mine = next((kind for c, kind, *_ in ts.faults
+                     if z3.is_true(model.eval(c, model_completion=True))), None)
+        if (fault is not None) != (mine is not None) or (fault is not None and
+                                                         fault.kind != mine):
+            diffs.append((k, "fault", fault.kind if fault else None, mine))
             break
         if fault is not None:
             break

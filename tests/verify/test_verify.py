@@ -269,6 +269,13 @@ def test_differential_features():
     _check([HERE / "diff" / "features.st"], 30, [1, 2])
 
 
+def test_differential_edges_and_faults():
+    """EN/ENO, bit writes, in-outs bound through a variable index, MUX,
+    shifts, WHILE/REPEAT, and the runtime faults: the same fault in the
+    same cycle (seeds whose runs fault early included)."""
+    _check([HERE / "diff" / "edges.st"], 40, [1, 2, 6, 11])
+
+
 def test_differential_event_tasks():
     _check([HERE / "diff" / "events.st"], 40, [1, 2])
 
