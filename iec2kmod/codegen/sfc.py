@@ -37,14 +37,18 @@ its own, iec2kmod/interp/sfc.py):
   5. Action control: for every action, each qualifier input of its
      ACTION_CONTROL block is the OR of the X flags (after clearing) of the
      steps that associate it with that qualifier (no qualifier is N; P and
-     P1 are the same rising edge, P0 the falling edge).  T is the time of
+     P1 pulse on the rising edge, P0 on the falling edge; P is part of the
+     action flag Q, P1 and P0 only of the activation A).  T is the time of
      the first timed association, in source order, whose step is active; it
      keeps its value while none is (a stored SD/SL timer runs on).  The
      blocks of all actions are evaluated, in the order of the actions
      (ACTIONs as declared, then Boolean-variable actions in the order of
      their first association), before any body runs.
-  6. Action bodies: every ACTION whose Q is TRUE runs once, in declaration
-     order; a Boolean-variable action's variable gets Q.  RETURN ends the
+  6. Action bodies: every ACTION whose A is TRUE runs once, in declaration
+     order; a Boolean-variable action's variable gets Q (ed.2 2.6.4.5: Q is
+     FALSE during an execution invoked by P1 or P0).  No final scan: an
+     action does not run once more after Q falls (the standard leaves the
+     choice to the implementation; MatIEC has none either).  RETURN ends the
      action's body, a fault stops the whole body (the task's fault rules).
 """
 
@@ -168,7 +172,7 @@ class SFCEmitter:
                 out.append(f"{be.var_access(a.var)} = {ac}.q;")
                 continue
             body, end = self.action_body(a, k)
-            out += [f"if ({ac}.q) {{"] + be.indent(body)
+            out += [f"if ({ac}.a) {{"] + be.indent(body)
             if end:
                 out.append(f"{end}:;")
             out.append("}")

@@ -26,9 +26,10 @@ One call of the body, ``now`` being the start of the task's cycle:
     action in turn: each qualifier input is TRUE when some step associating
     the action with that qualifier is active (P and P1 rising edge, P0
     falling edge); T comes from the first active step with a timed
-    association (kept when none); the output Q is computed for all actions
+    association (kept when none); the action flag Q and the activation A
+    (Q, or a P1/P0 pulse, which Q never shows) are computed for all actions
     first.
-  * Then the bodies: each ACTION with Q runs once, in declaration order;
+  * Then the bodies: each ACTION with A runs once, in declaration order;
     a Boolean variable used as an action receives Q.
 """
 
@@ -59,6 +60,7 @@ class ActionControl:
                                     False)
         self.T = 0
         self.Q = False
+        self.A = False
         self.S_FF = self.SD_FF = self.DS_FF = self.SL_FF = False
         self.mem = {"P": False, "P1": False, "P0": False}
         self.L_TMR, self.D_TMR = _Timer(), _Timer()
@@ -81,11 +83,11 @@ class ActionControl:
         self.S_FF = self._rs(i["S"], R, self.S_FF)
         l_q = self._ton(self.L_TMR, i["L"], self.T, rt)
         d_q = self._ton(self.D_TMR, i["D"], self.T, rt)
-        pulse = False
+        rising = {}
         for q in ("P", "P1"):
-            pulse = pulse or (i[q] and not self.mem[q])
+            rising[q] = i[q] and not self.mem[q]
             self.mem[q] = i[q]
-        pulse = pulse or (self.mem["P0"] and not i["P0"])
+        falling = self.mem["P0"] and not i["P0"]
         self.mem["P0"] = i["P0"]
         self.SD_FF = self._rs(i["SD"], R, self.SD_FF)
         sd_q = self._ton(self.SD_TMR, self.SD_FF, self.T, rt)
@@ -93,8 +95,10 @@ class ActionControl:
         self.DS_FF = self._rs(ds_q, R, self.DS_FF)
         self.SL_FF = self._rs(i["SL"], R, self.SL_FF)
         sl_q = self._ton(self.SL_TMR, self.SL_FF, self.T, rt)
-        self.Q = (not R) and bool(i["N"] or self.S_FF or (i["L"] and not l_q) or d_q or pulse
-                                  or sd_q or self.DS_FF or (self.SL_FF and not sl_q))
+        self.Q = (not R) and bool(i["N"] or self.S_FF or (i["L"] and not l_q) or d_q
+                                  or rising["P"] or sd_q or self.DS_FF
+                                  or (self.SL_FF and not sl_q))
+        self.A = bool(self.Q or rising["P1"] or falling)
 
 
 class _State:
@@ -186,7 +190,7 @@ def compile_sfc(pc):
         for (_, body, target), ac in zip(actions, state.controls):
             if target is not None:
                 target(env, ac.Q)
-            elif ac.Q:
+            elif ac.A:
                 body(env)       # RETURN ends the action only
         return None
     return run

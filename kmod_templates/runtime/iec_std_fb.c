@@ -239,6 +239,6 @@ void iec_fb_action_control(struct iec_fb_action_control *self, struct iec_ctx *c
 	iec__action_timer(&self->sl_tmr, self->sl_ff, self->t, ctx);
 	self->q = !self->r &&
 		  (self->n || self->s_ff || (self->l && !self->l_tmr.q) || self->d_tmr.q ||
-		   p_q || p1_q || p0_q || self->sd_tmr.q || self->ds_ff ||
-		   (self->sl_ff && !self->sl_tmr.q));
+		   p_q || self->sd_tmr.q || self->ds_ff || (self->sl_ff && !self->sl_tmr.q));
+	self->a = self->q || p1_q || p0_q;
 }

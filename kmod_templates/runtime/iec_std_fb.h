@@ -164,8 +164,12 @@ IEC__DECL_TIMER(tof_ltime, iec_ltime)
  * ACTION_CONTROL (IEC 61131-3 ed.2 2.6.4.5, figure 14, the form without
  * final scan): the control of one SFC action.  Each Boolean input is the
  * OR of the activity flags (X) of the steps that associate the action with
- * that qualifier; T is the time of the timed association in force.  The
- * body is the standard's network of blocks, in its order:
+ * that qualifier; T is the time of the timed association in force.  Q is
+ * the action flag (a Boolean-variable action takes its value); A, the
+ * activation, is Q or a P1/P0 pulse: an action's statements run while A
+ * is TRUE (ed.2 2.6.4.5 rule 1 and its notes 2-3: Q stays FALSE during
+ * an execution invoked by P1 or P0).  The body is the standard's network
+ * of blocks, in its order:
  *   S_FF  RS(S := S0, R1 := R)       L_TMR  TON(IN := L, PT := T)
  *   D_TMR TON(IN := D, PT := T)      P_TRIG R_TRIG(CLK := P)
  *   P1_TRIG R_TRIG(CLK := P1)        P0_TRIG F_TRIG(CLK := P0)
@@ -173,15 +177,15 @@ IEC__DECL_TIMER(tof_ltime, iec_ltime)
  *   DS_TMR TON(IN := DS, PT := T)    DS_FF  RS(S := DS_TMR.Q, R1 := R)
  *   SL_FF RS(S := SL, R1 := R)       SL_TMR TON(IN := SL_FF.Q1, PT := T)
  *   Q := NOT R AND (N OR S_FF.Q1 OR (L AND NOT L_TMR.Q) OR D_TMR.Q OR
- *        P_TRIG.Q OR P1_TRIG.Q OR P0_TRIG.Q OR SD_TMR.Q OR DS_FF.Q1 OR
- *        (SL_FF.Q1 AND NOT SL_TMR.Q))
+ *        P_TRIG.Q OR SD_TMR.Q OR DS_FF.Q1 OR (SL_FF.Q1 AND NOT SL_TMR.Q))
+ *   A := Q OR P1_TRIG.Q OR P0_TRIG.Q
  * The timers are the TON above (ctx->now_ns, PT read at every call).  The
  * all-zero struct is the initial state (F_TRIG: "CLK was FALSE").
  */
 struct iec_fb_action_control {
 	iec_bool n, r, s0, l, d, p, p1, p0, sd, ds, sl;
 	iec_time t;
-	iec_bool q;
+	iec_bool q, a;
 	iec_bool s_ff, sd_ff, ds_ff, sl_ff;	/* the RS blocks' Q1 */
 	iec_bool p_prev, p1_prev, p0_prev;	/* the edge detectors' memories */
 	struct iec_fb_ton l_tmr, d_tmr, sd_tmr, ds_tmr, sl_tmr;

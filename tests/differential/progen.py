@@ -1377,7 +1377,8 @@ class Gen:
             actions.append((name, body))
         bool_vars = [v.name for v in scope if v.ty is BOOL and v.sec in ("var", "out")
                      and not v.ro and not v.reserved and not v.sink]
-        times = [p for p, t in self.readable(scope, TIME) if self.plain(p)]
+        # action_time ::= duration | variable_name (no member, no index)
+        times = [p for p, t in self.readable(scope, TIME) if len(p) == 1]
         assocs = {st: [] for st in steps}
         for st in steps:
             for _ in range(r.randint(0, 3)):

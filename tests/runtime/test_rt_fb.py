@@ -247,7 +247,7 @@ QUALS = ("n", "r", "s0", "l", "d", "p", "p1", "p0", "sd", "ds", "sl")
 
 class ActionControl(C.Structure):
     _fields_ = [(q, C.c_uint8) for q in QUALS] + [
-        ("t", C.c_int64), ("q", C.c_uint8),
+        ("t", C.c_int64), ("q", C.c_uint8), ("a", C.c_uint8),
         ("s_ff", C.c_uint8), ("sd_ff", C.c_uint8), ("ds_ff", C.c_uint8), ("sl_ff", C.c_uint8),
         ("p_prev", C.c_uint8), ("p1_prev", C.c_uint8), ("p0_prev", C.c_uint8),
         ("l_tmr", Timer), ("d_tmr", Timer), ("sd_tmr", Timer), ("ds_tmr", Timer),
@@ -257,7 +257,7 @@ class ActionControl(C.Structure):
 def test_action_control_mirror_matches_c_layout(lib):
     L = lambda k: lib.iec_test_layout(k.encode())
     assert L("action_control") == C.sizeof(ActionControl)
-    for f in ("t", "q", "p0_prev", "l_tmr", "sl_tmr"):
+    for f in ("t", "q", "a", "p0_prev", "l_tmr", "sl_tmr"):
         assert L("action_control." + f) == getattr(ActionControl, f).offset
 
 
@@ -285,7 +285,7 @@ def action_traces(draw):
 def test_action_control_matches_the_interpreter(lib, trace):
     """The runtime's ACTION_CONTROL (kmod_templates/runtime/iec_std_fb.c)
     against the reference interpreter's own (iec2kmod/interp/sfc.py), call
-    by call: Q for every qualifier, timers included."""
+    by call: Q and A for every qualifier, timers included."""
     from iec2kmod.interp.sfc import ActionControl as Ref
 
     class Rt:
@@ -307,4 +307,5 @@ def test_action_control_matches_the_interpreter(lib, trace):
         ref.inputs = {key.get(q, q.upper()): inputs[q] for q in QUALS}
         lib.iec_fb_action_control(C.byref(fb), C.byref(ctx))
         ref.run(rt_)
-        assert bool(fb.q) == ref.Q, f"call {i}: inputs {inputs}, T={t_ms} ms, now={now}"
+        assert (bool(fb.q), bool(fb.a)) == (ref.Q, ref.A), \
+            f"call {i}: inputs {inputs}, T={t_ms} ms, now={now}"

@@ -119,7 +119,7 @@ def test_c_of_the_cycle_model_is_deterministic():
     body = ca.bodies["SEQ"][1]
     # the phases of the cycle model, in their order
     marks = ["self->h_sfc_started = 1;", "self->v_idle.v_t = ", "sfc_tc0 = 0;",
-             "iec_fb_action_control(&self->h_sfc_ac0, ctx);", "if (self->h_sfc_ac0.q) {"]
+             "iec_fb_action_control(&self->h_sfc_ac0, ctx);", "if (self->h_sfc_ac0.a) {"]
     where = [body.index(m) for m in marks]
     assert where == sorted(where), body
     # PRIORITY := 2 is evaluated before the transition without priority

@@ -33,6 +33,7 @@ long iec_test_layout(const char *what)
 		{ "action_control", sizeof(struct iec_fb_action_control) },
 		{ "action_control.t", OFF(iec_fb_action_control, t) },
 		{ "action_control.q", OFF(iec_fb_action_control, q) },
+		{ "action_control.a", OFF(iec_fb_action_control, a) },
 		{ "action_control.p0_prev", OFF(iec_fb_action_control, p0_prev) },
 		{ "action_control.l_tmr", OFF(iec_fb_action_control, l_tmr) },
 		{ "action_control.sl_tmr", OFF(iec_fb_action_control, sl_tmr) },
