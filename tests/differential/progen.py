@@ -231,11 +231,19 @@ class Gen:
         self.nres = 1
         self.sfc_r = random.Random(f"sfc{seed}")
         self.sfc = True
+        # the constructs of issue 10 are decided by a generator of their own:
+        # with them off (generate_unit(fidelity=False)) a seed gives the
+        # project it gave before they were added
+        self.fid_r = random.Random(f"fid{seed}")
+        self.fid = True
 
     # ------------------------------------------------------------ helpers
     def uid(self, stem):
         self.n += 1
         return f"{stem}{self.n}"
+
+    def fid_chance(self, p):
+        return self.fid and self.fid_r.random() < p
 
     def chance(self, p):
         return self.r.random() < p
@@ -623,7 +631,7 @@ class Gen:
                 if c:
                     args.append(f"{v.name} => {self.render_path(self.pick(c)[0], scope, d)}")
                     self.feat("function_output")
-        if formal and getattr(f, "eno", False) and self.chance(0.6):
+        if formal and getattr(f, "eno", False) and self.fid_chance(0.6):
             c = [x for x in self.readable(scope, BOOL, writable=True) if x[1] is BOOL]
             if c:
                 args.append(f"ENO => {self.render_path(self.pick(c)[0], scope, d)}")
@@ -673,7 +681,7 @@ class Gen:
                 k = self.r.randint(1, min(hi, 9))
                 if t.signed and self.chance(0.3):
                     k = -k
-                if op == "MOD" and self.chance(0.3):
+                if op == "MOD" and self.fid_chance(0.3):
                     self.feat("fn_form_MOD")        # the function form (issue 10)
                     return f"MOD({x()}, {k})"
                 return f"({x()} {op} {k})"
@@ -731,7 +739,7 @@ class Gen:
         x = lambda: self.expr(t, scope, d)   # noqa: E731
         if r < 0.35:
             self.feat("bitwise")
-            if self.chance(0.2):
+            if self.fid_chance(0.2):
                 self.feat("fn_form_bitwise")    # AND(a, b, ...) (issue 10)
                 return f"{self.pick(['AND', 'OR', 'XOR'])}" \
                     f"({', '.join(x() for _ in range(self.r.randint(2, 3)))})"
@@ -773,11 +781,11 @@ class Gen:
             return f"-{x()}" if self.chance(0.5) else f"ABS({x()})"
         if r < 0.58:
             self.feat("std_SQRT")
-            if self.chance(0.3):
+            if self.fid_chance(0.3):
                 # an untyped real literal typed by its context (issue 10):
                 # SQRT on REAL where t is REAL (sqrt is exact in both engines)
                 self.feat("real_literal_context")
-                return f"SQRT({self.r.randint(0, 400) / 4.0!r})"
+                return f"SQRT({self.fid_r.randint(0, 400) / 4.0!r})"
             return f"SQRT({x()})"
         if r < 0.66:
             f = self.pick(["MAX", "MIN", "LIMIT", "SEL"])
@@ -862,7 +870,7 @@ class Gen:
         r = self.r.random()
         x = lambda: self.expr(BOOL, scope, d)   # noqa: E731
         if r < 0.25:
-            if self.chance(0.15):
+            if self.fid_chance(0.15):
                 self.feat("fn_form_bitwise")
                 return f"{self.pick(['AND', 'OR', 'XOR'])}" \
                     f"({', '.join(x() for _ in range(self.r.randint(2, 3)))})"
@@ -1100,7 +1108,7 @@ class Gen:
         insts = [v for v in scope if v.ty.kind == "fb" and not v.ty.is_array]
         arrays = [v for v in scope if v.ty.kind == "array" and v.ty.elem.kind == "fb" and
                   len(v.ty.dims) == 1]
-        if arrays and (not insts or self.chance(0.3)):
+        if arrays and self.fid_chance(1.0 if not insts else 0.3):
             v = self.pick(arrays)
             t = v.ty.elem
             (lo, hi), = v.ty.dims
@@ -1439,12 +1447,12 @@ class Gen:
         self.for_ranges = []
         self.cur_name = name
         body = self.stmts(scope, 0, r.randint(2, int(6 * self.size) + 2), {"fn": True})
-        if self.chance(0.3):
+        if self.fid_chance(0.3):
             # ENO inside the body: the implicit output, TRUE when the body
             # starts, received by a call's ENO => (issue 10)
             line = f"    IF {self.expr(BOOL, scope)} THEN ENO := FALSE; END_IF;"
             # before or after the statements (a statement may span lines)
-            body.insert(0, line) if self.chance(0.5) else body.append(line)
+            body.insert(0, line) if self.fid_chance(0.5) else body.append(line)
             f.eno = True
             self.feat("function_eno")
         body.append(f"    {name} := {self.expr(res, scope)};")
@@ -1799,11 +1807,15 @@ class Gen:
 
 
 def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
-                  sfc: bool = True) -> Unit:
+                  sfc: bool = True, fidelity: bool = True) -> Unit:
     """``sfc=False``: no SFC bodies -- the same project the seed gave before
-    the generator knew SFC (SFC is decided by a random generator of its own)."""
+    the generator knew SFC (SFC is decided by a random generator of its own).
+    ``fidelity=False``: none of the constructs of issue 10 (function forms,
+    context-typed real literals, calls on array elements, ENO in functions),
+    likewise decided by a generator of their own."""
     g = Gen(seed, k, size)
     g.sfc = sfc
+    g.fid = fidelity
     g._dims = {}
     g.for_ranges = []
     return g.unit(cycles)
