@@ -206,6 +206,10 @@ def cmd_sim(args) -> int:
         print(f"iec2kmod: internal error: {exc}", file=sys.stderr)
         return EXIT_INTERNAL
     for t, task, fault, pou, file, line in res.faults:
+        if pou == "?" and not line:          # a fault of the task, not of a statement
+            print(f"iec2kmod: runtime error: {fault} (task {task}, t={t / 1e9:.6f} s); the "
+                  f"task is stopped", file=sys.stderr)
+            continue
         print(f"{file}:{line}: runtime error: {fault} in {pou} (task {task}, "
               f"t={t / 1e9:.6f} s); the task is stopped", file=sys.stderr)
     if args.csv:

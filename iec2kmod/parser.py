@@ -491,7 +491,7 @@ def _warn_pragmas(src: SourceFile, diags: Diagnostics) -> None:
     if "{" not in src.text:
         return
     for m in _PRAGMA_SCAN.finditer(src.text):
-        if m.group(1) and not re.match(r"\{\s*selective\b", m.group(1), re.I) and \
+        if m.group(1) and not re.match(r"\{\s*(selective|watchdog)\b", m.group(1), re.I) and \
                 not _VERIFY_PRAGMA.match(m.group(1)):
             # {selective ...} is read by iec2kmod/codegen/selective.py
             diags.warning(src, m.start(1), "pragma ignored")

@@ -111,7 +111,8 @@ def render_sim(project, selective=None):
         tasks.append({"index": tp.index,
                       "name": tp.name if implicit else f"{tp.resource}.{tp.name}",
                       "interval": tp.interval_ns or 0, "priority": tp.priority,
-                      "loop_budget": LOOP_BUDGET,
+                      "loop_budget": LOOP_BUDGET, "watchdog_ns": tp.watchdog_ns,
+                      "watchdog_overruns": tp.watchdog_overruns,
                       "single": f"&{tp.single.c_name}" if tp.single else "NULL", "body": body})
     vars_ = [{"path": N.c_string(e.path.encode()), "addr": f"&{e.c_lvalue}", "kind": e.kind,
               "size": e.size} for e in plan.table]

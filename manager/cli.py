@@ -120,7 +120,8 @@ def status_text(st) -> str:
                      fmt_time(t.started_ns) if t.starts > 1 else "-"])
         if t.fault:
             when = f" at {fmt_time(t.fault_ns)}" if t.fault_ns else ""
-            what = f"{t.fault} in {t.fault_pou} line {t.fault_line}{when}"
+            from .ops import fault_text
+            what = f"{fault_text(t)}{when}"
             if t.state == "fault":
                 faults.append(f"  {t.path}: stopped on a fault: {what}")
             else:

@@ -102,11 +102,19 @@ def _in_scope(t, resource: Optional[str]) -> bool:
     return resource is None or t.resource.lower() == resource.lower()
 
 
+def fault_text(t) -> str:
+    """'division by zero in Faulty line 15'; a fault of the task itself (the
+    watchdog's overruns) has no place."""
+    if t.fault_pou in (None, "", "?") and not t.fault_line:
+        return f"{t.fault}"
+    return f"{t.fault} in {t.fault_pou} line {t.fault_line}"
+
+
 def fault_facts(st: Status, resource: Optional[str] = None) -> List[str]:
     """One line per task (of *resource*, or of every resource) that is
     stopped on a fault: a fact about the task, not an error of a command."""
-    return [f"task {t.path} is stopped on a fault: {t.fault} in {t.fault_pou} "
-            f"line {t.fault_line}" for t in st.tasks()
+    return [f"task {t.path} is stopped on a fault: {fault_text(t)}"
+            for t in st.tasks()
             if t.state == "fault" and _in_scope(t, resource)]
 
 
@@ -122,8 +130,7 @@ def _wait_tasks(c: Client, pred, what: str, timeout: float = 5.0,
         faults = [t for t in st.tasks() if t.state == "fault" and _in_scope(t, resource)]
         if faults and fail_on_fault:
             t = faults[0]
-            raise PLCError(f"task {t.path} stopped on a fault: {t.fault} in {t.fault_pou} "
-                           f"line {t.fault_line}")
+            raise PLCError(f"task {t.path} stopped on a fault: {fault_text(t)}")
         if pred(st):
             return st
         if time.monotonic() > deadline:
@@ -437,8 +444,7 @@ def _restart_faulted(c: Client, manifest: dict, types: Sequence[str],
         return []
     before = {t.path: t.cycles for t in faulted}
     for t in faulted:
-        progress(f"restarting task {t.path} (stopped on a fault: {t.fault} in {t.fault_pou} "
-                 f"line {t.fault_line})")
+        progress(f"restarting task {t.path} (stopped on a fault: {fault_text(t)})")
         c.start(t.path)
     paths = set(before)
 
@@ -452,8 +458,7 @@ def _restart_faulted(c: Client, manifest: dict, types: Sequence[str],
         again = [t for t in st.tasks() if t.path in paths and t.state == "fault"]
         if again:
             t = again[0]
-            raise PLCError(f"task {t.path} faulted again after the restart: {t.fault} in "
-                           f"{t.fault_pou} line {t.fault_line}")
+            raise PLCError(f"task {t.path} faulted again after the restart: {fault_text(t)}")
         if ran(st):
             break
         if time.monotonic() > deadline:

@@ -4,7 +4,10 @@ represented variables."""
 
 from __future__ import annotations
 
+import re
+
 from .. import ast
+from ..literals import LiteralError, parse_duration
 from .body import BodyChecker
 from .declare import ConstError, address_span, check_address_type
 from .symbols import (Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo,
@@ -14,11 +17,36 @@ from .types import BOOL, ERROR, ArrayT, ErrorT, FBType, StructT, assignable, ide
 MAX_PRIORITY = 48   # IEC 0 (most urgent) .. 48 -> SCHED_FIFO 49 .. 1
 
 
+# The watchdog of a task (issue 9): set by a pragma in front of its TASK
+# declaration, {watchdog TIME} or {watchdog TIME, N}; TIME is a TIME literal
+# or "off", N the number of overrunning cycles in a row that fault the task
+# (0 or absent: no such limit).  Without a pragma: WATCHDOG_DEFAULT_NS and
+# no overrun limit.
+WATCHDOG_DEFAULT_NS = 5_000_000_000
+# The simulated clock (`iec2kmod sim`, both engines): a cycle takes no time
+# on the clock that releases the tasks, but for the watchdog each loop
+# iteration costs SIM_ITERATION_NS of simulated execution time (everything
+# else costs nothing).  The watchdog faults the iteration that would end
+# past the watchdog time; a cycle whose simulated time exceeds the task's
+# INTERVAL is an overrun.  Deterministic, and the same in both engines: they
+# count iterations as the loop budget does.
+SIM_ITERATION_NS = 100
+WATCHDOG_MAX_OVERRUNS = 1_000_000
+_WATCHDOG_PRAGMA = re.compile(r"\{\s*watchdog\b([^}]*)\}\s*\Z", re.I)
+_WATCHDOG_ANY = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
+                           r"(\{\s*watchdog\b[^}]*\})", re.S | re.I)
+
+
+def is_watchdog_pragma(text: str) -> bool:
+    return re.match(r"\{\s*watchdog\b", text, re.I) is not None
+
+
 class ConfigChecker:
     def __init__(self, project, declarer, diags):
         self.p = project
         self.decl = declarer
         self.diags = diags
+        self.watchdogs_used = set()        # (path, offset) of the pragmas read
         # address -> [(owner description, resource name or None, src, pos)]
         self.addresses: dict = {}
         self.reported_externals: set = set()
@@ -40,6 +68,7 @@ class ConfigChecker:
                     continue
                 names[key] = node
                 self.p.configurations.append(self.configuration(node))
+        self.unused_watchdogs(units)
         if len(self.p.configurations) > 1:
             c = self.p.configurations[1]
             self.error(c.src, c.node.pos, "only one configuration per project: iec2kmod runs "
@@ -154,6 +183,7 @@ class ConfigChecker:
                 v.used = True
                 info.single = v
                 info.single_name = v.name
+        self.watchdog(info, src)
         if "PRIORITY" not in t.props:
             self.error(src, t.pos, f"task '{t.name}' needs a PRIORITY")
         if info.interval_ns is None and info.single is None and \
@@ -164,6 +194,56 @@ class ConfigChecker:
             self.error(src, t.pos, f"task '{t.name}' has both INTERVAL and SINGLE: a task is "
                                    "periodic or event-driven")
         return info
+
+    def watchdog(self, info: TaskInfo, src) -> None:
+        """The {watchdog ...} pragma right in front of the TASK, if any."""
+        info.watchdog_ns = WATCHDOG_DEFAULT_NS
+        m = _WATCHDOG_PRAGMA.search(src.text, 0, info.pos)
+        if not m:
+            return
+        self.watchdogs_used.add((src.path, m.start()))
+        pos = m.start()
+        words = [w.strip() for w in m.group(1).split(",")]
+        usage = "write {watchdog T#20ms}, {watchdog T#20ms, 3} or {watchdog off, 3}"
+        if len(words) > 2 or not words[0]:
+            self.error(src, pos, f"malformed watchdog pragma: {usage}")
+            return
+        if words[0].lower() == "off":
+            ns = 0
+        else:
+            body = re.match(r"(?:T|TIME)#(.+)\Z", words[0], re.I)
+            try:
+                ns = parse_duration(body.group(1)) if body else None
+            except LiteralError:
+                ns = None
+            if ns is None:
+                self.error(src, pos, f"watchdog time '{words[0]}' is not a TIME literal: "
+                                     f"{usage}")
+                return
+            if ns <= 0:
+                self.error(src, pos, "the watchdog time must be positive (or off)")
+                return
+        n = 0
+        if len(words) == 2:
+            if not words[1].isdigit() or int(words[1]) > WATCHDOG_MAX_OVERRUNS:
+                self.error(src, pos, f"the overrun limit '{words[1]}' is not a number of "
+                                     f"cycles 0..{WATCHDOG_MAX_OVERRUNS}: {usage}")
+                return
+            n = int(words[1])
+        if n and not info.interval_ns:
+            self.error(src, pos, "an overrun limit needs a periodic task (INTERVAL)")
+            return
+        info.watchdog_ns, info.watchdog_overruns = ns, n
+
+    def unused_watchdogs(self, units) -> None:
+        for unit in units:
+            src = unit.src
+            if "{" not in src.text:
+                continue
+            for m in _WATCHDOG_ANY.finditer(src.text):
+                if m.group(1) and (src.path, m.start(1)) not in self.watchdogs_used:
+                    self.warning(src, m.start(1), "watchdog pragma applies to nothing: put it "
+                                                  "right in front of a TASK declaration")
 
     def program_instance(self, pc, r, cfg):
         src = cfg.src

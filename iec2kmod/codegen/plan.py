@@ -75,6 +75,8 @@ class TaskPlan:
     priority: int
     single: GlobalPlan | None
     instances: list = field(default_factory=list)
+    watchdog_ns: int = 0          # see checks/config.py
+    watchdog_overruns: int = 0
 
 
 @dataclass
@@ -129,7 +131,8 @@ def build_plan(project) -> Plan:
         rtasks = {}
         for t in r.tasks.values():
             tp = TaskPlan(t.name, r.name, len(tasks), t.interval_ns, t.priority,
-                          by_var.get(id(t.single)) if t.single else None)
+                          by_var.get(id(t.single)) if t.single else None,
+                          watchdog_ns=t.watchdog_ns, watchdog_overruns=t.watchdog_overruns)
             tasks.append(tp)
             rtasks[t.name.upper()] = tp
         for inst in r.programs:

@@ -10,6 +10,8 @@ RANGE = "subrange value out of range"
 ENUM = "invalid enumerated value"
 LOOP = "endless loop (loop budget exhausted)"
 MUX = "MUX selector out of range"
+WATCHDOG = "watchdog (cycle longer than the task's watchdog time)"
+OVERRUN = "overruns (cycles in a row that ended after the next release)"
 
 
 class Fault(Exception):

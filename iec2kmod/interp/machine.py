@@ -30,7 +30,8 @@ from .. import ast
 from ..checks.types import ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, concrete
 from ..literals import LiteralError, classify, parse_duration
 from .compiler import PouCompiler
-from .errors import Fault, VMError
+from ..checks.config import SIM_ITERATION_NS
+from .errors import LOOP, OVERRUN, WATCHDOG, Fault, VMError
 from .fbs import body_of
 from .model import Initializer, Instance, copier, copy_of
 from .values import base_of, f32, wrap, wrap64
@@ -143,6 +144,8 @@ class TaskRun:
     priority: int
     single: tuple | None     # (container, key) of the SINGLE variable
     programs: list = field(default_factory=list)
+    watchdog_ns: int = 0     # 0: no limit (checks/config.py)
+    watchdog_overruns: int = 0
 
 
 class Machine:
@@ -250,7 +253,8 @@ class Machine:
             for t in r.tasks.values():
                 tr = TaskRun(t.name if self.implicit else f"{r.name}.{t.name}",
                              t.interval_ns or 0, t.priority,
-                             self.cells[id(t.single)] if t.single is not None else None)
+                             self.cells[id(t.single)] if t.single is not None else None,
+                             watchdog_ns=t.watchdog_ns, watchdog_overruns=t.watchdog_overruns)
                 self.tasks.append(tr)
                 rtasks[t.name.upper()] = tr
             for pi in r.programs:
@@ -532,6 +536,7 @@ def _schedule(self, table, idx, events, end):
     res = VMResult([table[i].path for i in idx], [], end_ns=end)
     next_release = [0] * ntasks
     cycles = [0] * ntasks
+    late = [0] * ntasks                # overrunning cycles in a row
     faulted = [False] * ntasks
     pending = [False] * ntasks
     prev_single = [False] * ntasks
@@ -572,9 +577,22 @@ def _schedule(self, table, idx, events, end):
             if faulted[best]:
                 continue
             rt.now = t
-            rt.budget = LOOP_BUDGET
-            fault = self._run_task(tasks[best])
+            tk = tasks[best]
+            # the watchdog in simulated time: iterations of SIM_ITERATION_NS
+            wd = tk.watchdog_ns // SIM_ITERATION_NS if tk.watchdog_ns else LOOP_BUDGET
+            granted = rt.budget = min(wd, LOOP_BUDGET)
+            fault = self._run_task(tk)
             cycles[best] += 1
+            if fault is not None and fault.kind == LOOP and wd < LOOP_BUDGET:
+                fault.kind = WATCHDOG
+            if fault is None and tk.interval and tk.watchdog_overruns:
+                if (granted - rt.budget) * SIM_ITERATION_NS > tk.interval:
+                    late[best] += 1
+                    if late[best] >= tk.watchdog_overruns:
+                        self._restore_globals(self._cycle_saved)
+                        fault = Fault(OVERRUN)
+                else:
+                    late[best] = 0
             if fault is not None:
                 faulted[best] = True
                 res.faults.append((t, tasks[best].name, fault.kind, fault.pou or "?",
@@ -607,6 +625,7 @@ def _run_task(self, task):
     of its cycle, and not at all when the cycle faults (the task's image is
     not copied out): a faulting cycle leaves every global as it was."""
     saved = self._save_globals()
+    self._cycle_saved = saved
     for pr in task.programs:
         iv = pr.inst.v
         try:

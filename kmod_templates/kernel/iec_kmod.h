@@ -18,6 +18,7 @@
 #define IEC_KMOD_H
 
 #include <linux/types.h>
+#include <linux/hrtimer.h>
 #include <linux/ktime.h>
 #include <linux/list.h>
 #include <linux/module.h>
@@ -118,6 +119,14 @@ struct iec_task {
 	int priority;		/* IEC priority, 0 most urgent */
 	int single_event;	/* event number of its SINGLE variable, -1 none */
 	u32 loop_budget;	/* iterations per cycle before "endless loop" */
+	/*
+	 * The watchdog ({watchdog ...} pragma, iec2kmod/checks/config.py): a
+	 * cycle longer than watchdog_ns faults the task where it is (0: no
+	 * limit); watchdog_overruns cycles in a row that end after the next
+	 * release fault it too (0: no limit).
+	 */
+	s64 watchdog_ns;
+	u32 watchdog_overruns;
 	/* generated: copy in, run the programs, copy out */
 	void (*copy_in)(void);
 	void (*run)(struct iec_ctx *ctx);
@@ -134,6 +143,8 @@ struct iec_task {
 	ktime_t until;		/* 0, or: stop before this release ("run") */
 	ktime_t next;
 	struct iec_task_stats stats;
+	struct hrtimer watchdog;	/* armed during a cycle */
+	u32 late;			/* overrunning cycles in a row */
 
 	/*
 	 * Manager access to the task's program instances (iec_ctl.c).  The

@@ -13,6 +13,17 @@
  * IEC priority 0..48 maps to SCHED_FIFO 49..1: below the threaded
  * interrupt handlers (50), as on OpenPLC and LinuxCNC.
  *
+ * The watchdog: a hard hrtimer armed for watchdog_ns at the start of each
+ * cycle empties the cycle's loop budget when it fires, with the fault
+ * IEC_FAULT_WATCHDOG; the next loop iteration of the body faults there,
+ * located at its POU and line (iec_loop_tick()).  It fires again every
+ * IEC_WATCHDOG_AGAIN_NS until the cycle ends (the body may have written
+ * the budget back between reading and storing it).  A cycle that ends after
+ * the time ran out without passing a loop iteration faults at its end.
+ * watchdog_overruns cycles in a row that end after the next release fault
+ * the task (IEC_FAULT_OVERRUN) before the last one's results are copied
+ * out.
+ *
  * Unloading: while a task is active (started, until it acknowledges a
  * stop or a fault by going idle) its thread holds a reference on this
  * module, so rmmod refuses ("in use") instead of waiting in module exit
@@ -32,6 +43,7 @@
 #include "iec_kmod.h"
 
 #define IEC_FIFO_TOP	49
+#define IEC_WATCHDOG_AGAIN_NS	(100 * NSEC_PER_USEC)
 
 static struct iec_resource *iec_this_res;
 
@@ -88,6 +100,38 @@ static void iec_task_account(struct iec_task *t, s64 latency, s64 exec)
 	s->exec_sum_ns += exec;
 }
 
+/* Hard interrupt context: the cycle's time is up. */
+static enum hrtimer_restart iec_watchdog_fire(struct hrtimer *timer)
+{
+	struct iec_task *t = container_of(timer, struct iec_task, watchdog);
+
+	WRITE_ONCE(t->ctx.budget_fault, IEC_FAULT_WATCHDOG);
+	smp_wmb();	/* the fault before the empty budget (iec_loop_tick) */
+	WRITE_ONCE(t->ctx.loop_budget, 0);
+	hrtimer_forward_now(timer, ns_to_ktime(IEC_WATCHDOG_AGAIN_NS));
+	return HRTIMER_RESTART;
+}
+
+/* After the programs ran: the watchdog's faults that no loop noticed. */
+static void iec_watchdog_check(struct iec_task *t, ktime_t release)
+{
+	if (t->watchdog_ns) {
+		hrtimer_cancel(&t->watchdog);
+		if (t->ctx.fault == IEC_FAULT_NONE &&
+		    READ_ONCE(t->ctx.budget_fault) == IEC_FAULT_WATCHDOG)
+			iec_fault_raise(&t->ctx, IEC_FAULT_WATCHDOG);
+	}
+	if (!t->interval_ns || !t->watchdog_overruns ||
+	    t->ctx.fault != IEC_FAULT_NONE)
+		return;
+	if (ktime_after(ktime_get(), ktime_add_ns(release, t->interval_ns))) {
+		if (++t->late >= t->watchdog_overruns)
+			iec_fault_raise(&t->ctx, IEC_FAULT_OVERRUN);
+	} else {
+		t->late = 0;
+	}
+}
+
 /*
  * One cycle.  The programs' clock (timers) reads the cycle's release time,
  * not the moment the thread got the CPU: time advances by exactly one
@@ -98,9 +142,13 @@ static void iec_task_cycle(struct iec_task *t, ktime_t release)
 	ktime_t start = ktime_get();
 
 	iec_ctx_cycle_begin(&t->ctx, ktime_to_ns(release));
+	if (t->watchdog_ns)
+		hrtimer_start(&t->watchdog, ns_to_ktime(t->watchdog_ns),
+			      HRTIMER_MODE_REL_HARD);
 	iec2kmod_cycle_begin(t);	/* forces; the manager waits from here */
 	t->copy_in();
 	t->run(&t->ctx);
+	iec_watchdog_check(t, release);
 	if (t->ctx.fault != IEC_FAULT_NONE) {
 		/* the task stops; its results of this cycle are not written */
 		t->stats.faults++;
@@ -273,6 +321,8 @@ static int iec_task_create(struct iec_resource *res, struct iec_task *t)
 
 	t->res = res;
 	raw_spin_lock_init(&t->var_lock);
+	hrtimer_init(&t->watchdog, CLOCK_MONOTONIC, HRTIMER_MODE_REL_HARD);
+	t->watchdog.function = iec_watchdog_fire;
 	iec_ctx_init(&t->ctx, t->loop_budget);
 	p = kthread_create(iec_task_thread, t, "iec/%s/%s", res->name, t->name);
 	if (IS_ERR(p))
@@ -308,6 +358,7 @@ static int iec_resource_start_task(struct iec_resource *res, u32 i)
 	if (smp_load_acquire(&t->state) == IEC_TASK_RUNNING)
 		return 0;
 	iec_fault_clear(&t->ctx);
+	t->late = 0;
 	t->stats.starts++;
 	t->stats.started = ktime_get_real();
 	WRITE_ONCE(t->event_pending, false);
@@ -352,6 +403,7 @@ static void iec_resource_destroy(struct iec_resource *res)
 		smp_store_release(&t->state, IEC_TASK_STOPPED);
 		kthread_stop(t->thread);	/* waits for the cycle to end */
 		t->thread = NULL;
+		hrtimer_cancel(&t->watchdog);
 	}
 }
 

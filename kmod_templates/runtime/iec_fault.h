@@ -53,6 +53,8 @@ enum iec_fault_code {
 	IEC_FAULT_LOOP,		/* loop budget of the cycle exhausted */
 	IEC_FAULT_MUX,		/* MUX selector K out of range */
 	IEC_FAULT_USER,		/* raised by the program itself */
+	IEC_FAULT_WATCHDOG,	/* the cycle ran longer than its watchdog time */
+	IEC_FAULT_OVERRUN,	/* too many cycles in a row ended late */
 	IEC_FAULT__COUNT
 };
 
@@ -63,6 +65,13 @@ struct iec_ctx {
 	iec_s64 now_ns;			/* time the task cycle started */
 	iec_u32 loop_budget;		/* iterations left in this cycle */
 	iec_u32 loop_budget_cycle;	/* budget granted at cycle start */
+	/*
+	 * the fault an exhausted budget raises: IEC_FAULT_LOOP, or
+	 * IEC_FAULT_WATCHDOG when the watchdog ended the cycle (the kernel's
+	 * watchdog timer empties the budget; the simulation grants only the
+	 * iterations that fit in the watchdog time)
+	 */
+	enum iec_fault_code budget_fault;
 	enum iec_fault_code fault;	/* first fault, IEC_FAULT_NONE if none */
 	const char *fault_pou;		/* POU that raised it (NULL: unknown) */
 	int fault_line;			/* source line in that POU, 0: unknown */
@@ -80,12 +89,14 @@ static inline void iec_ctx_init(struct iec_ctx *ctx, iec_u32 loop_budget)
 	ctx->loop_budget_cycle = loop_budget ? loop_budget :
 					       IEC_LOOP_BUDGET_DEFAULT;
 	ctx->loop_budget = ctx->loop_budget_cycle;
+	ctx->budget_fault = IEC_FAULT_LOOP;
 }
 
 static inline void iec_ctx_cycle_begin(struct iec_ctx *ctx, iec_s64 now_ns)
 {
 	ctx->now_ns = now_ns;
 	ctx->loop_budget = ctx->loop_budget_cycle;
+	ctx->budget_fault = IEC_FAULT_LOOP;
 }
 
 static inline void iec_fault_clear(struct iec_ctx *ctx)
@@ -134,6 +145,10 @@ static inline const char *iec_fault_name(enum iec_fault_code code)
 		return "MUX selector out of range";
 	case IEC_FAULT_USER:
 		return "fault raised by the program";
+	case IEC_FAULT_WATCHDOG:
+		return "watchdog (cycle longer than the task's watchdog time)";
+	case IEC_FAULT_OVERRUN:
+		return "overruns (cycles in a row that ended after the next release)";
 	default:
 		return "unknown fault";
 	}
@@ -155,14 +170,21 @@ static inline const char *iec_fault_name(enum iec_fault_code code)
 		}							\
 	} while (0)
 
-/* Returns false (and records IEC_FAULT_LOOP) once the budget is used up. */
+/*
+ * Returns false (and records ctx->budget_fault: the endless loop, or the
+ * watchdog) once the budget is used up.  The budget is read through a
+ * volatile access: the kernel's watchdog timer empties it from interrupt
+ * context, and a loop must see that at its next iteration.
+ */
 static inline bool iec_loop_tick(struct iec_ctx *ctx)
 {
-	if (iec_likely(ctx->loop_budget != 0)) {
-		ctx->loop_budget--;
+	iec_u32 left = *(volatile iec_u32 *)&ctx->loop_budget;
+
+	if (iec_likely(left != 0)) {
+		ctx->loop_budget = left - 1;
 		return true;
 	}
-	iec_fault_raise(ctx, IEC_FAULT_LOOP);
+	iec_fault_raise(ctx, *(volatile enum iec_fault_code *)&ctx->budget_fault);
 	return false;
 }
 

@@ -21,6 +21,8 @@ struct sim_task {
 	const iec_bool *single;	/* SINGLE variable of an event task */
 	void (*run)(struct iec_ctx *ctx);
 	unsigned int loop_budget;	/* iterations per cycle, as in the kernel */
+	long long watchdog_ns;		/* 0: no limit */
+	unsigned int watchdog_overruns;	/* overrunning cycles in a row; 0: no limit */
 };
 
 struct sim_pou_file {

@@ -7,8 +7,15 @@
  * task runs when its SINGLE variable rises (checked after inputs are
  * applied and after every task cycle).  Tasks released at the same instant
  * run in IEC priority order (0 first), ties in declaration order; a cycle
- * runs to completion (execution takes no simulated time).  A task that
- * faults stops; the others go on.
+ * runs to completion (execution takes no time on the clock that releases
+ * the tasks).  A task that faults stops; the others go on.
+ *
+ * The watchdog (iec2kmod/checks/config.py) runs on simulated execution
+ * time: SIM_ITERATION_NS per loop iteration, nothing else.  A cycle gets
+ * only the iterations that fit in its watchdog time (the budget, then
+ * faulting with IEC_FAULT_WATCHDOG); a cycle whose iterations take longer
+ * than the task's interval is an overrun, and watchdog_overruns of them in
+ * a row fault the task (IEC_FAULT_OVERRUN, its results not written).
  *
  * Protocol (the Python driver writes argv and the events file):
  *   sim END_NS EVENTS_FILE WATCH_INDEX...
@@ -27,6 +34,8 @@
 #include <inttypes.h>
 
 #include "sim.h"
+
+#define SIM_ITERATION_NS 100LL	/* iec2kmod/checks/config.py SIM_ITERATION_NS */
 
 struct event {
 	long long t;
@@ -245,7 +254,7 @@ int main(int argc, char **argv)
 {
 	long long end, t = 0;
 	int *watch, nwatch = argc - 3;
-	long long *next_release, *cycles;
+	long long *next_release, *cycles, *late;
 	iec_bool *prev_single;
 	unsigned char *faulted, *pending;
 	struct iec_ctx *ctx;
@@ -268,12 +277,13 @@ int main(int argc, char **argv)
 	seen = calloc((size_t)sim_nvars + 1, 1);
 	next_release = calloc((size_t)sim_ntasks + 1, sizeof(*next_release));
 	cycles = calloc((size_t)sim_ntasks + 1, sizeof(*cycles));
+	late = calloc((size_t)sim_ntasks + 1, sizeof(*late));
 	prev_single = calloc((size_t)sim_ntasks + 1, sizeof(*prev_single));
 	faulted = calloc((size_t)sim_ntasks + 1, 1);
 	pending = calloc((size_t)sim_ntasks + 1, 1);
 	ctx = calloc((size_t)sim_ntasks + 1, sizeof(*ctx));
 	if (!watch || !last_int || !last_f || !last_s || !seen || !next_release ||
-	    !cycles || !prev_single || !faulted || !pending || !ctx)
+	    !cycles || !late || !prev_single || !faulted || !pending || !ctx)
 		die("out of memory");
 
 	sim_init();
@@ -297,6 +307,8 @@ int main(int argc, char **argv)
 			if (sim_tasks[i].interval_ns && next_release[i] == t)
 				pending[i] = 1;
 		do {
+			const struct sim_task *tk;
+			unsigned int granted;
 			int best = -1;
 
 			/* rising edges of SINGLE variables release event tasks */
@@ -319,11 +331,30 @@ int main(int argc, char **argv)
 			pending[best] = 0;
 			if (faulted[best])
 				continue;
+			tk = &sim_tasks[best];
 			iec_ctx_cycle_begin(&ctx[best], t);
+			if (tk->watchdog_ns &&
+			    tk->watchdog_ns / SIM_ITERATION_NS < ctx[best].loop_budget) {
+				ctx[best].loop_budget =
+					(unsigned int)(tk->watchdog_ns / SIM_ITERATION_NS);
+				ctx[best].budget_fault = IEC_FAULT_WATCHDOG;
+			}
+			granted = ctx[best].loop_budget;
 			ctx[best].sel_epoch = sim_sel_epoch;
 			sim_globals_save();
-			sim_tasks[best].run(&ctx[best]);
+			tk->run(&ctx[best]);
 			cycles[best]++;
+			if (ctx[best].fault == IEC_FAULT_NONE && tk->interval_ns &&
+			    tk->watchdog_overruns) {
+				long long used = (long long)(granted - ctx[best].loop_budget);
+
+				if (used * SIM_ITERATION_NS > tk->interval_ns) {
+					if (++late[best] >= tk->watchdog_overruns)
+						iec_fault_raise(&ctx[best], IEC_FAULT_OVERRUN);
+				} else {
+					late[best] = 0;
+				}
+			}
 			if (ctx[best].fault != IEC_FAULT_NONE) {
 				/* as in the kernel: a faulting cycle writes no global */
 				sim_globals_restore();
@@ -374,6 +405,7 @@ int main(int argc, char **argv)
 	free(cycles);
 	free(prev_single);
 	free(faulted);
+	free(late);
 	free(pending);
 	free(ctx);
 	return 0;

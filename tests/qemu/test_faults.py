@@ -10,7 +10,12 @@ r1.tb runs Healthy, which counts `beats`.
   and exit 0; only `start` of the faulted task's own resource fails (its
   task faults again); refused input (an unknown resource) changes nothing;
 * what a killed `load` leaves behind (a configuration module, a resource
-  never started, slots never published) is removed by a plain `stop`.
+  never started, slots never published) is removed by a plain `stop`;
+* `swap --restart` recovers a faulted task in one command, state kept;
+* the watchdog (tests/qemu/projects/watchdog): a cycle longer than its
+  task's watchdog time faults at the loop it was in, N overrunning cycles
+  in a row fault, the other tasks go on (the simulation's side, on
+  simulated time: tests/unit/test_watchdog.py).
 
 The manager is this checkout's (a plc_manager link on the guest's
 sys.path); the fixtures check the kernel log after every test.
@@ -256,5 +261,44 @@ def test_swap_restart_recovers_a_faulted_task_in_one_command(guest, faults, fixe
         # the same build again: nothing to swap, nothing restarted
         rc, out = pm(guest, pmdir, "swap", "--restart", fixed)
         assert rc == 0 and "runs already" in out and "restart" not in out, out
+    finally:
+        stop_clean(guest, pmdir)
+
+
+def test_the_watchdog_stops_a_long_cycle_and_repeated_overruns(guest_factory, faults):
+    """In virtual time (icount): the guest's clock advances with the
+    instructions it runs, so a loaded host cannot stretch a cycle past its
+    watchdog time (under plain TCG on a busy host a 1-line cycle was seen
+    to take 84 ms of guest time)."""
+    work, _, _, pmdir = faults
+    tree = work / "wd"
+    gen_and_build(HERE / "projects" / "watchdog", tree)
+    guest = guest_factory(icount=True)
+    assert loaded_modules(guest) == []
+    ok(guest, pmdir, "load", tree)
+    try:
+        before = tasks(guest, pmdir)
+        assert all(t["state"] == "running" for t in before.values()), before
+        ok(guest, pmdir, "write", "n", "900000")      # far longer than 20 ms
+        ts = wait_state(guest, pmdir, "rw.spin", "fault")
+        spin = ts["rw.spin"]
+        text = (HERE / "projects" / "watchdog" / "watchdog.st").read_text()
+        for_line = text[:text.index("FOR i := 1 TO n DO")].count("\n") + 1
+        assert spin["fault"].startswith("watchdog") and \
+            (spin["fault_pou"], spin["fault_line"]) == ("Spin", for_line), spin
+        # the cycle was stopped near its watchdog time, not by the budget
+        assert spin["exec_max_ns"] < 20_000_000 + 200_000_000, spin
+        ok(guest, pmdir, "write", "m", "900000")      # every 50 ms cycle overruns
+        ts = wait_state(guest, pmdir, "rw.slow", "fault")
+        slow = ts["rw.slow"]
+        assert slow["fault"].startswith("overruns") and slow["overruns"] >= 3, slow
+        assert ts["rb.beat"]["state"] == "running", ts
+        beats = ts["rb.beat"]["cycles"]
+        time.sleep(0.5)
+        assert tasks(guest, pmdir)["rb.beat"]["cycles"] > beats
+        out = ok(guest, pmdir, "stop")
+        assert "task rw.spin is stopped on a fault: watchdog" in out, out
+        assert "task rw.slow is stopped on a fault: overruns" in out, out
+        assert loaded_modules(guest) == []
     finally:
         stop_clean(guest, pmdir)
