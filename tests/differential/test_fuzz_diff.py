@@ -1,7 +1,8 @@
 """Differential tier: random valid projects (progen.py) run in every engine
-available -- the C simulator, the C simulator under ASan+UBSan and, once
-`iec2kmod sim --engine vm` exists, the reference interpreter -- must give
-identical traces (faults included).  300 projects on a fixed seed, 100
+available -- the C simulator, the C simulator under ASan+UBSan, the C
+simulator with selective execution (`sim --selective`: skipping blocks
+must be invisible) and, once `iec2kmod sim --engine vm` exists, the
+reference interpreter -- must give identical traces (faults included).  300 projects on a fixed seed, 100
 cycles each, in batches of 20 projects per simulator build on 2 processes
 (bodies 0.6 of the benchmark's default size, to stay within the CI budget).
 
@@ -55,6 +56,14 @@ def test_generated_projects_agree():
     reached = set().union(*(r.features for r in results))
     missing = MUST_REACH - reached
     assert not missing, f"the generator no longer reaches: {sorted(missing)}"
+    if "selective" in engines:
+        # the selective engine must have skipped blocks, or the comparison
+        # proved nothing about skipping
+        ev = sum(r.selective[0] for r in results)
+        sk = sum(r.selective[1] for r in results)
+        some = sum(1 for r in results if r.selective[1])
+        assert some >= COUNT // 10 and sk >= 0.05 * (ev + sk), \
+            f"the selective engine skipped {sk} of {ev + sk} blocks in {some} projects"
     bad = [r for r in results if not r.ok]
     kinds = collections.Counter(k for r in bad for k, _, _ in r.problems)
     report = [f"{len(bad)} of {len(results)} projects failed ({dict(kinds)}) "
