@@ -240,6 +240,33 @@ class Opaque:
         self.type = t
 
 
+def copy_tree(v):
+    """An independent copy of an array or structure value (its terms shared)."""
+    if isinstance(v, list):
+        return [copy_tree(x) for x in v]
+    if isinstance(v, dict):
+        return {k: copy_tree(x) for k, x in v.items()}
+    return v
+
+
+def store_into(c, k, guard, v):
+    """c[k] := v on the paths of guard.  An array or structure is updated in
+    place, element by element: the containers stay the ones the state
+    leaves (and references) point into."""
+    old = c[k]
+    if isinstance(old, list) and isinstance(v, list):
+        for i in range(len(old)):
+            store_into(old, i, guard, v[i])
+        return
+    if isinstance(old, dict) and isinstance(v, dict):
+        for key in old:
+            store_into(old, key, guard, v[key])
+        return
+    if isinstance(old, Instance):
+        return
+    c[k] = ite(guard, v, old)
+
+
 class Cell:
     """One place a value lives: container[key], or bit n of it."""
 
@@ -264,8 +291,7 @@ class Cell:
             v = z3.If(v, old | m, old & ~m)
             self.c[self.k] = ite(guard, v, old)
             return
-        self.c[self.k] = ite(guard, v, self.c[self.k]) if not isinstance(
-            self.c[self.k], Instance) else v
+        store_into(self.c, self.k, guard, v)
 
 
 class Place:
@@ -527,11 +553,7 @@ class Encoder:
             else:
                 out = z3.Or(z3.ULT(v, lo), z3.UGT(v, hi))
             self.fault(g, out, RANGE, frame, pos)
-        if isinstance(v, list):
-            return list(v)
-        if isinstance(v, dict):
-            return dict(v)
-        return v
+        return copy_tree(v)
 
     def write(self, r, v, src_t, frame, g, pos):
         val = self.store_value(v, src_t, r.type, frame, g, pos)
@@ -986,7 +1008,7 @@ class Encoder:
                 continue
             iv = inst.v
             for k, val in ins:
-                iv[k] = ite(gi, val, iv[k])
+                store_into(iv, k, gi, val)
             for k, pl in inouts:
                 inst.r[k] = pl
             if en_key is not None:
@@ -1504,7 +1526,7 @@ class Encoder:
             place = self.place(Ref_of(inst_var, i.pos), frame, g)
             for cond, inst in place.instances():
                 gi = land(g, cond)
-                inst.v[param.key] = ite(gi, val, inst.v[param.key])
+                store_into(inst.v, param.key, gi, val)
             return
         if op == "NOT":
             val = self.conv(self.cr_get(frame, cr_in), cr_in, concrete(cr_in))

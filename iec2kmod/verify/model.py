@@ -19,7 +19,7 @@ from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, c
 from ..interp.machine import Machine
 from ..interp.model import Instance
 from ..interp.values import base_of
-from .encode import (FALSE, Opaque, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
+from .encode import (FALSE, Opaque, store_into, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
                      land, lnot, sort_of)
 
 INT64_MAX = (1 << 63) - 1
@@ -366,7 +366,7 @@ class SymbolicMachine:
         for param, value in pi.inputs:
             val, vt = self.connection_value(value, param, enc, frame)
             new = enc.store_value(val, vt, param.type, frame, g, getattr(value, "pos", None))
-            iv[param.key] = ite(g, new, iv[param.key])
+            store_into(iv, param.key, g, new)
         enc.run_body(pi.pou, inst, g)
         for param, target in pi.outputs:
             val = iv[param.key]
@@ -377,7 +377,7 @@ class SymbolicMachine:
                 c, k = m.cells[id(target.symbol)]
                 tt = target.symbol.type
             new = enc.store_value(val, param.type, tt, frame, g, getattr(target, "pos", None))
-            c[k] = ite(g, new, c[k])
+            store_into(c, k, g, new)
 
     def connection_value(self, value, param, enc, frame):
         m = self.machine
