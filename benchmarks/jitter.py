@@ -1,15 +1,31 @@
 #!/usr/bin/env python3
-"""Benchmark (issue 4): release jitter of our 1 ms task next to cyclictest
-(rt-tests) and the kernel's timerlat, in the same QEMU guest and run, and
-the cost of REAL/LREAL (kernel FPU sections) next to the same arithmetic in
-DINT.
+"""Benchmark (issues 4 and 9): release latency of our 1 ms task next to
+cyclictest (rt-tests) at the same SCHED_FIFO priority and the kernel's
+timerlat, in the same QEMU guest and run, unloaded and loaded; and the cost
+of REAL/LREAL (kernel FPU sections) next to the same arithmetic in DINT.
+
+Scenarios (benchmarks/projects/jitter):
+
+  unloaded  ms1 (IEC priority 1 = FIFO 48) alone on the CPU with two 10 ms
+            tasks; then cyclictest -p 48 -i 1000 alone; then timerlat
+  loaded    the same while resource `load` runs `heavy`: IEC priority 0
+            (FIFO 49, above both), a body of about 70 us, every 1.37 ms (a
+            period that does not divide 1 ms)
+
+Full distributions: n, min, median, average, p99, p99.9, max, and the
+samples beyond each histogram's range (overflow).  Our histogram is
+log-linear (kmod_templates/kernel/iec_kmod.h: 1 us buckets to 32 us, then
+four per octave to 7168 us, then overflow); a percentile is the upper bound
+of its bucket (never above the exact maximum).  cyclictest's is 1 us wide
+to --hist-us (10 ms by default) plus its overflow count; its min/avg/max
+are its own.
 
 The guest runs in icount mode (`-icount shift=0,sleep=off`, one vCPU): one
 instruction is 1 ns of virtual time, so the figures repeat from run to run
 and do not depend on the host's load.  They are instruction-count budgets,
 not bare-metal latencies; compare ratios.
 
-    python benchmarks/jitter.py [--seconds 10]
+    python benchmarks/jitter.py [--seconds 10] [--hist-us 10000]
 """
 
 from __future__ import annotations
@@ -26,27 +42,107 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 HERE = Path(__file__).resolve().parent
+BUCKETS = 64                  # IEC_HIST_BUCKETS
 
 
-def percentile_from_hist(hist, q):
-    total = sum(hist)
-    if not total:
-        return 0
-    acc = 0
-    for us, n in enumerate(hist):
-        acc += n
-        if acc >= q * total:
-            return us
-    return len(hist) - 1
+def bucket_bounds(b):
+    """[lo, hi) in us of our histogram's bucket b (iec_hist_bucket())."""
+    if b < 32:
+        return b, b + 1
+    if b < BUCKETS - 1:
+        o, s = divmod(b - 32, 4)
+        return (32 << o) * (4 + s) // 4, (32 << o) * (5 + s) // 4
+    return bucket_bounds(BUCKETS - 2)[1], float("inf")
 
 
-def summary(name, samples_ns):
-    s = sorted(samples_ns)
+def bucket_of(us):
+    """The bucket of a latency in us (the kernel's function, for the test)."""
+    if us < 32:
+        return us
+    o = us.bit_length() - 1 - 5
+    return min(32 + 4 * o + ((us >> (o + 3)) & 3), BUCKETS - 1)
+
+
+class Dist:
+    """A latency distribution from a histogram: {upper bound us: count}
+    with exact min/avg/max where the tool gives them."""
+
+    def __init__(self, name, buckets, n, mn_us, avg_us, mx_us, overflow):
+        self.name, self.buckets, self.n = name, buckets, n
+        self.min, self.avg, self.max, self.overflow = mn_us, avg_us, mx_us, overflow
+
+    def q(self, p):
+        if not self.n:
+            return 0.0
+        need = p * self.n
+        acc = 0
+        for hi, c in self.buckets:
+            acc += c
+            if acc >= need:
+                return min(hi, self.max)
+        return self.max                  # in the overflow: only the maximum is known
+
+    def line(self):
+        if not self.n:
+            return f"{self.name:34} no samples"
+        return (f"{self.name:34} n={self.n:6}  min {self.min:7.1f}  median {self.q(0.5):7.1f}"
+                f"  avg {self.avg:7.2f}  p99 {self.q(0.99):7.1f}  p99.9 {self.q(0.999):7.1f}"
+                f"  max {self.max:7.1f} us  overflow {self.overflow}")
+
+
+def ours(name, hist, cycles, sum_ns, max_ns, overruns):
+    buckets = [(bucket_bounds(b)[1], c) for b, c in enumerate(hist[:BUCKETS - 1])]
+    mn = next((bucket_bounds(b)[0] for b, c in enumerate(hist) if c), 0)
+    d = Dist(f"{name} (overruns {overruns})", buckets, cycles, mn,
+             sum_ns / max(cycles, 1) / 1000, max_ns / 1000, hist[BUCKETS - 1])
+    d.q_overflow_from = bucket_bounds(BUCKETS - 1)[0]
+    return d
+
+
+def latency_line(text, task):
+    line = next(ln for ln in text.splitlines() if ln.startswith(task + " "))
+    w = line.split()
+    hist = [int(x) for x in w[10:]]
+    assert len(hist) == BUCKETS, f"{len(hist)} buckets, expected {BUCKETS}: rebuild the tree"
+    return {"cycles": int(w[2]), "overruns": int(w[4]), "max_ns": int(w[6]),
+            "sum_ns": int(w[8]), "hist": hist}
+
+
+def diff(a, b):
+    """Samples of b not in a (cumulative counters); the maximum of the
+    second phase is b's if it grew, else bounded by its histogram."""
+    hist = [y - x for x, y in zip(a["hist"], b["hist"])]
+    mx = b["max_ns"] if b["max_ns"] > a["max_ns"] else \
+        max((bucket_bounds(k)[1] * 1000 for k, c in enumerate(hist) if c), default=0)
+    return {"cycles": b["cycles"] - a["cycles"], "overruns": b["overruns"] - a["overruns"],
+            "max_ns": min(mx, b["max_ns"]), "sum_ns": b["sum_ns"] - a["sum_ns"], "hist": hist}
+
+
+def cyclictest(name, text):
+    buckets, total = [], 0
+    for ln in text.splitlines():
+        m = re.match(r"^(\d{6})\s+(\d+)\s*$", ln)
+        if m:
+            c = int(m.group(2))
+            buckets.append((int(m.group(1)) + 1, c))
+            total += c
+
+    def field(label):
+        m = re.search(rf"^# {label}:\s+(\d+)", text, re.M)
+        return int(m.group(1)) if m else None
+    over = field("Histogram Overflows") or 0
+    mn, avg, mx = field("Min Latencies"), field("Avg Latencies"), field("Max Latencies")
+    if not buckets and not over:
+        return Dist(name + ": no output", [], 0, 0, 0, 0, 0)
+    return Dist(name, buckets, total + over, mn or 0, avg or 0, mx or 0, over)
+
+
+def timerlat(name, text):
+    s = sorted(int(m.group(1)) / 1000 for m in
+               re.finditer(r"context\s+thread\s+timer_latency\s+(\d+) ns", text))
     if not s:
-        return f"{name:28} no samples"
-    pick = lambda q: s[min(len(s) - 1, int(q * len(s)))]
-    return (f"{name:28} n={len(s):6}  min {s[0] / 1000:7.2f}  avg {sum(s) / len(s) / 1000:7.2f}"
-            f"  p99 {pick(0.99) / 1000:7.2f}  max {s[-1] / 1000:7.2f} us"), sum(s) / len(s), s[-1]
+        return Dist(name + ": no samples", [], 0, 0, 0, 0, 0)
+    return Dist(name, [(v, 1) for v in s], len(s), s[0], sum(s) / len(s), s[-1], 0)
 
 
 def cli(*args):
@@ -58,7 +154,8 @@ def cli(*args):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--seconds", type=float, default=10.0)
+    ap.add_argument("--seconds", type=float, default=10.0, help="per tool and scenario")
+    ap.add_argument("--hist-us", type=int, default=10000, help="cyclictest's histogram range")
     args = ap.parse_args()
     from iec2kmod.vm import Guest
     work = Path(tempfile.mkdtemp(prefix="iec2kmod-jitter-"))
@@ -66,62 +163,82 @@ def main():
     cli("gen", str(HERE / "projects" / "jitter"), "-o", str(tree))
     cli("build", str(tree))
     manifest = json.loads((tree / "manifest.json").read_text())
+    res = {m["resource"].lower(): m["name"] for m in manifest["modules"]
+           if m["kind"] == "resource"}
+    cfg = manifest["configuration"].lower()
+    ctl = f"/sys/kernel/iec2kmod/{cfg}/control"
+    loops = int(args.seconds * 1000)
     g = Guest(str(work), icount=True, smp=1)
     g.start()
+    out = {}
     try:
         for m in manifest["load_order"]:
             g.check_call(f"insmod {tree / m / (m + '.ko')}")
-        cfg = manifest["configuration"].lower()
-        g.check_call(f"echo start all > /sys/kernel/iec2kmod/{cfg}/control")
+
+        def phase():
+            g.run(f"sleep {args.seconds}", timeout=args.seconds * 20 + 60)
+            return latency_line(g.check_call(f"cat /sys/module/{res['cpu0']}/iec_latency"),
+                                "ms1")
+
+        def ct(tag):
+            f = work / f"ct_{tag}.txt"
+            g.run(f"cyclictest -m -p 48 -i 1000 -l {loops} -q -h {args.hist_us} > {f} 2>&1",
+                  chroot=True, timeout=args.seconds * 40 + 120)
+            return f.read_text()
+
+        g.check_call(f"echo start cpu0 > {ctl}")
         time.sleep(1)
-        g.run(f"sleep {args.seconds}", timeout=args.seconds * 20 + 60)
-        res = next(m["name"] for m in manifest["modules"] if m["kind"] == "resource")
-        lat = g.check_call(f"cat /sys/module/{res}/iec_latency")
+        a = latency_line(g.check_call(f"cat /sys/module/{res['cpu0']}/iec_latency"), "ms1")
+        b = phase()
         status = g.check_call(f"cat /sys/kernel/iec2kmod/{cfg}/status")
-        g.check_call(f"echo stop all > /sys/kernel/iec2kmod/{cfg}/control")
-        # cyclictest: same period, same FIFO priority as IEC priority 0 (49)
-        loops = int(args.seconds * 1000)
-        ct = g.run(f"cyclictest -m -p 49 -i 1000 -l {loops} -q -h 200", chroot=True,
-                   timeout=args.seconds * 40 + 120).output
-        # timerlat: the kernel's own periodic RT thread woken by an hrtimer
+        g.check_call(f"echo stop cpu0 > {ctl}")
+        out["ct_unloaded"] = ct("unloaded")
         tr = "/sys/kernel/tracing"
         g.run(f"mountpoint -q {tr} || mount -t tracefs nodev {tr}")
         g.check_call(f"echo 1000 > {tr}/osnoise/timerlat_period_us && "
                      f"echo timerlat > {tr}/current_tracer && echo > {tr}/trace")
         g.run(f"sleep {args.seconds}", timeout=args.seconds * 20 + 60)
         tl = g.run(f"cat {tr}/trace; echo nop > {tr}/current_tracer", timeout=300).output
+        # loaded: heavy above ms1, then above cyclictest
+        g.check_call(f"echo start load > {ctl}")
+        g.check_call(f"echo start cpu0 > {ctl}")
+        time.sleep(1)
+        c = latency_line(g.check_call(f"cat /sys/module/{res['cpu0']}/iec_latency"), "ms1")
+        d = phase()
+        heavy = latency_line(g.check_call(f"cat /sys/module/{res['load']}/iec_latency"),
+                             "heavy")
+        hstatus = g.check_call(f"cat /sys/kernel/iec2kmod/{cfg}/status")
+        g.check_call(f"echo stop cpu0 > {ctl}")
+        out["ct_loaded"] = ct("loaded")
+        g.check_call(f"echo stop all > {ctl}")
     finally:
         g.close()
         shutil.rmtree(work, ignore_errors=True)
 
-    # ours: histogram in 1 us buckets
-    line = next(ln for ln in lat.splitlines() if ln.startswith("ms1 "))
-    words = line.split()
-    cycles, maxns, sumns = int(words[2]), int(words[6]), int(words[8])
-    hist = [int(x) for x in words[10:]]
-    ours_avg = sumns / max(cycles, 1)
-    print(f"guest: icount (1 instruction = 1 ns virtual), 1 vCPU, {args.seconds:g} s per tool")
-    print(f"{'iec2kmod task (1 ms)':28} n={cycles:6}  avg {ours_avg / 1000:7.2f}  p99 "
-          f"{percentile_from_hist(hist, 0.99):7.2f}  max {maxns / 1000:7.2f} us  "
-          f"(overruns {words[4]})")
-    # cyclictest histogram: lines "000012 000345" (us, count) and "# Max Latencies"
-    ct_samples = []
-    for ln in ct.splitlines():
-        m = re.match(r"^(\d{6})\s+(\d+)", ln)
-        if m:
-            ct_samples += [int(m.group(1)) * 1000] * int(m.group(2))
-    text, ct_avg, ct_max = summary("cyclictest (1 ms, FIFO 49)", ct_samples) if ct_samples \
-        else ("cyclictest: no output", 0, 0)
-    print(text)
-    tl_samples = [int(m.group(1)) for m in
-                  re.finditer(r"context\s+thread\s+timer_latency\s+(\d+) ns", tl)]
-    text, tl_avg, tl_max = summary("timerlat (thread, 1 ms)", tl_samples) if tl_samples \
-        else ("timerlat: no samples", 0, 0)
-    print(text)
-    if ct_avg and tl_avg:
-        print(f"ratios  ours/cyclictest: avg {ours_avg / ct_avg:.2f} max {maxns / ct_max:.2f};"
-              f"  ours/timerlat: avg {ours_avg / tl_avg:.2f} max {maxns / tl_max:.2f}")
-    # FPU cost: the same loop in DINT and in LREAL
+    print(f"guest: icount (1 instruction = 1 ns virtual), 1 vCPU, {args.seconds:g} s per tool "
+          f"and scenario; latencies in us")
+    rows = {}
+    for tag, (x, y), ctt in (("unloaded", (a, b), out["ct_unloaded"]),
+                              ("loaded", (c, d), out["ct_loaded"])):
+        s = diff(x, y)
+        mine = ours(f"iec2kmod ms1 {tag}", s["hist"], s["cycles"], s["sum_ns"], s["max_ns"],
+                    s["overruns"])
+        theirs = cyclictest(f"cyclictest {tag} (FIFO 48)", ctt)
+        rows[tag] = (mine, theirs)
+        print(mine.line())
+        print(theirs.line())
+        if theirs.n and mine.n:
+            print(f"{'':34} ours/cyclictest: median {mine.q(0.5) / max(theirs.q(0.5), 1):.2f}"
+                  f"  p99 {mine.q(0.99) / max(theirs.q(0.99), 1):.2f}"
+                  f"  max {mine.max / max(theirs.max, 1):.2f}  (target <= 1.1)")
+        if tag == "unloaded":
+            print(timerlat("timerlat unloaded (thread, 1 ms)", tl).line())
+    m = re.search(r"task load\.heavy .* exec_min_ns (\d+) exec_max_ns (\d+) exec_avg_ns (\d+)",
+                  hstatus)
+    if m:
+        print(f"load: heavy every 1.37 ms at FIFO 49, exec avg {int(m.group(3)) / 1000:.1f} us, "
+              f"max {int(m.group(2)) / 1000:.1f} us, {heavy['cycles']} cycles, "
+              f"{heavy['overruns']} overruns")
     ex = {}
     for ln in status.splitlines():
         m = re.match(r"task \S+\.(ints|reals) .* exec_min_ns (\d+) exec_max_ns (\d+) "

@@ -21,6 +21,7 @@
 #include <linux/hrtimer.h>
 #include <linux/ktime.h>
 #include <linux/list.h>
+#include <linux/log2.h>
 #include <linux/module.h>
 #include <linux/rcupdate.h>
 #include <linux/spinlock.h>
@@ -28,7 +29,15 @@
 #include "iec_fault.h"
 
 #define IEC_KMOD_ABI		1
-#define IEC_HIST_BUCKETS	32	/* release latency histogram, 1 us wide */
+/*
+ * Release latency histogram, log-linear so that it covers the worst case
+ * and stays precise where most samples are: buckets 0..31 are 1 us wide
+ * ([b, b + 1) us); from 32 us on, four buckets per octave: bucket
+ * 32 + 4 * o + s holds [(32 << o) * (4 + s) / 4, (32 << o) * (5 + s) / 4) us
+ * (o = 0..7); the last bucket counts everything from 7168 us on (overflow).
+ * benchmarks/jitter.py decodes it (iec_hist_bucket()).
+ */
+#define IEC_HIST_BUCKETS	64
 #define IEC_POU_NAME_LEN	64
 #define IEC_START_DELAY_MS	50	/* start command to the first release */
 
@@ -86,7 +95,7 @@ struct iec_task_stats {
 	s64 exec_sum_ns;
 	s64 latency_max_ns;	/* release jitter: wake-up minus deadline */
 	s64 latency_sum_ns;
-	u64 hist[IEC_HIST_BUCKETS];	/* latency, 1 us buckets, last: more */
+	u64 hist[IEC_HIST_BUCKETS];	/* latency, see IEC_HIST_BUCKETS */
 	u64 starts;		/* since the load; more than one: restarted */
 	ktime_t started;	/* CLOCK_REALTIME of the last start */
 	/*
@@ -102,6 +111,19 @@ struct iec_task_stats {
 };
 
 struct iec_resource;
+
+/* The histogram bucket of a release latency of @ns (IEC_HIST_BUCKETS). */
+static inline u32 iec_hist_bucket(s64 ns)
+{
+	u64 us = ns > 0 ? (u64)ns / NSEC_PER_USEC : 0;
+	u32 o, b;
+
+	if (us < 32)
+		return us;
+	o = ilog2(us) - 5;		/* us in [32 << o, 64 << o) */
+	b = 32 + 4 * o + ((us >> (o + 3)) & 3);
+	return min_t(u32, b, IEC_HIST_BUCKETS - 1);
+}
 
 /* A forced variable: its value is written at every cycle boundary. */
 struct iec_force {

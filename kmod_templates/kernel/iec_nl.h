@@ -74,7 +74,7 @@ enum iec_nl_attr {
 	IEC_A_EXEC_MAX_NS,	/* s64 */
 	IEC_A_LAT_AVG_NS,	/* s64: release jitter */
 	IEC_A_LAT_MAX_NS,	/* s64 */
-	IEC_A_HIST,		/* binary: u64[IEC_HIST_BUCKETS] latency, 1 us */
+	IEC_A_HIST,		/* binary: u64[IEC_HIST_BUCKETS] latency (log-linear) */
 	IEC_A_FAULT_NAME,	/* string: the last fault (kept across a restart) */
 	IEC_A_FAULT_POU,	/* string */
 	IEC_A_FAULT_LINE,	/* s32 */

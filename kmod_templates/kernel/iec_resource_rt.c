@@ -49,8 +49,8 @@ static struct iec_resource *iec_this_res;
 
 /*
  * /sys/module/<resource module>/iec_latency: per task, the release latency
- * histogram (1 us buckets, the last one holds everything above), for the
- * jitter benchmark.  Root-only.
+ * histogram (IEC_HIST_BUCKETS: log-linear, the last bucket counts the
+ * overflow), for the jitter benchmark.  Root-only.
  */
 static ssize_t iec_latency_show(struct kobject *kobj, struct kobj_attribute *attr,
 				char *buf)
@@ -62,8 +62,8 @@ static ssize_t iec_latency_show(struct kobject *kobj, struct kobj_attribute *att
 	for (i = 0; res && i < res->ntasks; i++) {
 		const struct iec_task_stats *s = &res->tasks[i].stats;
 
-		/* a line is at most ~900 bytes: stop while the page has room */
-		if (len > PAGE_SIZE - 1024) {
+		/* a line is at most ~1500 bytes: stop while the page has room */
+		if (len > PAGE_SIZE - 1600) {
 			len += sysfs_emit_at(buf, len, "...\n");
 			break;
 		}
@@ -83,13 +83,11 @@ static struct kobj_attribute iec_latency_attr = __ATTR(iec_latency, 0400,
 static void iec_task_account(struct iec_task *t, s64 latency, s64 exec)
 {
 	struct iec_task_stats *s = &t->stats;
-	u64 bucket;
 
 	s->cycles++;
 	if (latency < 0)
 		latency = 0;
-	bucket = (u64)latency / NSEC_PER_USEC;
-	s->hist[min_t(u64, bucket, IEC_HIST_BUCKETS - 1)]++;
+	s->hist[iec_hist_bucket(latency)]++;
 	if (latency > s->latency_max_ns)
 		s->latency_max_ns = latency;
 	s->latency_sum_ns += latency;
