@@ -89,6 +89,7 @@ def test_two_typed_paths_still_conflict():
     ("mod (IN1 := b, IN2 := 3)", "MOD(IN1 := b, IN2 := 3)"),
     ("AND(x, y, z)", "AND(x, y, z)"),
     ("OR(x, y) AND XOR(x, y)", "(OR(x, y) AND XOR(x, y))"),
+    ("NOT(IN := c) AND NOT (c)", "(NOT(IN := c) AND (NOT c))"),   # formal: the function
     ("a MOD (b)", "(a MOD b)"),              # still the operator after an operand
     ("a AND (b OR c)", "(a AND (b OR c))"),
 ])
