@@ -94,7 +94,11 @@ from .model import SymbolicMachine
 from .props import (Prop, PropChecker, config_scope, instance_of_path, parse_expr,
                     scan_pragmas)
 
-__all__ = ["verify", "Refuse", "Outcome"]
+__all__ = ["verify", "Refuse", "Outcome", "UsageError"]
+
+
+class UsageError(Exception):
+    """A command-line mistake (exit status 2)."""
 
 
 @dataclass
@@ -121,8 +125,8 @@ def _scopes(sym, prop, instance, diags):
     if instance is not None and prop.src.path.startswith("<"):
         hit = instance_of_path(sym, instance)
         if hit is None:
-            diags.error(None, None, f"--instance: no program instance '{instance}'")
-            return []
+            raise UsageError(f"--instance: no program instance '{instance}' (the instances: "
+                             + ", ".join(p for p, _ in sym.machine.instances) + ")")
         return [(prop.name, hit[0], hit[1])]
     pou, inst = config_scope(sym)
     return [(prop.name, pou, inst)]

@@ -26,7 +26,7 @@ def _fmt_time(ns):
 def run_verify(args) -> int:
     from ..cli import front_end, print_diagnostics
     from ..diagnostics import Diagnostics
-    from . import Refuse, verify
+    from . import Refuse, UsageError, verify
     from .cex import replay, write_trace
     if args.unroll < 1:
         print("iec2kmod: error: --unroll must be at least 1", file=sys.stderr)
@@ -45,6 +45,9 @@ def run_verify(args) -> int:
     except Refuse as exc:
         diags.error(exc.src, exc.pos if exc.pos is not None else 0, exc.message)
         out = None
+    except UsageError as exc:
+        print(f"iec2kmod: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
     print_diagnostics(diags, sys.stderr)
     if out is None:
         return EXIT_SOURCE
@@ -120,7 +123,7 @@ def run_export(args) -> int:
     that cannot be exported, 2 usage or I/O errors."""
     from ..cli import front_end, print_diagnostics
     from ..diagnostics import Diagnostics
-    from . import Refuse
+    from . import Refuse, UsageError
     from .uppaal import export
     project = front_end(args.files)
     if project is None:
@@ -128,6 +131,9 @@ def run_export(args) -> int:
     diags = Diagnostics()
     try:
         text, warnings = export(project, args.property, args.instance)
+    except UsageError as exc:
+        print(f"iec2kmod: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
     except Refuse as exc:
         diags.error(exc.src, exc.pos if exc.pos is not None else 0, exc.message)
         print_diagnostics(diags, sys.stderr)

@@ -251,6 +251,8 @@ def test_bad_properties_are_diagnosed(tmp_path, capsys):
     rc, out, err = verify(capsys, bad)
     assert rc == 1 and "p.st:5:" in err and "Traceback" not in err
     assert cli.main(["verify", str(proj), "--depth", "0"]) == 2
+    rc, out, err = verify(capsys, proj, "--instance", "nope", "-p", "n <= 10")
+    assert rc == 2 and "--instance: no program instance 'nope' (the instances: R.c)" in err
 
 
 # ----------------------------------------------------------- differential
