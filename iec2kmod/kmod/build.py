@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
+import subprocess
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -70,8 +72,9 @@ def build_tree(tree, kdir=None, container=False, jobs=0, sparse=False) -> TreeBu
         result.modules.append(str(ko))
     result.messages.append(f"built {len(result.modules)} modules in {res.duration:.1f} s: " +
                            ", ".join(manifest["load_order"]))
+    _split_debug(result.modules)
     manifest["kernel_release"] = release
-    (tree / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
+    _write_manifest(tree, manifest)
     if result.warnings:
         raise BuildError("the generated modules built with warnings (a bug of iec2kmod):\n" +
                          "\n".join(result.warnings[:20]), 70)
@@ -118,6 +121,37 @@ def _build_in_container(tree: Path, manifest, kdir, jobs) -> TreeBuild:
                          "\n".join(out.warnings[:20]), 70)
     out.messages.append(f"built {len(out.modules)} modules in container {res.image} "
                         f"({res.duration:.1f} s) for kernel {release}")
+    _split_debug(out.modules)
     manifest["kernel_release"] = release
-    (tree / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
+    _write_manifest(tree, manifest)
     return out
+
+
+def _write_manifest(tree: Path, manifest) -> None:
+    from . import _manifest_text
+    (tree / "manifest.json").write_text(_manifest_text(manifest))
+
+
+def _split_debug(modules) -> None:
+    """Debug information out of the modules, as the kernel's own modules
+    have it: Debian installs its modules with --strip-debug (the DWARF is in
+    the separate -dbg package) and keeps the symbol table, ORC unwind data
+    and .BTF.  The DWARF goes into <module>.ko.debug beside each module (for
+    gdb, faddr2line, crash: `objcopy --add-gnu-debuglink` or
+    `symbol-file`); a module is three to eight times smaller without it.
+    A module already split (a rebuild that kbuild found up to date) is left
+    as it is."""
+    objcopy, strip, readelf = (shutil.which(t) for t in ("objcopy", "strip", "readelf"))
+    if not objcopy or not strip or not readelf:
+        raise BuildError("objcopy, strip and readelf (Debian package binutils) are needed to "
+                         "split the modules' debug information", 2)
+    for ko in modules:
+        sections = subprocess.run([readelf, "-S", "-W", ko], capture_output=True,
+                                  text=True).stdout
+        if ".debug_info" not in sections:
+            continue
+        for cmd in ([objcopy, "--only-keep-debug", ko, ko + ".debug"],
+                    [strip, "--strip-debug", ko]):
+            p = subprocess.run(cmd, capture_output=True, text=True)
+            if p.returncode:
+                raise BuildError(f"{' '.join(cmd)} failed: {p.stderr.strip()}", 70)
