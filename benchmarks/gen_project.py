@@ -148,5 +148,24 @@ END_CONFIGURATION
     return "".join(parts + progs) + config
 
 
+def dense_pou(lines: int = 10000) -> str:
+    """One PROGRAM of about ``lines`` lines, expression-dense (issue 14):
+    every line an assignment with three or four operators, every third one
+    an IF around one."""
+    out = ["PROGRAM Dense",
+           "VAR a, b, c, d, e : DINT; x, y : DINT; k : INT; f : BOOL; END_VAR"]
+    i = 0
+    while len(out) < lines - 1:
+        if i % 3 == 2:
+            out.append(f"    IF a > {i} AND b < c + {i % 7} THEN x := x + (a - {i}) * 2; "
+                       f"END_IF;")
+        else:
+            out.append(f"    {'abcde'[i % 5]} := (a + b * {i % 13 + 1}) - (c - d) / {i % 5 + 1}"
+                       f" + e MOD {i % 9 + 2};")
+        i += 1
+    out.append("END_PROGRAM")
+    return "\n".join(out) + "\n"
+
+
 if __name__ == "__main__":
     sys.stdout.write(project(int(sys.argv[1]) if len(sys.argv) > 1 else 10000))

@@ -111,6 +111,110 @@ def split_source(src: SourceFile, pieces: int) -> list[SourceFile]:
     return parts
 
 
+# tokens of an ST body that matter for cutting it between statements;
+# comments, strings and pragmas are skipped whole
+_BODY_TOKENS = re.compile(
+    r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|\{[^}]*\}|"
+    r"(;)|\b(IF|CASE|FOR|WHILE|REPEAT|END_IF|END_CASE|END_FOR|END_WHILE|END_REPEAT|"
+    r"END_VAR|VAR\w*|PROGRAM|FUNCTION_BLOCK|FUNCTION|END_PROGRAM|END_FUNCTION_BLOCK|"
+    r"END_FUNCTION|TYPE|END_TYPE|CONFIGURATION|END_CONFIGURATION|ACTION|METHOD|USING)\b",
+    re.S | re.I)
+_OPENS = {"IF", "CASE", "FOR", "WHILE", "REPEAT"}
+_CLOSES = {"END_IF", "END_CASE", "END_FOR", "END_WHILE", "END_REPEAT"}
+_POU_END = {"END_PROGRAM", "END_FUNCTION_BLOCK", "END_FUNCTION"}
+
+
+def split_statements(src: SourceFile, pieces: int):
+    """Cuts the ST body of the one POU in src between top-level statements
+    into about ``pieces`` parts, for parsing one large POU on every core.
+    Part 0 keeps the whole text but the other parts' statements; part k > 0
+    keeps only the POU's header and declarations, its own statements and
+    the END keyword; everything else is blanked (newlines kept), so every
+    position is the real one.  None when src is not one POU with an ST body
+    of enough statements (anything unexpected: no cut, a serial parse)."""
+    text = src.text
+    toks = [(m.start(), m.end(), (m.group(2) or "").upper(), bool(m.group(1)))
+            for m in _BODY_TOKENS.finditer(text) if m.group(1) or m.group(2)]
+    pous = [t for t in toks if t[2] in ("PROGRAM", "FUNCTION_BLOCK", "FUNCTION")]
+    ends = [t for t in toks if t[2] in _POU_END]
+    if len(pous) != 1 or len(ends) != 1 or \
+            any(t[2] in ("TYPE", "CONFIGURATION", "ACTION", "METHOD", "USING") for t in toks):
+        return None
+    head, end = pous[0], ends[0]
+    inside = [t for t in toks if head[1] <= t[0] < end[0]]
+    body_start = None
+    in_decl = False
+    for k, t in enumerate(inside):
+        if t[2].startswith("VAR") and not in_decl:
+            in_decl = True
+        elif t[2] == "END_VAR":
+            in_decl = False
+            body_start = t[1]
+        elif not in_decl:
+            break
+    if body_start is None:
+        return None
+    depth = 0
+    cuts = []
+    for a, b, word, semi in inside:
+        if a < body_start:
+            continue
+        if word in _OPENS:
+            depth += 1
+        elif word in _CLOSES:
+            depth -= 1
+        elif semi and depth == 0:
+            cuts.append(b)
+        if depth < 0 or word.startswith("VAR") or word == "END_VAR":
+            return None
+    if depth != 0 or len(cuts) < 4 * pieces:
+        return None
+    target = (end[0] - body_start) / pieces
+    bounds = [body_start]
+    for c in cuts:
+        if c - bounds[-1] >= target and end[0] - c > target / 2:
+            bounds.append(c)
+    bounds.append(end[0])
+    if len(bounds) <= 2:
+        return None
+
+    def blank(t):
+        return re.sub(r"[^\n]", " ", t)
+    parts = [SourceFile(src.path, text[:bounds[1]] + blank(text[bounds[1]:end[0]]) +
+                        text[end[0]:])]
+    for a, b in zip(bounds[1:], bounds[2:]):
+        parts.append(SourceFile(src.path, blank(text[:head[0]]) + text[head[0]:body_start] +
+                                blank(text[body_start:a]) + text[a:b] +
+                                blank(text[b:end[0]]) + text[end[0]:end[1]] +
+                                blank(text[end[1]:])))
+    return parts
+
+
+def _merge_statements(src: SourceFile, results):
+    """One unit from the parts of split_statements(); None when a part
+    did not give what the cut promised (the caller parses serially)."""
+    if any(u is None or any(d.severity == "error" for d in items) for u, items in results):
+        return None
+    first = results[0][0]
+    if len(first.pous) != 1 or first.pous[0].language != "ST":
+        return None
+    pou = first.pous[0]
+    seen = set()
+    items = []
+    for u, part_items in results:
+        if u is not results[0][0]:
+            if len(u.pous) != 1 or u.types or u.configurations or \
+                    u.pous[0].language != "ST" or u.pous[0].name != pou.name:
+                return None
+            pou.body.extend(u.pous[0].body)
+        for d in part_items:       # the header's warnings come from every part
+            key = (d.line, d.col, d.severity, d.message)
+            if key not in seen:
+                seen.add(key)
+                items.append(d)
+    return first, items
+
+
 def _merge(src: SourceFile, results):
     """One unit from the parsed parts of a file, pointing at the real text."""
     from . import ast
@@ -171,21 +275,65 @@ def parse_all(sources: list[SourceFile], jobs: int | None = None):
             gc.enable()
 
 
+def _weight(src: SourceFile) -> int:
+    """What parsing a part costs, about: its characters less the blanks
+    that stand for the rest of its file."""
+    t = src.text
+    return len(t) - t.count(" ") - t.count("\n")
+
+
+def _parse_many(sources):
+    return [_parse_one(s) for s in sources]
+
+
 def _parse_parallel(sources, jobs, total):
-    parts = []  # (file index, part)
+    parts = []  # (file index, piece index, part): pieces of one part are one POU's body
+    pieces = {}  # (file index, piece index) -> the part they were cut from
     for i, s in enumerate(sources):
         share = max(1, round(2 * jobs * len(s.text) / total))
-        parts += [(i, p) for p in split_source(s, share)]
+        for p in split_source(s, share):
+            n = len(pieces)
+            # one POU too big for an even share: its statements on every core
+            cut = split_statements(p, max(2, round(jobs * _weight(p) / total))) \
+                if _weight(p) * jobs > total and len(p.text) >= 20000 else None
+            pieces[(i, n)] = p
+            parts += [(i, n, q) for q in (cut or [p])]
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor  # only here: a cache hit needs none
     ctx = multiprocessing.get_context("fork")
-    # biggest parts first so the cores finish together
-    order = sorted(range(len(parts)), key=lambda k: -len(parts[k][1].text.lstrip()))
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
-        done = dict(zip(order, pool.map(_parse_one, [parts[k][1] for k in order])))
+    # the parts shared out over the cores, biggest first onto the least
+    # loaded, so that the cores finish together; this process parses the
+    # first share itself (its results need no pickling)
+    weight = [_weight(p[2]) for p in parts]
+    shares: list[list[int]] = [[] for _ in range(jobs)]
+    loads = [0] * jobs
+    for k in sorted(range(len(parts)), key=lambda k: -weight[k]):
+        b = loads.index(min(loads))
+        shares[b].append(k)
+        loads[b] += weight[k]
+    others = [s for s in shares[1:] if s]
+    done = {}
+    with ProcessPoolExecutor(max_workers=max(1, len(others)), mp_context=ctx) as pool:
+        futures = [pool.submit(_parse_many, [parts[k][2] for k in s]) for s in others]
+        for k in shares[0]:
+            done[k] = _parse_one(parts[k][2])
+        for s, f in zip(others, futures):
+            done.update(zip(s, f.result()))
     out = []
     for i, s in enumerate(sources):
-        out.append(_merge(s, [done[k] for k in range(len(parts)) if parts[k][0] == i]))
+        results = []
+        for (fi, n), p in pieces.items():
+            if fi != i:
+                continue
+            got = [done[k] for k in range(len(parts)) if parts[k][:2] == (i, n)]
+            if len(got) > 1:
+                got = _merge_statements(p, got)
+                # a cut the parser did not agree with (a syntax error, IL, ...):
+                # the part again in one piece, for its own diagnostics
+                results.append(got if got is not None else _parse_one(p))
+            else:
+                results.append(got[0])
+        out.append(_merge(s, results))
     return out
 
 
@@ -222,8 +370,18 @@ def run(paths, use_cache: bool = True, jobs: int | None = None) -> FrontEndResul
 
     project = None
     if not diags.errors:
+        import gc
         from .checks import check_project
-        project = check_project(units, diags, timings)
+        # the checks allocate as they walk the millions of parsed objects,
+        # which the cyclic collector would rescan again and again (half of
+        # the check time of a 10,000-line POU); they make no garbage cycles
+        gc_was_enabled = gc.isenabled()
+        gc.disable()
+        try:
+            project = check_project(units, diags, timings)
+        finally:
+            if gc_was_enabled:
+                gc.enable()
     if key is not None:
         _store_cached(key, diags.items)
     return FrontEndResult(units, diags, project, timings)
