@@ -7,6 +7,8 @@ live variables.
                                            module, its directory, or a rebuilt project);
                                            --restart: then restart the tasks stopped on
                                            a fault that run the swapped program types
+    plc-manager swap --prepare NEW         its slow half: check, insert staged
+    plc-manager swap --publish | --unstage its quick half, or drop what is staged
     plc-manager stop [--keep-loaded] [--resource R]
     plc-manager start [--resource R]
     plc-manager status [--json]
@@ -34,7 +36,7 @@ import sys
 import time
 from typing import List, Optional, Sequence
 
-from .errors import PLCError
+from .errors import PLCError, UsageError
 
 PROG = "plc-manager"
 
@@ -191,12 +193,27 @@ def cmd_load(a) -> int:
 
 def cmd_swap(a) -> int:
     from . import ops
-    rep = ops.swap(a.new, restart=a.restart, progress=_quiet if a.json else _say)
+    say = _quiet if a.json else _say
+    if sum(map(bool, (a.prepare, a.publish, a.unstage))) > 1:
+        raise UsageError("swap: --prepare, --publish and --unstage exclude each other")
+    if (a.new is None) != bool(a.publish or a.unstage):
+        raise UsageError("swap: NEW is needed, except with --publish and --unstage"
+                         if a.new is None else
+                         "swap: --publish and --unstage take no NEW (what is staged)")
+    if a.restart and (a.prepare or a.unstage):
+        raise UsageError("swap: --restart goes with a swap that publishes (not --prepare "
+                         "or --unstage)")
+    if a.unstage:
+        ops.unstage(progress=say)
+        return 0
+    rep = ops.publish(restart=a.restart, progress=say) if a.publish else \
+        ops.swap(a.new, restart=a.restart, progress=say, prepare_only=a.prepare)
     if a.json:
-        print(json.dumps({"check_ms": rep.check_ms, "total_ms": rep.total_ms,
+        print(json.dumps({"check_ms": rep.check_ms, "prepare_ms": rep.prepare_ms,
+                          "published": rep.published, "total_ms": rep.total_ms,
                           "steps": [s.__dict__ for s in rep.steps],
                           "restarted": rep.restarted}))
-    elif rep.steps:
+    elif rep.steps and rep.published:
         _say(f"swap done in {rep.total_ms:.1f} ms (checks {rep.check_ms:.1f} ms)")
     return 0
 
@@ -342,8 +359,16 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_load)
 
     s = sub.add_parser("swap", help="hot code change of program types")
-    s.add_argument("new", help="a rebuilt program-type module (.ko or its directory) or a "
-                               "rebuilt project directory")
+    s.add_argument("new", nargs="?", help="a rebuilt program-type module (.ko or its "
+                                          "directory) or a rebuilt project directory")
+    s.add_argument("--prepare", action="store_true",
+                   help="only check and insert the new builds, staged in their slots (the "
+                        "slow half); the tasks run the old ones until --publish")
+    s.add_argument("--publish", action="store_true",
+                   help="publish what --prepare staged (the quick half), remove the old "
+                        "modules")
+    s.add_argument("--unstage", action="store_true",
+                   help="drop what --prepare staged, unpublished")
     s.add_argument("--restart", action="store_true",
                    help="then restart the tasks of the swapped program types that are "
                         "stopped on a fault (their state is kept)")

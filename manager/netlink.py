@@ -24,7 +24,8 @@ MAX_FORCES = 128
 
 COMMANDS = ["IEC_CMD_UNSPEC", "IEC_CMD_STATUS", "IEC_CMD_VAR_GET", "IEC_CMD_VAR_LIST",
             "IEC_CMD_VAR_SET", "IEC_CMD_VAR_FORCE", "IEC_CMD_VAR_UNFORCE",
-            "IEC_CMD_RES_START", "IEC_CMD_RES_STOP", "IEC_CMD_SLOT_CLEAR"]
+            "IEC_CMD_RES_START", "IEC_CMD_RES_STOP", "IEC_CMD_SLOT_CLEAR",
+            "IEC_CMD_SLOT_PUBLISH", "IEC_CMD_SLOT_UNSTAGE"]
 CMD = {name: i for i, name in enumerate(COMMANDS)}
 
 NEST = "nest"
@@ -82,6 +83,8 @@ ATTRIBUTES = [
     ("IEC_A_STARTS", "uint64"),
     ("IEC_A_STARTED_NS", "int64"),
     ("IEC_A_FAULT_NS", "int64"),
+    ("IEC_A_STAGED", "asciiz"),
+    ("IEC_A_FIRST_RUN_NS", "int64"),
 ]
 
 STATES = {0: "stopped", 1: "running", 2: "fault"}
@@ -166,6 +169,8 @@ class Slot:
     build_id: Optional[str]
     since_ns: int
     publications: int
+    staged: Optional[str] = None        # build id inserted with stage=1, not published
+    first_run_ns: Optional[int] = None  # CLOCK_REALTIME of the running body's first cycle
 
 
 @dataclass
@@ -261,7 +266,9 @@ def _status_from(msg) -> Status:
         slots.append(Slot(index=s["IEC_A_SLOT_INDEX"], type_name=s["IEC_A_NAME"],
                           interface="%016x" % s["IEC_A_SLOT_IFACE"],
                           module=s.get("IEC_A_MODULE"), build_id=s.get("IEC_A_BUILD_ID"),
-                          since_ns=s["IEC_A_SINCE_NS"], publications=s["IEC_A_PUBLICATIONS"]))
+                          since_ns=s["IEC_A_SINCE_NS"], publications=s["IEC_A_PUBLICATIONS"],
+                          staged=s.get("IEC_A_STAGED"),
+                          first_run_ns=s.get("IEC_A_FIRST_RUN_NS") or None))
     return Status(abi=a["IEC_A_ABI"], configuration=a["IEC_A_NAME"], module=a["IEC_A_MODULE"],
                   source_hash=a["IEC_A_SOURCE_HASH"], interface_hash=a["IEC_A_IFACE_HASH"],
                   now_ns=a["IEC_A_NOW_NS"], forced=a["IEC_A_NFORCED"],
@@ -365,6 +372,16 @@ class Client:
 
     def clear(self, slot: Optional[int] = None) -> None:
         self._request("IEC_CMD_SLOT_CLEAR", [["IEC_A_SLOT_INDEX", slot]]
+                      if slot is not None else [])
+
+    def publish(self, slot: Optional[int] = None) -> None:
+        """Publishes the builds staged (insmod stage=1) in one slot or in
+        every slot; returns after one grace period for the old bodies."""
+        self._request("IEC_CMD_SLOT_PUBLISH", [["IEC_A_SLOT_INDEX", slot]]
+                      if slot is not None else [])
+
+    def unstage(self, slot: Optional[int] = None) -> None:
+        self._request("IEC_CMD_SLOT_UNSTAGE", [["IEC_A_SLOT_INDEX", slot]]
                       if slot is not None else [])
 
 

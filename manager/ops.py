@@ -5,13 +5,19 @@ load   check the manifest and the kernel release; insert the configuration
        module, the program types, the resources (manifest load_order);
        confirm every slot runs its build; start the tasks.  A failure half
        way removes what was inserted.
-swap   check the new program-type modules (interface hash against the
-       running slot, kernel release, files) before inserting anything; insert
-       each one (its init publishes it: RCU pointer swap, then a grace
-       period: every task cycle running at the swap has ended, so no task
-       can still run the old body, and the old module's reference is
-       dropped); confirm the slot runs the new build
-       and a cycle ran it; remove the old module.  Timed step by step.
+swap   in two halves.  Prepare (slow, nothing changes for the tasks): check
+       the new program-type modules (interface hash against the running
+       slot, kernel release, files) before inserting anything, then insert
+       each one with stage=1 (relocation, its init checks it against its
+       slot and stages it there).  Perform (quick): one netlink command
+       publishes every staged build at once (RCU pointer swap: the next
+       cycle of every task runs the new body; then a grace period: every
+       cycle running at the swap has ended, no task can still run an old
+       body, the old modules' references are dropped); confirm the slots
+       run the new builds and a cycle ran them; remove the old modules.
+       `swap --prepare` stops after the first half, `swap --publish` does
+       the second.  Timed step by step, with the kernel's own clock for
+       the publication and for the first cycle of each new body.
 stop   stop the tasks; remove the resources (their exit joins the threads),
        clear the GFT, remove the program types and the configuration.
 
@@ -25,6 +31,7 @@ still run stays loaded (its resource module, the program type it runs).
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import errno
 import time
@@ -369,6 +376,9 @@ class SwapStep:
     remove_ms: float = 0.0
     publish_ms: float = 0.0          # command to the slot's publication (kernel clock)
     latency_ms: float = 0.0          # command to new body running (or confirmed)
+    perform_ms: float = 0.0          # publish command to the publication (kernel clock)
+    publication_to_first_ms: Optional[float] = None  # to the new body's first cycle (kernel)
+    staged: bool = False             # prepared (inserted with stage=1), not yet published
 
 
 @dataclass
@@ -377,6 +387,8 @@ class SwapReport:
     steps: List[SwapStep] = field(default_factory=list)
     total_ms: float = 0.0
     restarted: List[str] = field(default_factory=list)     # tasks restarted (--restart)
+    prepare_ms: float = 0.0          # checks + inserting the staged builds
+    published: bool = False
 
 
 def _tasks_running_type(manifest: Optional[dict], type_name: str) -> List[str]:
@@ -387,11 +399,14 @@ def _tasks_running_type(manifest: Optional[dict], type_name: str) -> List[str]:
                    if i["type"].upper() == type_name.upper() and i.get("task")})
 
 
-def swap(new: str, restart: bool = False, progress: Progress = _quiet) -> SwapReport:
-    """Hot code change of the program types NEW names.  *restart*: then
-    restart every task that is stopped on a fault and runs an instance of a
-    swapped type (one command from a fault to running again: the program
-    instances keep their state), and wait for a cycle of each."""
+def swap(new: str, restart: bool = False, progress: Progress = _quiet,
+         prepare_only: bool = False) -> SwapReport:
+    """Hot code change of the program types NEW names, in two halves:
+    prepare (checks, insert staged) and, unless *prepare_only*, publish.
+    *restart*: then restart every task that is stopped on a fault and runs
+    an instance of a swapped type (one command from a fault to running
+    again: the program instances keep their state), and wait for a cycle of
+    each."""
     kmod.require(kmod.CAP_SYS_MODULE, "swap")
     t_cmd = time.perf_counter()
     t_wall = time.time_ns()
@@ -399,6 +414,11 @@ def swap(new: str, restart: bool = False, progress: Progress = _quiet) -> SwapRe
     with connect("swap") as c:
         st = c.status()
         state = running_state(st)
+        if any(s.staged for s in st.slots):
+            raise UsageError("a swap is prepared already (staged: " +
+                             ", ".join(f"{s.type_name} {s.staged}" for s in st.slots
+                                       if s.staged) +
+                             "): plc-manager swap --publish, or --unstage")
         running = {s.type_name.upper(): s.build_id for s in st.slots}
         cands = swap_candidates(new, running)
         if not cands:
@@ -416,11 +436,17 @@ def swap(new: str, restart: bool = False, progress: Progress = _quiet) -> SwapRe
                              "(saved by plc-manager load, or beside the new modules) to know "
                              "which tasks run the swapped program types")
         rep.check_ms = _ms(t_cmd, time.perf_counter())
-        for cand in cands:
-            step, st = _swap_one(c, cand, st, state, t_cmd, t_wall, progress)
-            rep.steps.append(step)
-        if state is not None:
-            state.save()
+        steps = _prepare(c, cands, st, progress)
+        rep.steps = steps
+        rep.prepare_ms = _ms(t_cmd, time.perf_counter())
+        if prepare_only:
+            progress(f"prepared in {rep.prepare_ms:.1f} ms: publish with "
+                     f"`plc-manager swap --publish`")
+            rep.total_ms = rep.prepare_ms
+            return rep
+        _perform(c, steps, state, t_cmd, t_wall, progress,
+                 {cand.type_name.upper(): str(cand.ko) for cand in cands})
+        rep.published = True
         if restart:
             rep.restarted = _restart_faulted(c, manifest, [x.type_name for x in cands],
                                              progress)
@@ -470,6 +496,202 @@ def _restart_faulted(c: Client, manifest: dict, types: Sequence[str],
             progress(f"  task {t.path} runs again ({t.cycles - before[t.path]} cycles since "
                      f"the restart, state kept)")
     return sorted(paths)
+def publish(restart: bool = False, progress: Progress = _quiet) -> SwapReport:
+    """The second half of a prepared swap (swap --prepare): publishes
+    every staged build at once, confirms, removes the old modules;
+    *restart* as for swap()."""
+    kmod.require(kmod.CAP_SYS_MODULE, "swap --publish")
+    t_cmd = time.perf_counter()
+    t_wall = time.time_ns()
+    rep = SwapReport()
+    with connect("swap --publish") as c:
+        st = c.status()
+        state = running_state(st)
+        staged = [s for s in st.slots if s.staged]
+        if not staged:
+            raise UsageError("nothing is prepared: plc-manager swap --prepare NEW first")
+        manifest = state.manifest if state is not None else None
+        if restart and not (manifest and "instances" in manifest):
+            raise UsageError("swap --restart needs the manifest of the running configuration "
+                             "(saved by plc-manager load) to know which tasks run the "
+                             "swapped program types")
+        loaded = kmod.loaded()
+        for s in staged:
+            mod = next((m for m in loaded if m.endswith(f"_{s.staged}") and
+                        m != s.module), None)
+            step = SwapStep(s.type_name, s.module, s.build_id, mod or "?", s.staged)
+            step.staged = True
+            rep.steps.append(step)
+        _perform(c, rep.steps, state, t_cmd, t_wall, progress)
+        rep.published = True
+        if restart:
+            rep.restarted = _restart_faulted(c, manifest, [s.type_name for s in staged],
+                                             progress)
+    rep.total_ms = _ms(t_cmd, time.perf_counter())
+    return rep
+
+
+def unstage(progress: Progress = _quiet) -> None:
+    """Drops a prepared swap: the staged builds leave their slots unpublished
+    and their modules are removed."""
+    kmod.require(kmod.CAP_SYS_MODULE, "swap --unstage")
+    with connect("swap --unstage") as c:
+        st = c.status()
+        staged = [s for s in st.slots if s.staged]
+        if not staged:
+            progress("nothing is prepared")
+            return
+        loaded = kmod.loaded()
+        c.unstage()
+        for s in staged:
+            for m in [m for m in loaded if m.endswith(f"_{s.staged}") and m != s.module]:
+                kmod.remove(m)
+                progress(f"unstaged {s.type_name}: removed {m}")
+
+
+def _prepare(c: Client, cands: Sequence[Candidate], st: Status,
+             progress: Progress) -> List[SwapStep]:
+    """Inserts every candidate staged; on a failure removes what it staged."""
+    steps: List[SwapStep] = []
+    try:
+        for cand in cands:
+            slot = st.slot(cand.type_name)
+            step = SwapStep(slot.type_name, slot.module, slot.build_id, cand.module,
+                            cand.build_id, staged=True)
+            t0 = time.perf_counter()
+            kmod.insert(str(cand.ko), "stage=1")    # checked against its slot, staged there
+            step.insert_ms = _ms(t0, time.perf_counter())
+            steps.append(step)
+        st = c.status()
+        for step in steps:
+            s = st.slot(step.type_name)
+            if s is None or s.staged != step.new_build:
+                raise PLCError(f"slot {step.type_name} has not staged {step.new_module} "
+                               f"after inserting it")
+    except BaseException:
+        if steps:       # what this command staged goes (nothing else was staged)
+            with contextlib.suppress(PLCError):
+                c.unstage()
+        for step in steps:
+            with contextlib.suppress(PLCError):
+                kmod.remove(step.new_module)
+        raise
+    for step in steps:
+        progress(f"staged {step.type_name}: {step.new_module} ({step.insert_ms:.1f} ms)")
+    return steps
+
+
+def _record(state: State, step: SwapStep, ko: Optional[str]) -> None:
+    """The saved state: *step*'s new build runs in its slot now."""
+    for t in state.manifest["program_types"]:
+        if t["name"].upper() == step.type_name.upper():
+            t["module"] = step.new_module
+            t["build_id"] = step.new_build
+            if ko:
+                t["ko"] = ko
+
+
+def _perform(c: Client, steps: List[SwapStep], state: Optional[State], t_cmd: float,
+             t_wall: int, progress: Progress, kos: Optional[Dict[str, str]] = None) -> None:
+    """Publishes the staged builds (one command, every slot), then confirms
+    each slot, waits for a cycle of each new body, removes the old modules."""
+    manifest = state.manifest if state is not None else None
+    kos = kos or {}
+    t_perform = time.time_ns()
+    t0 = time.perf_counter()
+    _kernel_call(c, "publish", c.publish)     # pointer swaps, then one grace period
+    t1 = time.perf_counter()
+    st = c.status()
+    t2 = time.perf_counter()
+    for step in steps:
+        s2 = st.slot(step.type_name)
+        if s2 is None or s2.build_id != step.new_build:
+            raise PLCError(f"slot {step.type_name} does not run {step.new_module} after "
+                           f"publishing it (it runs {s2.module if s2 else '?'})")
+        step.new_module = s2.module or step.new_module
+        step.insert_ms += _ms(t0, t1)
+        step.confirm_ms = _ms(t1, t2)
+        step.publish_ms = (s2.since_ns - t_wall) / 1e6
+        step.perform_ms = (s2.since_ns - t_perform) / 1e6
+        step.staged = False
+    # wait for a cycle that certainly ran each new body: the kernel stamps
+    # a body's first cycle; a task using the type must also show two more
+    # cycles than at the confirmation (the name of the task for the report)
+    deadline = time.monotonic() + 5.0
+    pending = {step.type_name for step in steps}
+    watch = {}
+    for step in steps:
+        using = _tasks_running_type(manifest, step.type_name)
+        watch[step.type_name] = {t.path: t.cycles for t in st.tasks()
+                                 if t.path.lower() in using and t.state == "running" and
+                                 t.interval_ns}
+        if not watch[step.type_name]:
+            pending.discard(step.type_name)
+    while pending and time.monotonic() < deadline:
+        st = c.status()
+        for step in steps:
+            if step.type_name not in pending:
+                continue
+            s = st.slot(step.type_name)
+            done = [t.path for t in st.tasks() if t.path in watch[step.type_name] and
+                    t.cycles >= watch[step.type_name][t.path] + 2]
+            if s is not None and s.first_run_ns and done:
+                step.first_cycle_ms = _ms(t2, time.perf_counter())
+                step.first_cycle_task = done[0]
+                step.publication_to_first_ms = (s.first_run_ns - s.since_ns) / 1e6
+                pending.discard(step.type_name)
+                step.latency_ms = (s.first_run_ns - t_wall) / 1e6
+    for step in steps:
+        if not step.latency_ms:
+            step.latency_ms = _ms(t_cmd, time.perf_counter())
+    for step in steps:
+        if step.old_module:
+            _remove_old(c, step)
+        if state is not None:
+            _record(state, step, kos.get(step.type_name.upper()))
+        _report_step(step, progress)
+    if state is not None:
+        state.save()
+
+
+def _remove_old(c: Client, step: SwapStep) -> None:
+    t4 = time.perf_counter()
+    # the publication dropped the old module's reference after the grace
+    # period: nothing can run the old body any more
+    for _ in range(200):
+        if kmod.refcnt(step.old_module) in (0, None):
+            break
+        time.sleep(0.005)
+    try:
+        kmod.remove(step.old_module)
+    except PLCError as e:
+        who = _stuck(c)
+        raise PLCError(f"swapped {step.type_name} to build {step.new_build}, but the old "
+                       f"module could not be removed: {e}" +
+                       (f" ({who} does not come back: the old body may still run there)"
+                        if who else "")) from None
+    step.remove_ms = _ms(t4, time.perf_counter())
+
+
+def _report_step(step: SwapStep, progress: Progress) -> None:
+    progress(f"swapped {step.type_name}: {step.old_module or '(empty slot)'} -> "
+             f"{step.new_module}")
+    progress(f"  insert staged + publish {step.insert_ms:8.2f} ms   (relocation and checks, "
+             f"then the RCU pointer swap and a grace period: no task runs the old body)")
+    progress(f"  confirm slot       {step.confirm_ms:8.2f} ms   (slot runs build "
+             f"{step.new_build})")
+    if step.first_cycle_ms is not None:
+        progress(f"  new body ran       {step.first_cycle_ms:8.2f} ms   "
+                 f"(cycles of task {step.first_cycle_task}; its first cycle "
+                 f"{step.publication_to_first_ms:.2f} ms after the publication)")
+    else:
+        progress("  new body ran            -      (no running periodic task uses it: "
+                 "it runs at its next cycle)")
+    if step.old_module:
+        progress(f"  remove old module  {step.remove_ms:8.2f} ms   ({step.old_module})")
+    progress(f"  command to publication {step.publish_ms:.2f} ms (publish command to "
+             f"publication {step.perform_ms:.2f} ms), to new body running "
+             f"{step.latency_ms:.2f} ms")
 
 
 def _check_interface(cand: Candidate, st: Status, state: Optional[State]) -> None:
@@ -509,79 +731,6 @@ def _check_candidate(cand: Candidate, st: Status, loaded: dict) -> None:
     check_module_kernel(cand.ko)
     check_module_identity(cand.ko, cand.module, st.configuration,
                           cand.manifest.get("source_hash") if cand.manifest else None)
-
-
-def _swap_one(c: Client, cand: Candidate, st: Status, state: Optional[State], t_cmd: float,
-              t_wall: int, progress: Progress) -> Tuple[SwapStep, Status]:
-    slot = st.slot(cand.type_name)
-    step = SwapStep(slot.type_name, slot.module, slot.build_id, cand.module, cand.build_id)
-    manifest = state.manifest if state is not None else cand.manifest
-    using = _tasks_running_type(manifest, cand.type_name)
-
-    t0 = time.perf_counter()
-    kmod.insert(str(cand.ko))            # publishes: pointer swap + grace period
-    t1 = time.perf_counter()
-    step.insert_ms = _ms(t0, t1)
-
-    # confirm the slot, then wait for a cycle that certainly ran the new
-    # body: every cycle in flight at the publication was waited for by
-    # the grace period, but one may still be accounting; two more cycles
-    # than at the confirmation leave no doubt
-    st = c.status()
-    s2 = st.slot(cand.type_name)
-    if s2 is None or s2.build_id != cand.build_id or s2.module != cand.module:
-        raise PLCError(f"slot {slot.type_name} does not run {cand.module} after inserting it "
-                       f"(it runs {s2.module if s2 else '?'})")
-    t2 = time.perf_counter()
-    step.confirm_ms = _ms(t1, t2)
-    step.publish_ms = (s2.since_ns - t_wall) / 1e6
-    watch = {t.path: t.cycles for t in st.tasks()
-             if t.path.lower() in using and t.state == "running" and t.interval_ns}
-    deadline = time.monotonic() + 5.0
-    while watch and time.monotonic() < deadline:
-        st = c.status()
-        done = [t.path for t in st.tasks() if t.path in watch and t.cycles >= watch[t.path] + 2]
-        if done:
-            step.first_cycle_ms = _ms(t2, time.perf_counter())
-            step.first_cycle_task = done[0]
-            break
-    step.latency_ms = _ms(t_cmd, time.perf_counter())
-
-    if slot.module:
-        t4 = time.perf_counter()
-        # the publication dropped the old module's reference after the
-        # grace period: nothing can run the old body any more
-        for _ in range(200):
-            if kmod.refcnt(slot.module) in (0, None):
-                break
-            time.sleep(0.005)
-        try:
-            kmod.remove(slot.module)
-        except PLCError as e:
-            who = _stuck(c)
-            raise PLCError(f"swapped {slot.type_name} to build {cand.build_id}, but the old "
-                           f"module could not be removed: {e}" +
-                           (f" ({who} does not come back: the old body may still run there)"
-                            if who else "")) from None
-        step.remove_ms = _ms(t4, time.perf_counter())
-    if state is not None:
-        state.swapped(cand)
-    progress(f"swapped {slot.type_name}: {slot.module or '(empty slot)'} -> {cand.module}")
-    progress(f"  insert + publish   {step.insert_ms:8.2f} ms   (RCU pointer swap, "
-             f"grace period: no task runs the old body)")
-    progress(f"  confirm slot       {step.confirm_ms:8.2f} ms   (slot runs build "
-             f"{cand.build_id})")
-    if step.first_cycle_ms is not None:
-        progress(f"  new body ran       {step.first_cycle_ms:8.2f} ms   "
-                 f"(cycles of task {step.first_cycle_task})")
-    else:
-        progress("  new body ran            -      (no running periodic task uses it: "
-                 "it runs at its next cycle)")
-    if slot.module:
-        progress(f"  remove old module  {step.remove_ms:8.2f} ms   ({slot.module})")
-    progress(f"  command to publication {step.publish_ms:.2f} ms, to new body running "
-             f"{step.latency_ms:.2f} ms")
-    return step, st
 
 
 # ---------------------------------------------------------------------------

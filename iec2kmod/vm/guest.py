@@ -374,6 +374,10 @@ class Guest:
             "HOME": "/root", "LANG": "C.UTF-8", "TERM": "dumb",
             "PYTHONDONTWRITEBYTECODE": "1", "PYTHONUNBUFFERED": "1",
         }
+        # the host's PYTHONPATH (the host's root is the guest's chroot): a
+        # worktree's plc_manager is the one its tests run in the guest
+        if os.environ.get("PYTHONPATH"):
+            env["PYTHONPATH"] = os.environ["PYTHONPATH"]
         for k, v in env.items():
             if any(c.isspace() or c in "'\"\\$`" for c in v):
                 raise GuestError(f"cannot pass {k}={v!r} into the guest (whitespace/quotes)")

@@ -15,7 +15,12 @@
  *    cycle sees the new pointer: the var_lock orders it), then drop the
  *    old module's reference;
  *  - clearing a slot (manager, before removing a program module) does the
- *    same with NULL.
+ *    same with NULL;
+ *  - a swap in two halves: a build inserted with stage=1 only waits in its
+ *    slot (checked, referenced); IEC_CMD_SLOT_PUBLISH later replaces the
+ *    pointer (the next cycle of every task runs it), then the grace
+ *    period.  The slow half (insmod: relocation, checks) is out of the
+ *    publication's path.
  *
  * The grace period is our own, not synchronize_srcu(): a PLC cycle may be
  * long, and a task whose body never returns (a thread that died inside
@@ -111,6 +116,8 @@ int iec2kmod_run_program(u32 slot, void *self, struct iec_ctx *ctx)
 	if (slot >= iec_cfg->nslots)
 		return -EINVAL;
 	type = rcu_dereference_raw(iec_cfg->slots[slot].cur);
+	if (type && unlikely(!READ_ONCE(type->first_run_ns)))
+		cmpxchg64(&type->first_run_ns, 0, ktime_get_real_ns());
 	if (!type) {
 		ret = -ENOENT;
 	} else if (type->uses_fpu) {
@@ -248,9 +255,9 @@ static void iec_gft_replace(struct iec_gft_slot *slot,
 	slot->publications++;
 }
 
-int iec2kmod_gft_publish(struct iec_program_type *type)
+/* The slot of @type if its interface matches, else a negative errno. */
+static int iec_gft_slot_of(struct iec_program_type *type)
 {
-	struct iec_gft_slot *slot;
 	int i;
 
 	if (!iec_cfg)
@@ -261,13 +268,98 @@ int iec2kmod_gft_publish(struct iec_program_type *type)
 		       module_name(type->owner), type->type_name, iec_cfg->name);
 		return -ENOENT;
 	}
-	slot = &iec_cfg->slots[i];
-	if (slot->iface_hash != type->iface_hash) {
+	if (iec_cfg->slots[i].iface_hash != type->iface_hash) {
 		pr_err("iec2kmod: %s: interface %016llx of %s does not match slot %016llx\n",
 		       module_name(type->owner), type->iface_hash,
-		       type->type_name, slot->iface_hash);
+		       type->type_name, iec_cfg->slots[i].iface_hash);
 		return -EPROTO;
 	}
+	return i;
+}
+
+int iec2kmod_gft_stage(struct iec_program_type *type)
+{
+	struct iec_gft_slot *slot;
+	int i = iec_gft_slot_of(type);
+
+	if (i < 0)
+		return i;
+	slot = &iec_cfg->slots[i];
+	mutex_lock(&iec_gft_mutex);
+	if (slot->staged) {
+		mutex_unlock(&iec_gft_mutex);
+		pr_err("iec2kmod: %s: slot %s has %s staged already\n",
+		       module_name(type->owner), slot->type_name,
+		       module_name(slot->staged->owner));
+		return -EBUSY;
+	}
+	/* the caller is the module's own init: it cannot go away meanwhile */
+	__module_get(type->owner);
+	slot->staged = type;
+	mutex_unlock(&iec_gft_mutex);
+	pr_info("iec2kmod: slot %s: %s (%s) staged\n", type->type_name,
+		module_name(type->owner), type->build_id);
+	return 0;
+}
+EXPORT_SYMBOL_GPL(iec2kmod_gft_stage);
+
+/*
+ * Publishes the staged build of slot @i (-1: of every slot that has one)
+ * and waits one grace period for the replaced bodies.  The number of
+ * slots published, or -ENOENT when none was staged, or -ETIMEDOUT (the
+ * new bodies run all the same, see iec_gft_sync()).
+ */
+int iec_gft_publish_staged(long i)
+{
+	int n = 0;
+	int ret;
+	u32 k;
+
+	if (!iec_cfg || i >= (long)iec_cfg->nslots)
+		return -EINVAL;
+	mutex_lock(&iec_gft_mutex);
+	for (k = 0; k < iec_cfg->nslots; k++) {
+		struct iec_gft_slot *slot = &iec_cfg->slots[k];
+
+		if ((i >= 0 && k != i) || !slot->staged)
+			continue;
+		iec_gft_replace(slot, slot->staged);
+		slot->staged = NULL;
+		n++;
+	}
+	ret = n ? iec_gft_sync(i, "publish") : -ENOENT;
+	mutex_unlock(&iec_gft_mutex);
+	return ret ? ret : n;
+}
+
+/* Drops the staged builds of slot @i (-1: of every slot), unpublished. */
+int iec_gft_unstage(long i)
+{
+	u32 k;
+
+	if (!iec_cfg || i >= (long)iec_cfg->nslots)
+		return -EINVAL;
+	mutex_lock(&iec_gft_mutex);
+	for (k = 0; k < iec_cfg->nslots; k++) {
+		struct iec_gft_slot *slot = &iec_cfg->slots[k];
+
+		if ((i < 0 || k == i) && slot->staged) {
+			module_put(slot->staged->owner);
+			slot->staged = NULL;
+		}
+	}
+	mutex_unlock(&iec_gft_mutex);
+	return 0;
+}
+
+int iec2kmod_gft_publish(struct iec_program_type *type)
+{
+	struct iec_gft_slot *slot;
+	int i = iec_gft_slot_of(type);
+
+	if (i < 0)
+		return i;
+	slot = &iec_cfg->slots[i];
 	/* the caller is the module's own init: it cannot go away meanwhile */
 	__module_get(type->owner);
 	mutex_lock(&iec_gft_mutex);
@@ -297,6 +389,7 @@ int iec_gft_clear(long i)
 
 	if (!iec_cfg || i >= (long)iec_cfg->nslots)
 		return -EINVAL;
+	iec_gft_unstage(i);	/* a staged build goes with the slot */
 	mutex_lock(&iec_gft_mutex);
 	for (k = 0; k < iec_cfg->nslots; k++)
 		if ((i < 0 || k == i) && rcu_access_pointer(iec_cfg->slots[k].cur))
@@ -403,6 +496,6 @@ void iec_config_exit(struct iec_config *cfg)
 	/* program modules hold references on us: none is left here */
 	for (i = 0; i < cfg->nslots; i++)
 		WARN_ON_ONCE(rcu_access_pointer(cfg->slots[i].cur) ||
-			     cfg->slots[i].retired);
+			     cfg->slots[i].retired || cfg->slots[i].staged);
 	iec_cfg = NULL;
 }

@@ -548,7 +548,7 @@ cancel:
 static int iec_put_slot(struct sk_buff *skb, u32 i)
 {
 	const struct iec_gft_slot *slot = &iec_cfg->slots[i];
-	const struct iec_program_type *p;
+	const struct iec_program_type *p, *staged;
 	struct nlattr *nest;
 	int err = 0;
 
@@ -563,7 +563,13 @@ static int iec_put_slot(struct sk_buff *skb, u32 i)
 	    nla_put_s64(skb, IEC_A_SINCE_NS, ktime_to_ns(slot->since), IEC_A_PAD) ||
 	    nla_put_u64_64bit(skb, IEC_A_PUBLICATIONS, slot->publications, IEC_A_PAD) ||
 	    (p && (nla_put_string(skb, IEC_A_MODULE, module_name(p->owner)) ||
-		   nla_put_string(skb, IEC_A_BUILD_ID, p->build_id))))
+		   nla_put_string(skb, IEC_A_BUILD_ID, p->build_id) ||
+		   nla_put_s64(skb, IEC_A_FIRST_RUN_NS, READ_ONCE(p->first_run_ns),
+			       IEC_A_PAD))))
+		err = -EMSGSIZE;
+	/* a staged build is dropped under iec_ctl_mutex (held): it stays */
+	staged = READ_ONCE(slot->staged);
+	if (!err && staged && nla_put_string(skb, IEC_A_STAGED, staged->build_id))
 		err = -EMSGSIZE;
 	rcu_read_unlock();
 	if (err) {
@@ -588,7 +594,7 @@ static size_t iec_status_size(void)
 			     IEC_HIST_BUCKETS * sizeof(u64);
 	}
 	for (i = 0; i < iec_cfg->nslots; i++)
-		n += 256 + strlen(iec_cfg->slots[i].type_name) + MODULE_NAME_LEN;
+		n += 320 + strlen(iec_cfg->slots[i].type_name) + MODULE_NAME_LEN;
 	return n;
 }
 
@@ -1155,6 +1161,54 @@ static int iec_nl_slot_clear(struct sk_buff *skb, struct genl_info *info)
 	return err;
 }
 
+static long iec_nl_slot_arg(struct genl_info *info)
+{
+	long slot = -1;
+
+	if (info->attrs[IEC_A_SLOT_INDEX]) {
+		slot = nla_get_u32(info->attrs[IEC_A_SLOT_INDEX]);
+		if (slot >= iec_cfg->nslots) {
+			NL_SET_ERR_MSG_ATTR(info->extack,
+					    info->attrs[IEC_A_SLOT_INDEX],
+					    "no such slot");
+			return -ENOENT;
+		}
+	}
+	return slot;
+}
+
+/* The quick half of a swap: the staged builds replace the running ones. */
+static int iec_nl_slot_publish(struct sk_buff *skb, struct genl_info *info)
+{
+	long slot = iec_nl_slot_arg(info);
+	int err;
+
+	if (slot < -1)
+		return slot;
+	mutex_lock(&iec_ctl_mutex);
+	err = iec_gft_publish_staged(slot);
+	mutex_unlock(&iec_ctl_mutex);
+	if (err == -ENOENT)
+		NL_SET_ERR_MSG(info->extack, "nothing is staged (insmod ... stage=1)");
+	else if (err == -ETIMEDOUT)
+		NL_SET_ERR_MSG(info->extack,
+			       "published; a task does not come back from its cycle (the old body stays loaded)");
+	return err < 0 ? err : 0;
+}
+
+static int iec_nl_slot_unstage(struct sk_buff *skb, struct genl_info *info)
+{
+	long slot = iec_nl_slot_arg(info);
+	int err;
+
+	if (slot < -1)
+		return slot;
+	mutex_lock(&iec_ctl_mutex);
+	err = iec_gft_unstage(slot);
+	mutex_unlock(&iec_ctl_mutex);
+	return err;
+}
+
 /* commands that take no attribute at all */
 static const struct nla_policy iec_nl_none_policy[IEC_A_MAX + 1] = {};
 
@@ -1235,6 +1289,20 @@ static const struct genl_ops iec_nl_ops[] = {
 		.cmd = IEC_CMD_SLOT_CLEAR,
 		.flags = GENL_ADMIN_PERM,
 		.doit = iec_nl_slot_clear,
+		.policy = iec_nl_slot_policy,
+		.maxattr = IEC_A_MAX,
+	},
+	{
+		.cmd = IEC_CMD_SLOT_PUBLISH,
+		.flags = GENL_ADMIN_PERM,
+		.doit = iec_nl_slot_publish,
+		.policy = iec_nl_slot_policy,
+		.maxattr = IEC_A_MAX,
+	},
+	{
+		.cmd = IEC_CMD_SLOT_UNSTAGE,
+		.flags = GENL_ADMIN_PERM,
+		.doit = iec_nl_slot_unstage,
 		.policy = iec_nl_slot_policy,
 		.maxattr = IEC_A_MAX,
 	},

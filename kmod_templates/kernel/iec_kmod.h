@@ -28,7 +28,7 @@
 
 #include "iec_fault.h"
 
-#define IEC_KMOD_ABI		1
+#define IEC_KMOD_ABI		2
 /*
  * Release latency histogram, log-linear so that it covers the worst case
  * and stays precise where most samples are: buckets 0..31 are 1 us wide
@@ -64,6 +64,8 @@ struct iec_program_type {
 	struct module *owner;
 	/* configuration module: next in its slot's list of retired bodies */
 	struct iec_program_type *retired_next;
+	/* CLOCK_REALTIME of the first cycle that ran this body, 0 before */
+	u64 first_run_ns;
 };
 
 struct iec_gft_slot {
@@ -76,6 +78,11 @@ struct iec_gft_slot {
 	 * later grace period succeeds (iec_gft_sync()).
 	 */
 	struct iec_program_type *retired;
+	/*
+	 * A new build inserted with stage=1 (its module reference held): it
+	 * is published by IEC_CMD_SLOT_PUBLISH, the quick half of a swap.
+	 */
+	struct iec_program_type *staged;
 	ktime_t since;		/* CLOCK_REALTIME of the last publication */
 	u64 publications;
 };
@@ -249,6 +256,8 @@ int iec2kmod_run_program(u32 slot, void *self, struct iec_ctx *ctx);
 
 /* Program-type module init: fills its slot if the interface hash matches. */
 int iec2kmod_gft_publish(struct iec_program_type *type);
+/* Stages a build for a later publication (insmod ... stage=1). */
+int iec2kmod_gft_stage(struct iec_program_type *type);
 
 /* Resource module init/exit. */
 int iec2kmod_register_resource(struct iec_resource *res);
@@ -291,6 +300,8 @@ extern struct mutex iec_resources_lock;
 int iec_ctl_init(void);
 void iec_ctl_exit(void);
 int iec_gft_clear(long slot);	/* -1: every slot */
+int iec_gft_publish_staged(long slot);	/* -1: every staged slot */
+int iec_gft_unstage(long slot);		/* -1: every slot */
 extern struct wait_queue_head iec_ack_wq;
 int iec_wait_resource_idle(struct iec_resource *res, unsigned long deadline);
 void iec_task_stuck_report(const char *what, struct iec_resource *r,

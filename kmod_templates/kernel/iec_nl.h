@@ -19,6 +19,9 @@
  *   IEC_CMD_RES_START   [NAME]  (no NAME: every resource; "res.task": one task)
  *   IEC_CMD_RES_STOP    [NAME]
  *   IEC_CMD_SLOT_CLEAR  [SLOT_INDEX]  (none: every slot)
+ *   IEC_CMD_SLOT_PUBLISH [SLOT_INDEX] publishes what insmod stage=1 staged
+ *                          (none: every staged slot); ENOENT: none staged
+ *   IEC_CMD_SLOT_UNSTAGE [SLOT_INDEX] drops staged builds unpublished
  *
  * VALUE is the C object's bytes in host order (kind and size say how to
  * read them); for STRING/WSTRING it is the length (u16) and the
@@ -45,6 +48,8 @@ enum iec_nl_cmd {
 	IEC_CMD_RES_START,
 	IEC_CMD_RES_STOP,
 	IEC_CMD_SLOT_CLEAR,
+	IEC_CMD_SLOT_PUBLISH,
+	IEC_CMD_SLOT_UNSTAGE,
 	__IEC_CMD_MAX
 };
 
@@ -101,6 +106,8 @@ enum iec_nl_attr {
 	IEC_A_STARTS,		/* u64: starts of a task since the load */
 	IEC_A_STARTED_NS,	/* s64: CLOCK_REALTIME of its last start */
 	IEC_A_FAULT_NS,		/* s64: CLOCK_REALTIME of its last fault */
+	IEC_A_STAGED,		/* string: build id staged in a slot */
+	IEC_A_FIRST_RUN_NS,	/* s64: CLOCK_REALTIME of the body's first cycle */
 	__IEC_A_MAX
 };
 #define IEC_A_MAX (__IEC_A_MAX - 1)

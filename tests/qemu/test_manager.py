@@ -237,6 +237,30 @@ def test_load_status_variables_swap_stop(guest, plant):
         assert read(guest, "count")["count"]["value"] >= c1
         assert read(guest, "sum")["sum"]["value"] == 3      # the Mixer kept its state
 
+        # a swap in two halves: prepared (staged in its slot, the old body
+        # still runs), then published; a prepared swap dropped
+        a_build = step["new_build"]
+        out = pm(guest, "swap", "--prepare", plant.counter_b, check=0)[1]
+        assert "staged COUNTER" in out and "swap --publish" in out, out
+        (s,) = [s for s in status(guest)["slots"] if s["type_name"] == "COUNTER"]
+        assert s["staged"] == b_builds["COUNTER"] and s["build_id"] == a_build, s
+        time.sleep(0.1)
+        assert read(guest, "algo")["algo"]["value"] == 1
+        refused(guest, "swap", plant.counter_b, want="a swap is prepared already")
+        step = json.loads(pm(guest, "swap", "--publish", "--json", check=0)[1])["steps"][0]
+        assert step["new_build"] == b_builds["COUNTER"] and step["old_build"] == a_build
+        assert 0 <= step["publication_to_first_ms"] <= 50, step    # 1 ms task
+        assert 0 <= step["perform_ms"] < step["publish_ms"] + 1e-6, step
+        assert wait_for(guest, "algo", lambda v: v == 2) == 2
+        assert not [m for m in loaded_modules(guest) if m.endswith(a_build)]
+        pm(guest, "swap", "--prepare", plant.counter_a, check=0)
+        assert [m for m in loaded_modules(guest) if m.endswith(a_build)]
+        pm(guest, "swap", "--unstage", check=0)
+        assert all(s["staged"] is None for s in status(guest)["slots"])
+        assert not [m for m in loaded_modules(guest) if m.endswith(a_build)]
+        refused(guest, "swap", "--publish", want="nothing is prepared")
+        assert read(guest, "algo")["algo"]["value"] == 2
+
         # an incompatible swap: refused, naming the change, nothing touched
         before = snapshot(guest)
         refused(guest, "swap", plant.x, want="variable added: extra : INT (VAR)")
@@ -253,6 +277,9 @@ def test_load_status_variables_swap_stop(guest, plant):
         pm(guest, "stop", "--keep-loaded", check=0)
         assert len(loaded_modules(guest)) == 5
         pm(guest, "start", check=0)
+        # a prepared swap left when everything stops: it goes too
+        pm(guest, "swap", "--prepare", plant.counter_a, check=0)
+        assert len(loaded_modules(guest)) == 6
     finally:
         if loaded_modules(guest):
             stopped_clean(guest)
