@@ -4,7 +4,8 @@ PREEMPT_RT guest, with plc-manager.
 
 tests/qemu/projects/selective is built twice with --selective: A as
 written, B with another algorithm in the Station function block (same
-interface).  In the guest:
+interface; only its program-type module is built, and swapped in as a
+module).  In the guest:
 
 * the task statistics count evaluated and skipped blocks (``plc-manager
   status``, text and --json); while the inputs do not change, the skipped
@@ -30,6 +31,7 @@ from types import SimpleNamespace
 
 import pytest
 
+from iec2kmod import kbuild
 from kmod_helpers import loaded_modules
 
 pytestmark = pytest.mark.qemu
@@ -63,14 +65,21 @@ def lines(guest_workdir, kdir):
     text = (PROJECT / "line.st").read_text()
     assert ALGO_A in text
     (src_b / "line.st").write_text(text.replace(ALGO_A, ALGO_B))
+    # B: only its program-type module is built (the swap inserts nothing else)
     b = base / "b"
-    mb = _gen_build(src_b, b)
+    p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "gen", str(src_b), "-o", str(b),
+                        "--selective"], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stdout + p.stderr
+    mb = json.loads((b / "manifest.json").read_text())
     ta = {m["name"]: m for m in ma["program_types"]}
     tb = {m["name"]: m for m in mb["program_types"]}
     assert ta["Line"]["interface_hash"] == tb["Line"]["interface_hash"]
     assert ta["Line"]["build_id"] != tb["Line"]["build_id"]
+    mod = tb["Line"]["module"]
+    kbuild.build_modules(str(b / mod), kdir=kdir, extra_args=[
+        f"KBUILD_EXTRA_SYMBOLS={a / 'Module.symvers'}"]).check()
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
-    return SimpleNamespace(a=a, b=b)
+    return SimpleNamespace(a=a, b_ko=b / mod / f"{mod}.ko")
 
 
 def pm(guest, *args):
@@ -137,7 +146,7 @@ def test_selective_modules_in_the_guest(guest, lines):
 
         # hot swap while every block is skipped: the new algorithm runs at
         # once, the latched trips stay
-        out = pm(guest, "swap", lines.b)
+        out = pm(guest, "swap", lines.b_ko)
         assert "swapped LINE" in out, out
         wait_for(guest, "sp_total", 138)                 # 3 * (10 + 11 + 12 + 13)
         after = skipping(guest)
