@@ -20,12 +20,16 @@ from . import cnames as N
 from .expr import (BindingError, CodegenError, CRNode, ExprEmitter, Frame, Raw, _const_int,
                    c_int, scalar_kind)
 
+# the pointer to a body's frame (its strings, arrays, structures and FB
+# instances that are not state: temporaries, VAR_TEMP, a function's VAR)
+FRAME = "frm"
+
 UNSIGNED = {8: "iec_u8", 16: "iec_u16", 32: "iec_u32", 64: "iec_u64", 1: "iec_u8"}
 
 
 class BodyEmitter:
     def __init__(self, pou, ind="\t"):
-        self.pooling = False            # set for real POU bodies (pou_body)
+        self.pooling = False            # set for real POU bodies (pou_body): they have a frame
         self.pool: dict[str, str] = {}  # pooled temporary name -> declaration
         self._pool_names: dict = {}
         self.pou = pou
@@ -35,7 +39,8 @@ class BodyEmitter:
         self._temp = 0
         self._label = 0
         self.exit_labels: list[str] = []
-        self.cr_vars: dict[str, str] = {}   # C name -> C type
+        self.cr_vars: dict[str, str] = {}   # C name -> C type (scalars, on the stack)
+        self.frame_vars: dict[str, str] = {}   # frame member -> declaration (string CRs)
         self.ind = ind
         self.uses_ret_label = False
         self.used_labels: set[str] = set()
@@ -48,13 +53,15 @@ class BodyEmitter:
 
     # ---------------------------------------------------------- helpers
     def pool_name(self, decl_key, i):
-        """The i-th pooled temporary of a C type (see Frame.temp)."""
+        """The i-th pooled temporary of a C type (see Frame.temp): a member
+        of the body's frame (iec_fault.h, iec_frame_push), not of the
+        stack."""
         key = (decl_key, i)
         if key not in self._pool_names:
             name = f"pool{len(self._pool_names) + 1}"
             self._pool_names[key] = name
             self.pool[name] = decl_key.replace("@", name) + ";"
-        return self._pool_names[key]
+        return f"{FRAME}->{self._pool_names[key]}"
 
     def pool_snapshot(self):
         return dict(self.pool), dict(self._pool_names)
@@ -97,6 +104,8 @@ class BodyEmitter:
     def var_access(self, v: Var) -> str:
         """C lvalue of a variable of this POU."""
         name = N.var(v.name)
+        if self.in_frame(v):
+            return f"{FRAME}->{name}"
         if self.is_function:
             if v.section == "VAR_INPUT":
                 if isinstance(v.type, ArrayT) or N.is_scalar(v.type):
@@ -117,13 +126,25 @@ class BodyEmitter:
             return f"self->{name}" if isinstance(v.type, ArrayT) else f"(*self->{name})"
         return f"self->{name}"
 
+    def in_frame(self, v: Var) -> bool:
+        """Does a variable of this POU live in its frame?  Those that are
+        no state and no parameter, and are not scalars."""
+        if not self.pooling or N.is_scalar(v.type):
+            return False
+        if self.is_function:
+            return v.section in ("VAR", "VAR_TEMP")
+        return v.section == "VAR_TEMP"
+
     def cr_var(self, t, depth=0):
         t = concrete(t)
         if isinstance(t, StringT):
             # a string current result has the length of its type
             name = f"cr{depth}_{'w' if t.wide else ''}s{t.length}"
-            self.cr_vars[name] = N.string_struct(t)
-            return name
+            if not self.pooling:
+                self.cr_vars[name] = N.string_struct(t)
+                return name
+            self.frame_vars[name] = f"{N.string_struct(t)} {name};"
+            return f"{FRAME}->{name}"
         if isinstance(t, (ArrayT, StructT, FBType, ErrorT)) or t is None:
             raise CodegenError(f"IL current result of type {getattr(t, 'name', t)}")
         name = f"cr{depth}_{N.type_tag(t)}"

@@ -79,7 +79,7 @@ class Frame:
         return name
 
     def is_pooled(self, name):
-        return name.startswith("pool")
+        return name.startswith("frm->pool")
 
 
 def c_int(value: int, t) -> str:

@@ -8,7 +8,7 @@ from .. import ast
 from ..checks.types import (ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT,
                             concrete)
 from . import cnames as N
-from .body import BodyEmitter
+from .body import FRAME, BodyEmitter
 from .expr import Frame, c_int
 
 SECTION_ORDER = ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_EXTERNAL", "VAR_GLOBAL", "VAR")
@@ -244,9 +244,11 @@ def pou_init(project, pou) -> list[str]:
     return out
 
 
-def function_signature(pou) -> str:
+def function_signature(pou, cname=None, scope="IEC_POU_SCOPE", frame=None) -> str:
+    """C signature of a FUNCTION (cname: another C name; frame: the C type
+    of a frame pointer parameter, for the body behind the frame wrapper)."""
     result = pou.vars[pou.key]
-    params = ["struct iec_ctx *ctx"]
+    params = ["struct iec_ctx *ctx"] + ([f"{frame} *{FRAME}"] if frame else [])
     if N.is_scalar(result.type):
         ret = N.ctype(result.type)
     else:
@@ -272,7 +274,77 @@ def function_signature(pou) -> str:
                 params.append(f"{N.ctype(elem)} *{name}")
             else:
                 params.append(f"{N.ctype(v.type)} *{name}")
-    return f"IEC_POU_SCOPE {ret} {N.fn(pou.name)}({', '.join(params)})"
+    return f"{scope} {ret} {cname or N.fn(pou.name)}({', '.join(params)})"
+
+
+def function_args(pou) -> list[str]:
+    """The parameter names of function_signature(pou), in order."""
+    args = ["ctx"] + ([] if N.is_scalar(pou.vars[pou.key].type) else ["ret"])
+    return args + [N.var(v.name) for v in pou.vars.values()
+                   if v.section in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")]
+
+
+def _frame_prefix(pou) -> str:
+    return N.fn(pou.name) if pou.kind == "FUNCTION" else N.pou_prefix(pou)
+
+
+def frame_struct(pou) -> str:
+    return f"struct {_frame_prefix(pou)}_frame"
+
+
+def frame_need(pou) -> str:
+    """Name of the C constant: bytes of frame area a call of pou needs,
+    with everything it calls (see iec_fault.h, iec_frame_push)."""
+    return f"IEC_FRAME_NEED_{_frame_prefix(pou).upper()}"
+
+
+def callees(project, pou) -> list:
+    """User POUs a POU may call: the functions it calls, the types of its
+    FB instances (an over-approximation is safe: it only sizes frames)."""
+    keys = set(pou.calls)
+    for v in pou.vars.values():
+        t = v.type
+        while isinstance(concrete(t), ArrayT):
+            t = concrete(t).elem
+        if isinstance(concrete(t), FBType) and not concrete(t).pou.standard:
+            keys.add(concrete(t).pou.key)
+    return [project.pous[k] for k in sorted(keys)
+            if k in project.pous and not getattr(project.pous[k], "standard", False)]
+
+
+def _frame_lines(project, pou, members) -> list[str]:
+    """The frame struct of a body (if it has members) and its need."""
+    need = [frame_need(c) for c in callees(project, pou)]
+    inner = "0U"
+    for n in need:
+        inner = n if inner == "0U" else f"IEC_FRAME_MAX({n}, {inner})"
+    out = []
+    if members:
+        out += [f"{frame_struct(pou)} {{"] + ["\t" + m for m in members] + ["};", ""]
+        own = f"IEC_FRAME_ALIGN(sizeof({frame_struct(pou)}))"
+        out.append(f"#define {frame_need(pou)} ({own} + {inner})" if need else
+                   f"#define {frame_need(pou)} {own}")
+    else:
+        out.append(f"#define {frame_need(pou)} ({inner})")
+    return out + [""]
+
+
+def _frame_wrapper(pou, signature, inner_call, ret_type) -> list[str]:
+    """The POU's C function: pushes its frame, runs the body, pops."""
+    name = N.c_string(pou.name.encode())
+    line = pou.src.linecol(pou.node.pos)[0]
+    out = [signature, "{", f"\t{frame_struct(pou)} *{FRAME};", "\tiec_u32 frame_mark;"]
+    if ret_type:
+        out.append(f"\t{ret_type} r;")
+    out += ["", f"\t{FRAME} = iec_frame_push(ctx, sizeof(*{FRAME}), &frame_mark);",
+            f"\tif (!{FRAME}) {{", f"\t\tiec_fault_locate(ctx, {name}, {line});",
+            "\t\treturn 0;" if ret_type else "\t\treturn;", "\t}"]
+    out.append(f"\tr = {inner_call};" if ret_type else f"\t{inner_call};")
+    out.append("\tiec_frame_pop(ctx, frame_mark);")
+    if ret_type:
+        out.append("\treturn r;")
+    out.append("}")
+    return out
 
 
 def pou_body(project, pou, sel=None) -> list[str]:
@@ -283,9 +355,9 @@ def pou_body(project, pou, sel=None) -> list[str]:
     be.sel = sel
     stmts = be.body(pou.node.body)
     out = []
+    members = []       # of the frame
     if pou.kind == "FUNCTION":
-        out.append(function_signature(pou))
-        out.append("{")
+        inner = []
         locals_ = []
         ie = InitEmitter(project, pou)
         ie.body = be
@@ -294,10 +366,11 @@ def pou_body(project, pou, sel=None) -> list[str]:
         for v in pou.vars.values():
             if v.section in ("VAR", "VAR_TEMP") or (v.section == "RESULT" and
                                                     N.is_scalar(v.type)):
-                locals_.append(N.declare(v.type, N.var(v.name)) + ";")
-                init.append(f"iec_memset(&{N.var(v.name)}, 0, sizeof({N.var(v.name)}));")
-                init += ie.lines(N.var(v.name), v.type, v.init if v.section != "RESULT" else None,
-                                 f)
+                where = members if be.in_frame(v) else locals_
+                where.append(N.declare(v.type, N.var(v.name)) + ";")
+                name = be.var_access(v) if be.in_frame(v) else N.var(v.name)
+                init.append(f"iec_memset(&{name}, 0, sizeof({name}));")
+                init += ie.lines(name, v.type, v.init if v.section != "RESULT" else None, f)
             elif v.section == "RESULT":
                 # the result starts from its type's initial value
                 if isinstance(v.type, ArrayT):
@@ -320,7 +393,8 @@ def pou_body(project, pou, sel=None) -> list[str]:
                     init += ie.lines(f"(*{name})", v.type, v.init, f)
         if any("for (i = 0;" in ln for ln in init):
             locals_.append("iec_u32 i;")
-        locals_ += f.decls + be.pool_decls()
+        locals_ += f.decls
+        members += be.pool_decls() + [d for _, d in sorted(be.frame_vars.items())]
         locals_ += [f"{ct} {name};" for name, ct in sorted(be.cr_vars.items())]
         # a parameter the body does not use is valid IEC: every one is
         # marked used (-Wunused-parameter is an error in the module build)
@@ -328,17 +402,26 @@ def pou_body(project, pou, sel=None) -> list[str]:
                                  else [])
         used += [f"(void){N.var(v.name)};" for v in pou.vars.values()
                  if v.section in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")]
+        used += [f"(void){FRAME};"] if members else []
         # an IL current result may be loaded and never used (valid IL)
         used += [f"(void){name};" for name in sorted(be.cr_vars)]
-        out += ["\t" + ln for ln in locals_ + used + [x for x in f.pre + init if x]]
-        out += ["\t" + ln for ln in stmts]
+        inner += ["\t" + ln for ln in locals_ + used + [x for x in f.pre + init if x]]
+        inner += ["\t" + ln for ln in stmts]
         rv = be.ret_value()
-        out.append(f"\treturn {rv};" if rv else "\treturn;")
-        out.append("}")
-        return out
-    out.append(f"IEC_POU_SCOPE void {N.pou_prefix(pou)}_body({N.pou_struct(pou)} *self, "
-               "struct iec_ctx *ctx)")
-    out.append("{")
+        inner.append(f"\treturn {rv};" if rv else "\treturn;")
+        inner.append("}")
+        out = _frame_lines(project, pou, members)
+        if not members:
+            return out + [function_signature(pou), "{"] + inner
+        framed = N.fn(pou.name) + "_framed"
+        result = pou.vars[pou.key]
+        out += [function_signature(pou, framed, "static inline", frame_struct(pou)), "{"]
+        out += inner + [""]
+        args = function_args(pou)
+        call = f"{framed}({', '.join([args[0], FRAME] + args[1:])})"
+        return out + _frame_wrapper(pou, function_signature(pou), call,
+                                    N.ctype(result.type) if N.is_scalar(result.type) else None)
+    body_fn = f"{N.pou_prefix(pou)}_body"
     locals_ = []
     ie = InitEmitter(project, pou)
     ie.body = be
@@ -346,19 +429,22 @@ def pou_body(project, pou, sel=None) -> list[str]:
     init = []
     for v in pou.vars.values():
         if v.section == "VAR_TEMP":
-            locals_.append(N.declare(v.type, N.var(v.name)) + ";")
+            (members if be.in_frame(v) else locals_).append(N.declare(v.type, N.var(v.name)) +
+                                                            ";")
+            name = be.var_access(v)
             if has_fb(v.type):
                 # a fresh instance whose externals are bound: the prototype
                 proto = f"self->{N.temp_proto(v.name)}"
                 init.append(f"iec_memcpy({'' if isinstance(v.type, ArrayT) else '&'}"
-                            f"{N.var(v.name)}, {'' if isinstance(v.type, ArrayT) else '&'}"
-                            f"{proto}, sizeof({N.var(v.name)}));")
+                            f"{name}, {'' if isinstance(v.type, ArrayT) else '&'}"
+                            f"{proto}, sizeof({name}));")
                 continue
-            init.append(f"iec_memset(&{N.var(v.name)}, 0, sizeof({N.var(v.name)}));")
-            init += ie.lines(N.var(v.name), v.type, v.init, f)
+            init.append(f"iec_memset(&{name}, 0, sizeof({name}));")
+            init += ie.lines(name, v.type, v.init, f)
     if any("for (i = 0;" in ln for ln in init):
         locals_.append("iec_u32 i;")
-    locals_ += f.decls + be.pool_decls()
+    locals_ += f.decls
+    members += be.pool_decls() + [d for _, d in sorted(be.frame_vars.items())]
     locals_ += [f"{ct} {name};" for name, ct in sorted(be.cr_vars.items())]
     edge = []
     for v in pou.inputs:
@@ -370,13 +456,22 @@ def pou_body(project, pou, sel=None) -> list[str]:
             edge += [f"self->h_{n} = {expr};", f"{prev} = {cur};"]
     # an IL current result may be loaded and never used (valid IL)
     used = ["(void)self;", "(void)ctx;"] + [f"(void){name};" for name in sorted(be.cr_vars)]
-    out += ["\t" + ln for ln in locals_ + used + f.pre + init + edge]
-    out += ["\t" + ln for ln in stmts]
+    used += [f"(void){FRAME};"] if members else []
+    inner = ["\t" + ln for ln in locals_ + used + f.pre + init + edge]
+    inner += ["\t" + ln for ln in stmts]
     if be.uses_ret_label:
-        out.append("out:")
-        out.append("\treturn;")
-    out.append("}")
+        inner.append("out:")
+        inner.append("\treturn;")
+    inner.append("}")
+    out = _frame_lines(project, pou, members)
+    sig = f"IEC_POU_SCOPE void {body_fn}({N.pou_struct(pou)} *self, struct iec_ctx *ctx)"
+    if not members:
+        out += [sig, "{"] + inner
+    else:
+        out += [f"static inline void {body_fn}_framed({N.pou_struct(pou)} *self, "
+                f"struct iec_ctx *ctx, {frame_struct(pou)} *{FRAME})", "{"]
+        out += inner + [""]
+        out += _frame_wrapper(pou, sig, f"{body_fn}_framed(self, ctx, {FRAME})", None)
     if sel is not None and sel.has_layout(pou):
-        out.append("")
-        out += sel.run_function(pou)
+        out += [""] + sel.run_function(pou)
     return out

@@ -156,6 +156,7 @@ struct iec_task {
 	 */
 	s64 watchdog_ns;
 	u32 watchdog_overruns;
+	u32 task_id;		/* index in the configuration: its frame areas */
 	/* generated: copy in, run the programs, copy out */
 	void (*copy_in)(void);
 	void (*run)(struct iec_ctx *ctx);

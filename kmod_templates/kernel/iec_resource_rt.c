@@ -322,6 +322,7 @@ static int iec_task_create(struct iec_resource *res, struct iec_task *t)
 	hrtimer_init(&t->watchdog, CLOCK_MONOTONIC, HRTIMER_MODE_REL_HARD);
 	t->watchdog.function = iec_watchdog_fire;
 	iec_ctx_init(&t->ctx, t->loop_budget);
+	t->ctx.task_id = t->task_id;
 	p = kthread_create(iec_task_thread, t, "iec/%s/%s", res->name, t->name);
 	if (IS_ERR(p))
 		return PTR_ERR(p);

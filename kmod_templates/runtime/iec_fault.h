@@ -55,6 +55,7 @@ enum iec_fault_code {
 	IEC_FAULT_USER,		/* raised by the program itself */
 	IEC_FAULT_WATCHDOG,	/* the cycle ran longer than its watchdog time */
 	IEC_FAULT_OVERRUN,	/* too many cycles in a row ended late */
+	IEC_FAULT_FRAME,	/* frame area too small (never, by construction) */
 	IEC_FAULT__COUNT
 };
 
@@ -81,6 +82,11 @@ struct iec_ctx {
 	bool sel_changed;		/* a nested evaluation changed its state */
 	iec_u64 sel_evaluated;		/* blocks evaluated */
 	iec_u64 sel_skipped;		/* blocks skipped */
+	/* frame area of the running program's module, see iec_frame_push() */
+	iec_u8 *frame_base;
+	iec_u32 frame_size;
+	iec_u32 frame_used;
+	iec_u32 task_id;		/* the task's index in its configuration */
 };
 
 static inline void iec_ctx_init(struct iec_ctx *ctx, iec_u32 loop_budget)
@@ -149,9 +155,55 @@ static inline const char *iec_fault_name(enum iec_fault_code code)
 		return "watchdog (cycle longer than the task's watchdog time)";
 	case IEC_FAULT_OVERRUN:
 		return "overruns (cycles in a row that ended after the next release)";
+	case IEC_FAULT_FRAME:
+		return "frame area exhausted";
 	default:
 		return "unknown fault";
 	}
+}
+
+/*
+ * Frame area.  The strings, arrays, structures and FB instances a POU body
+ * needs as temporaries or VAR_TEMP (function: VAR) do not live on the
+ * kernel stack, whose frames must stay small: each POU that has any keeps
+ * them in a struct <pou>_frame pushed on the task's frame area when it is
+ * called and popped when it returns.  The code that owns the program's
+ * code (a program-type module; the simulator) owns one area per task,
+ * sized at compile time for the deepest chain of calls (IEC has no
+ * recursion), and points ctx at it before the program body runs.  A push
+ * that would not fit records IEC_FAULT_FRAME instead of overrunning.
+ */
+#define IEC_FRAME_ALIGN(n)	((((iec_u32)(n)) + 15U) & ~15U)
+#define IEC_FRAME_MAX(a, b)	((a) > (b) ? (a) : (b))
+
+static inline void iec_frame_area(struct iec_ctx *ctx, iec_u8 *base,
+				  iec_u32 size)
+{
+	ctx->frame_base = base;
+	ctx->frame_size = size;
+	ctx->frame_used = 0;
+}
+
+static inline void *iec_frame_push(struct iec_ctx *ctx, iec_u32 size,
+				   iec_u32 *mark)
+{
+	iec_u32 need = IEC_FRAME_ALIGN(size);
+	void *p;
+
+	*mark = ctx->frame_used;
+	if (iec_unlikely(!ctx->frame_base || need > ctx->frame_size ||
+			 ctx->frame_used > ctx->frame_size - need)) {
+		iec_fault_raise(ctx, IEC_FAULT_FRAME);
+		return NULL;
+	}
+	p = ctx->frame_base + ctx->frame_used;
+	ctx->frame_used += need;
+	return p;
+}
+
+static inline void iec_frame_pop(struct iec_ctx *ctx, iec_u32 mark)
+{
+	ctx->frame_used = mark;
 }
 
 #define IEC_FAULT_CHECK(ctx, pou, line)					\
