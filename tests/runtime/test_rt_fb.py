@@ -23,9 +23,13 @@ def wrap64(v):
 
 class Ctx(C.Structure):
     _fields_ = [("now_ns", C.c_int64), ("loop_budget", C.c_uint32),
-                ("loop_budget_cycle", C.c_uint32), ("fault", C.c_int),
-                ("fault_pou", C.c_char_p), ("fault_line", C.c_int),
-                ("fault_count", C.c_uint32)]
+                ("loop_budget_cycle", C.c_uint32), ("budget_fault", C.c_int),
+                ("fault", C.c_int), ("fault_pou", C.c_char_p), ("fault_line", C.c_int),
+                ("fault_count", C.c_uint32), ("sel_epoch", C.c_uint32),
+                ("sel_changed", C.c_bool), ("sel_evaluated", C.c_uint64),
+                ("sel_skipped", C.c_uint64), ("frame_base", C.c_void_p),
+                ("frame_size", C.c_uint32), ("frame_used", C.c_uint32),
+                ("task_id", C.c_uint32)]
 
 
 class Timer(C.Structure):
@@ -80,6 +84,8 @@ def test_ctypes_mirrors_match_c_layout(lib):
     assert L("ctx") == C.sizeof(Ctx)
     assert L("ctx.fault") == Ctx.fault.offset
     assert L("ctx.fault_count") == Ctx.fault_count.offset
+    for f in ("sel_skipped", "frame_base", "task_id"):
+        assert L("ctx." + f) == getattr(Ctx, f).offset
     assert L("ton") == C.sizeof(Timer)
     for f in ("pt", "q", "et", "state", "start"):
         assert L("ton." + f) == getattr(Timer, f).offset
