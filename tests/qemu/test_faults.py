@@ -173,17 +173,18 @@ def test_a_faulted_task_does_not_prevent_stop_or_unload(guest, faults):
         stop_clean(guest, pmdir)
 
 
-@pytest.mark.parametrize("partial", ["config", "config+r1", "no_programs"])
+@pytest.mark.parametrize("partial", ["config+r1", "no_programs"])
 def test_stop_removes_what_a_killed_load_left(guest, faults, partial):
     """The modules a `load` killed half way may leave: the configuration
-    alone, with a resource never started and empty slots, or every
-    resource and no program type (slots never published); stopped or
-    started.  A plain `stop` removes all of it and exits 0."""
+    with a resource never started and empty slots, or every resource and
+    no program type (slots never published), started.  A plain `stop`
+    removes all of it and exits 0 (benchmarks/soak.py kills the manager at
+    random points)."""
     work, tree, manifest, pmdir = faults
     order = manifest["load_order"]
     kinds = {m["name"]: m["kind"] for m in manifest["modules"]}
     res = [n for n in order if kinds[n] == "resource"]
-    want = {"config": order[:1], "config+r1": [order[0], res[-1]],
+    want = {"config+r1": [order[0], res[-1]],
             "no_programs": [order[0]] + res}[partial]
     assert loaded_modules(guest) == []
     try:
