@@ -28,7 +28,7 @@ from ..codegen import cnames as N
 from ..codegen.expr import Frame, Raw
 from ..codegen.body import BodyEmitter, copy_value
 from ..codegen.plan import PlanEmitter, build_plan, kind_of, unbound_pointer_check
-from ..codegen.pou import InitEmitter, frame_need, pou_struct
+from ..codegen.pou import InitEmitter, callees, frame_need, pou_struct
 
 RUNTIME_HEADERS = ("iec_platform.h", "iec_types.h", "iec_fault.h", "iec_int.h", "iec_conv.h",
                    "iec_time.h", "iec_string.h", "iec_std_fb.h", "iec_real.h", "iec_gen.h")
@@ -139,15 +139,25 @@ def _deps(pou, project):
         if p.key in need:
             return
         need.add(p.key)
-        for d in p.calls:
-            if d in project.pous:
-                visit(project.pous[d])
-        for v in p.vars.values():
-            if isinstance(v.type, FBType) and not v.type.pou.standard:
-                visit(v.type.pou)
+        # the same POUs whose frame needs the body's adds up (codegen.pou)
+        for c in callees(project, p):
+            visit(c)
 
     visit(pou)
     return [p for p in order if p.key in need]
+
+
+def _frame_rows(plan, pou) -> list[int]:
+    """For each task of the configuration, the row of the program type's
+    frame areas it uses, -1 if it runs no instance of the type."""
+    rows, n = [], 0
+    for tp in plan.tasks:
+        if any(ip.pou is pou for ip in tp.instances):
+            rows.append(n)
+            n += 1
+        else:
+            rows.append(-1)
+    return rows
 
 
 def generate_tree(project, out: Path, *args, **kwargs) -> dict:
@@ -210,7 +220,7 @@ def _generate_tree(project, out: Path, selective=None) -> dict:
         body = env.get_template("program_body.c.j2").render(
             type=pou.name, header=gen.header_name, bodies=[gen.bodies[p.key][0] for p in deps],
             prefix=prefix, uses_fpu=fpu, version=__version__, sel_token=sel_token,
-            ntasks=max(1, len(plan.tasks)), frame_need=frame_need(pou),
+            frame_rows=_frame_rows(plan, pou), frame_need=frame_need(pou),
             call=f"{prefix}_run(self, ctx, true)" if sel is not None and sel.has_layout(pou)
             else f"{prefix}_body(self, ctx)")
         # the code only: comments name the sources and change with any edit

@@ -125,16 +125,23 @@ static inline iec_bool iec_lt_##n(T a, T b) { return a < b; }		\
 static inline iec_bool iec_ne_##n(T a, T b) { return a != b; }
 
 /* Bit string functions; BITS is the width, W an unsigned type >= T. */
+/*
+ * All ones in the low BITS bits of W: results are masked before they are
+ * narrowed to T (the same value; sparse warns about a cast that truncates
+ * a constant once a shift or rotate of a constant is inlined).
+ */
+#define IEC__MASK(W, BITS)	((W)((((W)1 << ((BITS) - 1)) << 1) - 1))
+
 #define IEC__DEF_BITS(n, T, W, BITS)					\
 static inline T iec_and_##n(T a, T b) { return (T)(a & b); }		\
 static inline T iec_or_##n(T a, T b) { return (T)(a | b); }		\
 static inline T iec_xor_##n(T a, T b) { return (T)(a ^ b); }		\
-static inline T iec_not_##n(T a) { return (T)~(W)a; }			\
+static inline T iec_not_##n(T a) { return (T)(~(W)a & IEC__MASK(W, BITS)); } \
 static inline T iec_shl_##n(T in, iec_s64 sh)				\
 {									\
 	if (sh < 0 || sh >= (BITS))					\
 		return 0;						\
-	return (T)((W)in << sh);					\
+	return (T)(((W)in << sh) & IEC__MASK(W, BITS));			\
 }									\
 static inline T iec_shr_##n(T in, iec_s64 sh)				\
 {									\
@@ -148,7 +155,8 @@ static inline T iec_rol_##n(T in, iec_s64 sh)				\
 									\
 	if (r == 0)							\
 		return in;						\
-	return (T)(((W)in << r) | ((W)in >> ((BITS) - r)));		\
+	return (T)((((W)in << r) | ((W)in >> ((BITS) - r))) &		\
+		   IEC__MASK(W, BITS));						\
 }									\
 static inline T iec_ror_##n(T in, iec_s64 sh)				\
 {									\
@@ -156,7 +164,8 @@ static inline T iec_ror_##n(T in, iec_s64 sh)				\
 									\
 	if (r == 0)							\
 		return in;						\
-	return (T)(((W)in >> r) | ((W)in << ((BITS) - r)));		\
+	return (T)((((W)in >> r) | ((W)in << ((BITS) - r))) &		\
+		   IEC__MASK(W, BITS));						\
 }
 
 IEC__DEF_WRAP_ARITH(sint, iec_sint, iec_u8, iec_u32)
