@@ -142,10 +142,15 @@ def render_sim(project, selective=None):
         init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init),
         init=f.pre + init, tasks=tasks, vars=vars_, pou_files=pou_files,
         unbound_check=unbound_pointer_check(plan.instances),
-        backup=[N.declare(g.var.type, g.c_name) for g in plan.globals],
-        save=[copy_value(f"sim_backup.{g.c_name}", g.c_name, g.var.type) for g in plan.globals],
+        # directly represented variables are part of a task's image too: a
+        # faulting cycle publishes none of them (the kernel copies nothing out)
+        backup=[N.declare(g.var.type, g.c_name) for g in plan.globals] +
+        [N.declare(t, c) for c, t in plan.directs.values()],
+        save=[copy_value(f"sim_backup.{g.c_name}", g.c_name, g.var.type) for g in plan.globals] +
+        [copy_value(f"sim_backup.{c}", c, t) for c, t in plan.directs.values()],
         restore=[copy_value(g.c_name, f"sim_backup.{g.c_name}", g.var.type)
-                 for g in plan.globals])
+                 for g in plan.globals] +
+        [copy_value(c, f"sim_backup.{c}", t) for c, t in plan.directs.values()])
     files = {gen.header_name: gen.header, "sim_project.c": text}
     for key in gen.order:
         name, body = gen.bodies[key]

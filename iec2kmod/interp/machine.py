@@ -644,6 +644,10 @@ def _save_globals(self):
     out = []
     for _path, v, container in self.global_paths:
         out.append((container, v.key, copy_of(v.type)(container[v.key])))
+    # directly represented variables (%Q written through a connection) are
+    # part of the task's image too: not published from a faulting cycle
+    for address, value in self.directs.items():
+        out.append((self.directs, address, list(value) if isinstance(value, list) else value))
     return out
 
 
