@@ -329,15 +329,35 @@ def _frame_lines(project, pou, members) -> list[str]:
     return out + [""]
 
 
+def _function_zero_outputs(pou) -> list[str]:
+    """A FUNCTION's outputs and non-scalar result set to zero (what its
+    caller reads when the call faults before the body ran)."""
+    out = []
+    result = pou.vars[pou.key]
+    places = [("ret", result.type)] if not N.is_scalar(result.type) else []
+    places += [(N.var(v.name), v.type) for v in pou.vars.values() if v.section == "VAR_OUTPUT"]
+    for name, t in places:
+        if isinstance(t, ArrayT):
+            _, count = N.array_flat(t)
+            out.append(f"iec_memset({name}, 0, {count} * sizeof(*{name}));")
+        else:
+            out.append(f"iec_memset({name}, 0, sizeof(*{name}));")
+    return out
+
+
 def _frame_wrapper(pou, signature, inner_call, ret_type) -> list[str]:
-    """The POU's C function: pushes its frame, runs the body, pops."""
+    """The POU's C function: pushes its frame, runs the body, pops.  When
+    the push fails (never, by construction) a function's outputs are zeroed
+    as its body would have done, so no caller reads an unset value."""
     name = N.c_string(pou.name.encode())
     line = pou.src.linecol(pou.node.pos)[0]
+    zero = _function_zero_outputs(pou) if pou.kind == "FUNCTION" else []
     out = [signature, "{", f"\t{frame_struct(pou)} *{FRAME};", "\tiec_u32 frame_mark;"]
     if ret_type:
         out.append(f"\t{ret_type} r;")
     out += ["", f"\t{FRAME} = iec_frame_push(ctx, sizeof(*{FRAME}), &frame_mark);",
-            f"\tif (!{FRAME}) {{", f"\t\tiec_fault_locate(ctx, {name}, {line});",
+            f"\tif (!{FRAME}) {{"] + ["\t\t" + z for z in zero] + [
+            f"\t\tiec_fault_locate(ctx, {name}, {line});",
             "\t\treturn 0;" if ret_type else "\t\treturn;", "\t}"]
     out.append(f"\tr = {inner_call};" if ret_type else f"\t{inner_call};")
     out.append("\tiec_frame_pop(ctx, frame_mark);")
