@@ -511,6 +511,11 @@ class Guest:
         fails = [l for l in self._console_tail if "@@IEC2KMOD-INIT-FAIL" in l]
         if fails:
             parts.append("guest init failed: " + fails[-1].split("INIT-FAIL", 1)[1].strip())
+        # a panic's reason can be more than 30 lines above the end of its trace
+        bad = self.console_problems()
+        if bad:
+            parts.append("kernel console since the last kernel log check:\n  "
+                         + "\n  ".join(bad))
         parts.append(f"last console lines ({self.console_log}):\n" + self.console_tail(30))
         return "\n".join(parts)
 

@@ -121,6 +121,8 @@ def _env_options() -> Dict[str, Any]:
         opts["preload"] = tuple(m for m in os.environ["IEC2KMOD_VM_PRELOAD"].split(",") if m)
     if os.environ.get("IEC2KMOD_VM_HOST_CACHE"):
         opts["host_cache"] = os.environ["IEC2KMOD_VM_HOST_CACHE"]
+    if os.environ.get("IEC2KMOD_VM_APPEND"):     # e.g. "slub_debug=FZPU page_poison=1"
+        opts["append"] = os.environ["IEC2KMOD_VM_APPEND"]
     return opts
 
 
@@ -233,6 +235,8 @@ def guest_factory(guest_workdir):
 
     def make(**kw) -> Guest:
         kw.setdefault("workdir", _STATE["workdir"])
+        for k, v in _env_options().items():
+            kw.setdefault(k, v)
         workdir = kw.pop("workdir")
         g = _boot(str(workdir), _STATE["logdir"], **kw)
         made.append(g)

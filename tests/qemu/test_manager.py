@@ -80,7 +80,12 @@ def plant(guest_workdir, kdir):
         f"KBUILD_EXTRA_SYMBOLS={a / 'Module.symvers'}"]).check()
     # the guest imports the manager from the host's files: give it bytecode
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
-    ns = SimpleNamespace(base=base, a=a, b=b, x=x)
+    # CPU: the same plant with its resource on a CPU no guest has, so that
+    # its insertion, the last, fails in the kernel after every check passed
+    cpu = base / "cpu"
+    gen_and_build(_variant(base / "src_cpu", [("RESOURCE main ON CPU0",
+                                                "RESOURCE main ON CPU7")]), cpu)
+    ns = SimpleNamespace(base=base, a=a, b=b, x=x, cpu=cpu)
     for k in ("a", "b", "x"):
         d = _counter(getattr(ns, k))
         setattr(ns, f"counter_{k}", d / f"{d.name}.ko")
@@ -91,9 +96,15 @@ def pm(guest, *args, check=None, timeout=300, user=None):
     """plc-manager ARGS in the guest; returns (exit code, output)."""
     if user is None:
         r = guest.pyrun(script="plc-manager", argv=[str(a) for a in args], timeout=timeout)
-    else:        # the same entry point, after dropping root
+    else:        # the same entry point, after dropping root.  The guest's Python
+        # is the host's, under /root (mode 0700 through 9p): nobody cannot
+        # import from it, so every module the manager may import (its own and
+        # the standard library's) is imported while still root
         r = guest.pyrun(
-            "import os, sys\n"
+            "import importlib, os, pkgutil, sys\n"
+            "import plc_manager\n"
+            "for m in pkgutil.walk_packages(plc_manager.__path__, 'plc_manager.'):\n"
+            "    importlib.import_module(m.name)\n"
             "os.setgroups([]); os.setgid(65534); os.setuid(65534)\n"
             "from plc_manager.cli import main\n"
             "sys.exit(main(sys.argv[1:]))", argv=[str(a) for a in args], timeout=timeout)
@@ -326,20 +337,26 @@ def test_bad_input_changes_nothing(guest, plant):
     # not root
     refused(guest, "load", plant.a, user="nobody", want="load needs CAP_SYS_MODULE")
     assert loaded_modules(guest) == []
-    # a failure half way: the last module (here: another build of a program
-    # type, whose interface does not fit its slot) fails, the rest goes again
+    # a module of another build in the tree is refused before anything is
+    # inserted (it would not fit its slot)
     broken = plant.base / "broken"
     if broken.exists():
         shutil.rmtree(broken)
     shutil.copytree(plant.a, broken, symlinks=True)
-    last = m["load_order"][-1]
-    shutil.copyfile(plant.counter_x, broken / last / f"{last}.ko")
-    rc, out = pm(guest, "load", broken)
+    (prog,) = [n for n in m["load_order"] if n.startswith("iec_plant_p_counter_")]
+    shutil.copyfile(plant.counter_x, broken / prog / f"{prog}.ko")
+    refused(guest, "load", broken, want=f"is module {plant.counter_x.stem}, not {prog}")
+    assert loaded_modules(guest) == []
+    # a failure half way, in the kernel: the resource's CPU is not there; its
+    # module, the last, fails, and what was inserted before goes again
+    mc = json.loads((plant.cpu / "manifest.json").read_text())
+    last = mc["load_order"][-1]
+    assert last.startswith("iec_plant_r_"), mc["load_order"]
+    rc, out = pm(guest, "load", plant.cpu)
     assert rc == 1, out
-    assert f"inserted {m['load_order'][-2]}" in out and "removing what was inserted" in out
-    assert out.strip().splitlines()[-1].startswith(
-        f"plc-manager: insert {last}.ko: the interface of the program type does not match "
-        f"its slot -- kernel: iec2kmod: "), out
+    assert f"inserted {mc['load_order'][-2]}" in out and "removing what was inserted" in out
+    assert out.strip().splitlines()[-1].startswith(f"plc-manager: insert {last}.ko: "), out
+    assert "CPU 7 is not online" in out, out
     assert loaded_modules(guest) == []
     assert "plant.json" not in guest.run("ls /host/run/plc-manager/ 2>&1").output
 
