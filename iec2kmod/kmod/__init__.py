@@ -231,7 +231,11 @@ def _generate_tree(project, out: Path, selective=None) -> dict:
             type=pou.name, type_upper=pou.name.upper(), build_id=build_id, config=cfg.name,
             header=gen.header_name, prefix=prefix, iface_hash=ihash, uses_fpu=fpu,
             version=__version__, source_hash=source_hash)
-        fp_objs = ["body.o"]
+        # The FPU flags exactly where the body runs between kernel_fpu_begin()
+        # and kernel_fpu_end() (.uses_fpu, iec2kmod_run_program): with them
+        # gcc copies and zeroes structures through %xmm registers, which
+        # outside such a section are the interrupted user process's
+        fp_objs = ["body.o"] if fpu else []
         fp_runtime = [f for f in ("iec_math.c", "iec_real.c") if (ROOT / "runtime" / f).exists()]
         runtime = _runtime_used([main, body, gen.header] + [gen.bodies[p.key][1] for p in deps],
                                 fpu)

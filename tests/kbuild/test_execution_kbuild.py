@@ -14,7 +14,9 @@ instead of building them a second time."""
 from __future__ import annotations
 
 import hashlib
+import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -80,6 +82,33 @@ def cache_dir(name, sources) -> Path:
     return runner.build_root() / "kbuild_exec" / f"{name}-{h.hexdigest()[:16]}"
 
 
+_FPU_REG = re.compile(r"%(?:[xyz]mm\d+|mm\d|st(?:\(\d\))?)\b")
+
+
+def fpu_outside_sections(tree: Path) -> list:
+    """Instructions on FPU/SIMD registers in code that does not run between
+    kernel_fpu_begin() and kernel_fpu_end(): every module but a program
+    type that uses REAL (manifest "uses_fpu").  Such an instruction clobbers
+    the registers of the user process the task preempted (a heap corrupted
+    in plc-manager, found in the QEMU tier)."""
+    manifest = json.loads((tree / "manifest.json").read_text())
+    found = []
+    for m in manifest["modules"]:
+        if m.get("uses_fpu"):
+            continue
+        ko = tree / m.get("dir", m["name"]) / f"{m['name']}.ko"
+        p = subprocess.run(["objdump", "-d", "--no-show-raw-insn", str(ko)],
+                           capture_output=True, text=True, timeout=120)
+        assert p.returncode == 0, p.stderr
+        func = "?"
+        for line in p.stdout.splitlines():
+            if line.endswith(">:"):
+                func = line.split("<", 1)[1][:-2]
+            elif _FPU_REG.search(line):
+                found.append(f"{ko.name}: {func}: {line.strip()}")
+    return found
+
+
 def _build(name, cases, tmp: Path, container: bool):
     sources = group_sources(name, cases, tmp)
     cached = None if container else cache_dir(name, sources)
@@ -93,6 +122,10 @@ def _build(name, cases, tmp: Path, container: bool):
     p = _cli("build", str(out), *(["--container"] if container else ["--sparse"]))
     if p.returncode != 0:
         return f"{name}: build failed ({p.returncode}): {p.stderr[-3000:]}"
+    fpu = fpu_outside_sections(out)
+    if fpu:
+        return (f"{name}: FPU registers used outside kernel_fpu_begin/end:\n  "
+                + "\n  ".join(fpu[:20]))
     if cached is not None:
         (out / "built.ok").write_text("")
         for old in cached.parent.glob(f"{name}-*"):
