@@ -35,6 +35,7 @@ import contextlib
 import difflib
 import errno
 import time
+from pathlib import Path
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
@@ -399,6 +400,13 @@ def _tasks_running_type(manifest: Optional[dict], type_name: str) -> List[str]:
                    if i["type"].upper() == type_name.upper() and i.get("task")})
 
 
+def _require_instances(manifest: Optional[dict]) -> None:
+    if not (manifest and "instances" in manifest):
+        raise UsageError("swap --restart needs the manifest of the running configuration "
+                         "(saved by plc-manager load, or beside the new modules) to know "
+                         "which tasks run the swapped program types")
+
+
 def swap(new: str, restart: bool = False, progress: Progress = _quiet,
          prepare_only: bool = False) -> SwapReport:
     """Hot code change of the program types NEW names, in two halves:
@@ -423,6 +431,15 @@ def swap(new: str, restart: bool = False, progress: Progress = _quiet,
         cands = swap_candidates(new, running)
         if not cands:
             progress(f"nothing to swap: every program type in {new} runs already")
+            if restart:
+                # the fixed build runs already (a swap without --restart
+                # before): the restart alone is what is asked for
+                proj = Project.open(Path(new).resolve())
+                manifest = state.manifest if state is not None else proj.m
+                _require_instances(manifest)
+                rep.restarted = _restart_faulted(
+                    c, manifest, [t["name"] for t in proj.m["program_types"]], progress)
+            rep.total_ms = _ms(t_cmd, time.perf_counter())
             return rep
         loaded = kmod.loaded()
         # every check before anything is touched; interfaces first
@@ -431,10 +448,8 @@ def swap(new: str, restart: bool = False, progress: Progress = _quiet,
         for cand in cands:
             _check_candidate(cand, st, loaded)
         manifest = state.manifest if state is not None else cands[0].manifest
-        if restart and not (manifest and "instances" in manifest):
-            raise UsageError("swap --restart needs the manifest of the running configuration "
-                             "(saved by plc-manager load, or beside the new modules) to know "
-                             "which tasks run the swapped program types")
+        if restart:
+            _require_instances(manifest)
         rep.check_ms = _ms(t_cmd, time.perf_counter())
         steps = _prepare(c, cands, st, progress)
         rep.steps = steps

@@ -261,7 +261,20 @@ def test_swap_restart_recovers_a_faulted_task_in_one_command(guest, faults, fixe
         assert f"last fault: {FAULT} at " in line and "; restarted at " in line, text
         # the same build again: nothing to swap, nothing restarted
         rc, out = pm(guest, pmdir, "swap", "--restart", fixed)
-        assert rc == 0 and "runs already" in out and "restart" not in out, out
+        assert rc == 0 and "runs already" in out and "nothing to restart" in out, out
+        assert "restarting" not in out, out
+        # the faulty build back (divisor is still 0): the task faults again;
+        # a swap to the fix without --restart leaves it stopped on the fault,
+        # and `swap --restart` of the build that runs now restarts it alone
+        ok(guest, pmdir, "swap", tree)
+        wait_state(guest, pmdir, "r0.ta", "fault")
+        ok(guest, pmdir, "swap", fixed)
+        assert tasks(guest, pmdir)["r0.ta"]["state"] == "fault"
+        out = ok(guest, pmdir, "swap", "--restart", fixed)
+        assert "runs already" in out and "restarting task r0.ta" in out, out
+        assert "task r0.ta runs again" in out, out
+        ts = tasks(guest, pmdir)
+        assert ts["r0.ta"]["state"] == "running" and ts["r0.ta"]["faults"] == 2, ts
     finally:
         stop_clean(guest, pmdir)
 
