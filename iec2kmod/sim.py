@@ -20,7 +20,7 @@ from pathlib import Path
 from jinja2 import Environment, FileSystemLoader, StrictUndefined
 
 from . import __version__
-from .checks.types import EnumT, concrete
+from .checks.types import Elementary, EnumT, SubrangeT, concrete
 from .codegen import generate, source_list
 from .codegen import cnames as N
 from .codegen.body import copy_value
@@ -309,8 +309,21 @@ def value_for(entry, text: str):
     if kind in ("int", "time", "date", "tod", "dt"):
         if entry.kind == "b":
             raise SimError(f"{entry.path} is BOOL: '{text}' is not TRUE/FALSE")
+        rng = _int_range(entry.type) if kind == "int" else None
+        if rng is not None and not rng[0] <= int(value) <= rng[1]:
+            # as plc-manager write refuses it: never wrapped silently
+            raise SimError(f"invalid value '{text}' for {entry.path}: out of range "
+                           f"{rng[0]}..{rng[1]}")
         return "i", int(value)
     raise SimError(f"invalid value '{text}' for {entry.path}")
+
+
+def _int_range(t):
+    """(low, high) of an integer, bit string or subrange type; None otherwise."""
+    t = concrete(t)
+    if isinstance(t, SubrangeT):
+        return t.low, t.high
+    return t.range if isinstance(t, Elementary) else None
 
 
 def read_trace(path: str, plan):

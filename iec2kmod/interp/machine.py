@@ -34,7 +34,7 @@ from ..checks.config import SIM_ITERATION_NS
 from .errors import LOOP, OVERRUN, WATCHDOG, Fault, VMError
 from .fbs import body_of
 from .model import Initializer, Instance, copier, copy_of
-from .values import base_of, f32, wrap, wrap64
+from .values import base_of, f32, int_range, wrap, wrap64
 
 # the kernel's per-cycle loop budget (iec2kmod.kmod.DEFAULT_LOOP_BUDGET; a
 # test checks that both agree)
@@ -461,6 +461,12 @@ def value_for(entry, text: str):
     if kind in ("int", "time", "date", "tod", "dt"):
         if entry.kind == "b":
             raise VMError(f"{entry.path} is BOOL: '{text}' is not TRUE/FALSE")
+        t = concrete(entry.type)
+        rng = ((t.low, t.high) if isinstance(t, SubrangeT) else
+               int_range(t) if kind == "int" else None)
+        if kind == "int" and rng is not None and not rng[0] <= int(value) <= rng[1]:
+            raise VMError(f"invalid value '{text}' for {entry.path}: out of range "
+                          f"{rng[0]}..{rng[1]}")
         return "i", int(value)
     raise VMError(f"invalid value '{text}' for {entry.path}")
 

@@ -75,6 +75,44 @@ def test_same_usage_errors(tmp_path):
         assert (v.returncode, v.stderr) == (c.returncode, c.stderr)
 
 
+RANGE_ST = """TYPE Pct : INT (0..100); END_TYPE
+PROGRAM P
+VAR_INPUT u : USINT; p : Pct; w : WORD; i : SINT; END_VAR
+VAR y : INT; END_VAR
+  y := USINT_TO_INT(u) + p;
+END_PROGRAM
+CONFIGURATION C
+  RESOURCE R ON PLC
+    TASK T (INTERVAL := T#10ms, PRIORITY := 1);
+    PROGRAM I WITH T : P;
+  END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+@pytest.mark.parametrize("var,value,ok", [
+    ("r.i.u", "255", True), ("r.i.u", "256", False), ("r.i.u", "-1", False),
+    ("r.i.p", "100", True), ("r.i.p", "101", False), ("r.i.p", "-1", False),
+    ("r.i.w", "16#FFFF", True), ("r.i.w", "65536", False),
+    ("r.i.i", "-128", True), ("r.i.i", "128", False)])
+def test_input_trace_values_out_of_range_are_refused(tmp_path, var, value, ok):
+    """A value the variable cannot hold is an error naming the trace's line
+    and the range, in both engines (as `plc-manager write` refuses it); it
+    used to wrap silently."""
+    src = tmp_path / "range.st"
+    src.write_text(RANGE_ST)
+    trace = tmp_path / "in.csv"
+    trace.write_text(f"time,variable,value\n0,{var},{value}\n")
+    c, _, _ = sim(tmp_path, "c", str(src), "--cycles", "1", "--inputs", str(trace))
+    v, _, _ = sim(tmp_path, "vm", str(src), "--cycles", "1", "--inputs", str(trace))
+    assert (v.returncode, v.stderr) == (c.returncode, c.stderr)
+    if ok:
+        assert c.returncode == 0, c.stderr
+    else:
+        assert c.returncode == 2 and f"in.csv:2: invalid value '{value}'" in c.stderr, c.stderr
+        assert "out of range" in c.stderr, c.stderr
+
+
 def test_vm_needs_no_c_compiler():
     env = {**__import__("os").environ, "CC": "no-such-compiler"}
     run = [sys.executable, "-m", "iec2kmod.cli", "sim", "examples/traffic_light", "--cycles", "3"]
