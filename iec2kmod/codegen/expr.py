@@ -437,7 +437,9 @@ class ExprEmitter:
             if scalar_kind(res) == "real":
                 if fam == "MOD":
                     raise CodegenError("MOD on REAL")
-                sym = {"ADD": "+", "SUB": "-", "MUL": "*", "DIV": "/"}[fam]
+                if fam == "DIV":        # never a bare '/': see iec_real.h
+                    return f"iec_div_{tag(res)}({vs[0]}, {vs[1]})"
+                sym = {"ADD": "+", "SUB": "-", "MUL": "*"}[fam]
                 return "(" + f" {sym} ".join(vs) + ")"
             fn = f"iec_{fam.lower()}_{tag(res)}"
             if fam in ("DIV", "MOD"):

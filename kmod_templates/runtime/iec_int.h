@@ -28,23 +28,29 @@
 #include "iec_fault.h"
 
 /* T: C type, U: unsigned of same width, W: unsigned type wide enough for
- * an unpromoted product (at least unsigned int). */
+ * an unpromoted product (at least unsigned int).  The result is masked to U
+ * before it is narrowed: sparse warns "cast truncates bits from constant
+ * value" on a narrowing cast once a call with constants is inlined. */
 #define IEC__DEF_WRAP_ARITH(n, T, U, W)					\
 static inline T iec_add_##n(T a, T b)					\
 {									\
-	return (T)(U)((W)(U)a + (W)(U)b);				\
+	return (T)(U)(((W)(U)a + (W)(U)b) &			\
+		      IEC__MASK(W, 8 * sizeof(U)));			\
 }									\
 static inline T iec_sub_##n(T a, T b)					\
 {									\
-	return (T)(U)((W)(U)a - (W)(U)b);				\
+	return (T)(U)(((W)(U)a - (W)(U)b) &			\
+		      IEC__MASK(W, 8 * sizeof(U)));			\
 }									\
 static inline T iec_mul_##n(T a, T b)					\
 {									\
-	return (T)(U)((W)(U)a * (W)(U)b);				\
+	return (T)(U)(((W)(U)a * (W)(U)b) &			\
+		      IEC__MASK(W, 8 * sizeof(U)));			\
 }									\
 static inline T iec_neg_##n(T a)					\
 {									\
-	return (T)(U)((W)0 - (W)(U)a);					\
+	return (T)(U)(((W)0 - (W)(U)a) &				\
+		      IEC__MASK(W, 8 * sizeof(U)));			\
 }
 
 #define IEC__DEF_SIGNED_DIV(n, T)					\

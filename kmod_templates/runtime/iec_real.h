@@ -47,12 +47,25 @@
 #include "iec_conv.h"
 #include "iec_string.h"
 
+/*
+ * Division: x / 0.0 is defined (IEEE 754: +-Inf or NaN), but sparse folds a
+ * quotient of two constants and warns "division by zero" on it; sparse sees
+ * a declaration, the compiler the inline function.  Generated code divides
+ * REAL values only through iec_div_real/lreal.
+ */
+#ifdef __CHECKER__
+#define IEC__REAL_DIV(n, T) T iec_div_##n(T a, T b);
+#else
+#define IEC__REAL_DIV(n, T)						\
+static inline T iec_div_##n(T a, T b) { return a / b; }
+#endif
+
 /* Arithmetic and selection */
 #define IEC__DEF_REAL_OPS(n, T)						\
 static inline T iec_add_##n(T a, T b) { return a + b; }		\
 static inline T iec_sub_##n(T a, T b) { return a - b; }		\
 static inline T iec_mul_##n(T a, T b) { return a * b; }		\
-static inline T iec_div_##n(T a, T b) { return a / b; }		\
+IEC__REAL_DIV(n, T)							\
 static inline T iec_neg_##n(T a) { return -a; }				\
 static inline T iec_abs_##n(T a) { return a < 0 ? -a : (a == 0 ? (T)0 : a); } \
 static inline T iec_sel_##n(iec_bool g, T in0, T in1)			\
