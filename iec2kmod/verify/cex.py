@@ -9,6 +9,7 @@ them exactly when the verifier's cycle k reads them."""
 
 from __future__ import annotations
 
+import csv
 import math
 from types import SimpleNamespace
 
@@ -22,12 +23,20 @@ from .encode import const_of, kind, py_value
 def input_values(out, result):
     """[(cycle, {leaf name: Python value})] of a violating BMC path."""
     model = result.model
+    # an input outside the property's cone of influence is not in the
+    # query, so not in the model: model completion would give it any value
+    # of its sort (a REAL NaN, an enumeration or subrange value out of its
+    # domain) that a trace cannot write; it keeps its initial value
+    given = {d.name() for d in model.decls()}
     rows = []
     for k in range(1, result.cycle + 1):
         vals = {}
         for leaf, var, _ in out.system.inputs:
-            c = z3.Const(f"{var}@b{k}", var.sort())
-            term = model.eval(c, model_completion=True)
+            name = f"{var}@b{k}"
+            if name not in given:
+                vals[leaf.name] = leaf.init
+                continue
+            term = model.eval(z3.Const(name, var.sort()), model_completion=True)
             vals[leaf.name] = py_value(term, leaf.type)
         rows.append((k, vals))
     return rows
@@ -58,7 +67,7 @@ def write_trace(out, result, path):
     period = out.sym.period
     leaves = {leaf.name: leaf for leaf, _, _ in out.system.inputs}
     last = {}
-    lines = ["time,variable,value"]
+    rows = []
     for k, vals in input_values(out, result):
         t = (k - 1) * period
         for name in sorted(vals):
@@ -66,10 +75,13 @@ def write_trace(out, result, path):
             if name in last and _same(last[name], v):
                 continue
             last[name] = v
-            lines.append(f"{t}ns,{name},{format_value(leaves[name], v)}")
-    with open(path, "w") as fh:
-        fh.write("\n".join(lines) + "\n")
-    return len(lines) - 1
+            rows.append((f"{t}ns", name, format_value(leaves[name], v)))
+    # csv quoting: an element of a multi-dimensional array is 'a[0,5]'
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(("time", "variable", "value"))
+        w.writerows(rows)
+    return len(rows)
 
 
 def _same(a, b):

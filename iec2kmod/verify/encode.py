@@ -990,11 +990,15 @@ class Encoder:
 
     def fb_call(self, c, frame, g):
         inst_var = c.target
-        pou = inst_var.type.pou
+        # an element of an array of instances (t[i](...)): c.ref is the
+        # indexed reference, c.target the array variable
+        pou = (c.ref.type if c.ref is not None else inst_var.type).pou
+        # the index is computed (and checked) before EN and the arguments,
+        # as the interpreter does
+        ref = c.ref if c.ref is not None else Ref_of(inst_var, c.pos)
+        place = self.place(ref, frame, g)
         en, eno = self.en_eno(c, frame, g)
         g2 = land(g, en) if en is not None else g
-        ref = Ref_of(inst_var, c.pos)
-        place = self.place(ref, frame, g)
         ins, inouts, outs = self.bind_args(c, pou, frame, g2)
         v_en = pou.var("EN")
         en_key = v_en.key if v_en is not None and v_en.section == "VAR_INPUT" and \
