@@ -94,9 +94,12 @@ def _num(s):
 def properties(unit, rnd):
     props = [P("TRUE", None, lambda v: True), P("FALSE", None, lambda v: False)]
     cands = []
+    free = {path.upper() for path, _ in unit.inputs}
     for ln in unit.globals_text:
         m = re.match(r"(\w+)(?:\s+AT\s+%\S+)?\s*:\s*(\w+)\s*(?::=.*)?;$", ln)
-        if m:
+        # not the generator's trace inputs: a property over an input is
+        # violated at cycle 1 whatever the program does
+        if m and m.group(1).upper() not in free:
             cands.append((m.group(1), m.group(2).upper()))
     rnd.shuffle(cands)
     for name, ty in cands:
@@ -171,10 +174,11 @@ def sim_run(path, trace, steps, step_ns, watch, cwd, timeout):
     rc, so, se, _ = cli(args, timeout, cwd)
     if rc is None:
         return None, None, "sim timed out"
-    if rc != 0 or "Traceback" in se:
+    m = FAULT.search(se)
+    # exit 1: a runtime error stopped a task (the run went on)
+    if not (rc == 0 or rc == 1 and m) or "Traceback" in se:
         return None, None, f"sim exit {rc}: {se.strip().splitlines()[-1:] if se else ''}"
     fault = None
-    m = FAULT.search(se)
     if m:
         fault = round(float(m.group(3)) * 1e9 / step_ns) + 1
     rows = []
