@@ -102,6 +102,11 @@ def properties(unit, rnd):
         if m and m.group(1).upper() not in free:
             cands.append((m.group(1), m.group(2).upper()))
     rnd.shuffle(cands)
+    # globals a program writes first (a global nothing writes is an input
+    # of the verifier: a property over it is violated at cycle 1 too)
+    text = unit.decl_text + unit.resources_text
+    cands.sort(key=lambda c: not re.search(
+        rf"(\b{c[0]}\b(\[[^\]]*\])?(\.\w+)*\s*:=(?!=)|=>\s*{c[0]}\b)", text, re.I))
     for name, ty in cands:
         if len(props) >= 4:
             break
@@ -119,6 +124,14 @@ def properties(unit, rnd):
                 props.append(P(f"{name} = {name}", name, lambda v: not math.isnan(float(v))))
             else:
                 props.append(P(f"{name} < 1000.0", name, lambda v: float(v) < 1000.0))
+    # two integers of the same signedness and maybe different widths (an
+    # implicit widening inside the property)
+    ints = [(n, t) for n, t in cands[:3] if t in INT_TYPES and not t.endswith("WORD")
+            and t != "BYTE"]
+    if len(ints) >= 2 and rnd.random() < 0.5:
+        (a, ta), (b, tb) = ints[:2]
+        if (ta[0] == "U") == (tb[0] == "U"):
+            props.append(P(f"{a} <= {b}", (a, b), lambda v: int(v[0]) <= int(v[1])))
     return props
 
 
@@ -201,6 +214,9 @@ def first_violation(prop, rows, fault):
             return None
         if prop.var is None:
             if not prop.test(None):
+                return k
+        elif isinstance(prop.var, tuple):
+            if all(v in row for v in prop.var) and not prop.test([row[v] for v in prop.var]):
                 return k
         elif prop.var in row and not prop.test(row[prop.var]):
             return k
@@ -298,7 +314,8 @@ def run_project(seed, size, depth, timeout, traces, workdir):
     r["outcome"] = "verdicts"
     step = parse_step(out)
     byname = dict(zip(names[1:], props))
-    watch = sorted({p.var for p in props if p.var})
+    watch = sorted({v for p in props if p.var for v in
+                    (p.var if isinstance(p.var, tuple) else (p.var,))})
     # 1. every violation re-run in the simulator, independently of verify's replay
     for name, (status, k) in verdicts.items():
         if status != "violated":
@@ -317,10 +334,9 @@ def run_project(seed, size, depth, timeout, traces, workdir):
         p = byname[name]
         if fault is not None and fault <= k:
             r["problems"].append(f"{name} ({p.text}): cex faults at cycle {fault} <= {k}")
-        elif p.var is not None and p.test(rows[-1].get(p.var, "?")) or \
-                p.var is None and p.test(None):
+        elif first_violation(p, rows[-1:], None) is None:
             r["problems"].append(f"{name} ({p.text}): violated at cycle {k}, but sim --inputs "
-                                 f"{trace.name} gives {rows[-1].get(p.var)} there")
+                                 f"{trace.name} gives {rows[-1]} there")
     # 2. random traces against proved / holds-up-to-N
     claims = {n: v for n, v in verdicts.items() if v[0] in ("proved", "bounded")}
     if traces and claims and step:

@@ -670,7 +670,7 @@ class Encoder:
             ptypes = [res if isinstance(pt, LiteralT) and not isinstance(res, LiteralT)
                       else pt for pt in pts]
         if isinstance(res, LiteralT):
-            vals = [self.expr(a, frame, g) for a in args]
+            vals = [literal_int(self.expr(a, frame, g), a) for a in args]
             return self.literal_arith(fam, vals, res, frame, g, pos)
         if isinstance(base_of(res), StringT) or any(
                 isinstance(base_of(concrete(pt)), StringT) for pt in ptypes):
@@ -1586,6 +1586,22 @@ class _SlotVal(ast.Expr):
         super().__init__(None)
         self.value = value
         self.type = t
+
+
+def literal_int(v, a):
+    """An operand of untyped literal arithmetic as an unbounded integer: a
+    typed operand (TRUNC(1.5), a DINT the encoding holds as a bit-vector)
+    by its value in its own type's signedness (as the interpreter takes a
+    typed value into literal arithmetic)."""
+    if not isinstance(v, z3.BitVecRef):
+        return v
+    t = getattr(a, "type", None)
+    sg = True if t is None or isinstance(t, LiteralT) else signed(concrete(t))
+    v = z3.simplify(v)
+    if z3.is_bv_value(v):
+        x = v.as_long()
+        return x - (1 << v.size()) if sg and x >> (v.size() - 1) else x
+    return z3.BV2Int(v, is_signed=sg)
 
 
 def Ref_of(var, pos):

@@ -159,3 +159,38 @@ def test_campaign_fixed_seed(tmp_path):
     # the campaign exercised both kinds of answers
     assert "verdicts" in outcomes and "refused" in outcomes, text
     assert sum(1 for r in res if r["outcome"] == "verdicts") >= 10, text
+
+
+# ---------------------------------------------------------------- typed operands of literal arithmetic
+TRUNC_LITERAL = """
+    PROGRAM P
+    VAR_OUTPUT n : LINT; m : DINT; k : DINT; END_VAR
+    CASE MOD(TRUNC(1.5), 2) OF
+    1: k := 1;
+    ELSE k := 2;
+    END_CASE;
+    n := TRUNC(1.0E10) + 1;
+    m := MOD(TRUNC(-7.5), 4);
+    END_PROGRAM
+    CONFIGURATION C
+        RESOURCE R ON CPU0
+            TASK tk (INTERVAL := T#10ms, PRIORITY := 1);
+            PROGRAM p WITH tk : P;
+        END_RESOURCE
+    END_CONFIGURATION
+"""
+
+
+def test_typed_operand_of_literal_arithmetic(tmp_path, capsys):
+    # progen seed 2000196 (size 0.2): MOD(TRUNC(1.5), 2) is untyped literal
+    # arithmetic over a DINT the encoding holds as a bit-vector: 'sort
+    # mismatch' (exit 70); the typed operand enters as its signed value
+    proj = project(tmp_path, TRUNC_LITERAL)
+    rc, out, err = run(capsys, "verify", proj, "--instance", "p", "-p", "k = 1",
+                       "-p", "m = -3", "-p", "n = 2147483648", "--depth", "2",
+                       "--cex-dir", tmp_path)
+    assert "internal error" not in err, err
+    assert rc == 0, out + err
+    import diffverify
+    diffs, done = diffverify.run(front(proj), 3, 1)
+    assert not diffs and done == 3, diffs
