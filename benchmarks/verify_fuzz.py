@@ -8,8 +8,9 @@ is contradicted by the reference interpreter.
     python3 benchmarks/verify_fuzz.py --count 200 --seed 1 --size 0.2 --depth 6
     python3 benchmarks/verify_fuzz.py --unit 1000042 --keep /tmp/found   (one project again)
 
-Per project (progen seed difftest.unit_seed(SEED, i), body size --size, SFC
-bodies in about one project in ten since the encoding refuses them at once):
+Per project (progen seed difftest.unit_seed(SEED, i), body size --size; SFC
+bodies in about one project in ten and strings in three in ten, since the
+encoding refuses them and a refusal hides the rest of the project):
 
   * `iec2kmod verify` (a subprocess, --timeout per project) with the
     properties TRUE, FALSE and one or two over generated configuration
@@ -256,7 +257,8 @@ def random_trace(inputs, steps, step_ns, rnd, path):
 def run_project(seed, size, depth, timeout, traces, workdir):
     """A dict: outcome, and details (verdicts, refusal, problems)."""
     rnd = random.Random(seed)
-    unit = progen.generate_unit(seed, 0, 100, size, sfc=rnd.random() < 0.1)
+    sfc, strings = rnd.random() < 0.1, rnd.random() < 0.3
+    unit = progen.generate_unit(seed, 0, 100, size, sfc=sfc, strings=strings)
     wd = Path(workdir)
     wd.mkdir(parents=True, exist_ok=True)
     src = wd / f"p{seed}.st"

@@ -236,6 +236,10 @@ class Gen:
         # project it gave before they were added
         self.fid_r = random.Random(f"fid{seed}")
         self.fid = True
+        # strings=False (generate_unit): no STRING type, value or function,
+        # for engines that have none (the verifier); True leaves every seed's
+        # project as it was
+        self.strings = True
 
     # ------------------------------------------------------------ helpers
     def uid(self, stem):
@@ -383,6 +387,8 @@ class Gen:
         if r < 0.66:
             return TIME
         if r < 0.72:
+            if not self.strings:
+                return INT
             if self.named_strings and self.chance(0.3):
                 return self.named_strings[0]
             return string_t(self.pick([None, 4, 8, 16]))
@@ -711,7 +717,7 @@ class Gen:
                 return x()
             self.feat("conv")
             return f"{src.name}_TO_{t.name}({self.expr(src, scope, d)})"
-        if r < 0.76 and t.name == "INT":
+        if r < 0.76 and t.name == "INT" and self.strings:
             s = self.expr(string_t(), scope, d)
             if self.chance(0.5):
                 self.feat("std_LEN")
@@ -880,6 +886,8 @@ class Gen:
         if r < 0.7:
             ct = self.pick([*INTS[:4], INT, INT, DINT, *BITS[:2], REAL, LREAL, TIME, string_t()]
                            + self.enums)
+            if ct.kind == "string" and not self.strings:
+                ct = INT
             a, b = self.expr(ct, scope, d), self.expr(ct, scope, d)
             while clash(a, b, ct):
                 a, b = self.expr(ct, scope, d), self.lit(ct, bare=False)
@@ -1309,6 +1317,8 @@ class Gen:
             pou.vars.append(Var(f"{name}{self.uid('')}", self.pick([INT, DINT]), "var"))
         if self.chance(0.5):
             t = self.pick([INT, BOOL, REAL, string_t(8)])
+            if t.kind == "string" and not self.strings:
+                t = INT
             pou.vars.append(Var(self.uid("tmp"), t, "temp"))
             self.feat("var_temp")
             pou.vars.append(Var(self.uid("ti"), INT, "temp"))
@@ -1807,15 +1817,18 @@ class Gen:
 
 
 def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
-                  sfc: bool = True, fidelity: bool = True) -> Unit:
+                  sfc: bool = True, fidelity: bool = True, strings: bool = True) -> Unit:
     """``sfc=False``: no SFC bodies -- the same project the seed gave before
     the generator knew SFC (SFC is decided by a random generator of its own).
     ``fidelity=False``: none of the constructs of issue 10 (function forms,
     context-typed real literals, calls on array elements, ENO in functions),
-    likewise decided by a generator of their own."""
+    likewise decided by a generator of their own.  ``strings=False``: no
+    STRING type, value or function (benchmarks/verify_fuzz.py: the verifier
+    refuses them); True gives every seed's project as before."""
     g = Gen(seed, k, size)
     g.sfc = sfc
     g.fid = fidelity
+    g.strings = strings
     g._dims = {}
     g.for_ranges = []
     return g.unit(cycles)
