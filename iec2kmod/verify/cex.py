@@ -102,15 +102,12 @@ def lookup(machine, keys):
     else:
         c = dict(machine.instances)[rest[0]]
         rest = rest[1:]
-        for k in rest[:-1]:
-            c = c.v[k] if isinstance(c, Instance) else c[k]
-        k = rest[-1]
-        if isinstance(k, tuple):
-            return c.e, k[1]
-        return (c.v if isinstance(c, Instance) else c), k
     for k in rest[:-1]:
         c = c.v[k] if isinstance(c, Instance) else c[k]
     k = rest[-1]
+    if isinstance(k, tuple):
+        # ("e", key): the memory of an FB instance's R_EDGE/F_EDGE input
+        return c.e, k[1]
     return (c.v if isinstance(c, Instance) else c), k
 
 
@@ -127,6 +124,10 @@ def leaf_value(machine, leaf, now):
         c, _ = lookup(machine, leaf.keys[:-1] + ("$S",))
         return now - c["$T0"] if c["$S"] == 1 else 0
     c, k = lookup(machine, leaf.keys)
+    if isinstance(leaf.keys[-1], tuple):
+        # the interpreter creates an edge memory at the instance's first
+        # call: FALSE until then
+        return bool(c.get(k, False))
     return c[k]
 
 

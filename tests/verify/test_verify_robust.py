@@ -194,3 +194,45 @@ def test_typed_operand_of_literal_arithmetic(tmp_path, capsys):
     import diffverify
     diffs, done = diffverify.run(front(proj), 3, 1)
     assert not diffs and done == 3, diffs
+
+
+# ---------------------------------------------------------------- edge memories not yet created
+EDGE_FB = """
+    FUNCTION_BLOCK Det
+    VAR_INPUT x : BOOL R_EDGE; END_VAR
+    VAR_OUTPUT n : INT; END_VAR
+    IF x THEN n := n + 1; END_IF;
+    END_FUNCTION_BLOCK
+    PROGRAM P
+    VAR_INPUT go : BOOL; x : BOOL; END_VAR
+    VAR_OUTPUT k : INT; END_VAR
+    VAR d : Det; da : ARRAY[1..2] OF Det; END_VAR
+    IF go THEN
+        d(x := x);
+        da[2](x := x);
+    END_IF;
+    k := k + 1;
+    END_PROGRAM
+    CONFIGURATION C
+        RESOURCE R ON CPU0
+            TASK tk (INTERVAL := T#10ms, PRIORITY := 1);
+            PROGRAM p WITH tk : P (go := %IX0.0, x := %IX0.1);
+        END_RESOURCE
+    END_CONFIGURATION
+"""
+
+
+def test_replay_before_the_first_call_of_an_edge_input(tmp_path, capsys):
+    # progen seed 6000112 (size 0.3): the replay read the interpreter's
+    # memory of an R_EDGE input of an FB instance not called yet (it is
+    # created at the first call): KeyError '$IN43' (exit 70)
+    proj = project(tmp_path, EDGE_FB)
+    rc, out, err = run(capsys, "verify", proj, "--instance", "p", "--assume", "NOT go",
+                       "-p", "k < 2", "--depth", "4", "--cex-dir", tmp_path)
+    assert "internal error" not in err, err
+    assert rc == 3 and "property 1        violated at cycle 2" in out, out + err
+    rc, out, err = run(capsys, "verify", proj, "--instance", "p", "-p", "d.n < 2",
+                       "-p", "da[2].n = d.n", "--depth", "4", "--cex-dir", tmp_path)
+    assert "internal error" not in err, err
+    assert rc == 3 and "property 1        violated at cycle 3" in out, out + err
+    assert "property 2        proved" in out, out
