@@ -140,25 +140,28 @@ def test_counterexample_trace_is_valid_input(tmp_path, capsys):
 
 # ---------------------------------------------------------------- the campaign
 def test_campaign_fixed_seed(tmp_path):
-    """benchmarks/verify_fuzz.py on 40 projects of campaign seed 3 (size
-    0.2, depth 5, one random trace each): every project either refused
+    """benchmarks/verify_fuzz.py on 26 projects of campaign seed 3 (size
+    0.2, depth 5, one random trace each; its projects 3-29 but the 13th,
+    whose verification alone takes 16 s): every project either refused
     with a located error or given verdicts; no internal error, no verdict
-    contradicted by the interpreter."""
+    contradicted by the interpreter.  About 60 s."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
     try:
         import verify_fuzz
     finally:
         sys.path.remove(str(ROOT / "benchmarks"))
-    seeds = [verify_fuzz.unit_seed(3, i) for i in range(40)]
+    seeds = [verify_fuzz.unit_seed(3, i) for i in range(3, 30) if i != 12]
     log = []
-    res = verify_fuzz.campaign(seeds, 0.2, 5, 60, 1, tmp_path, log=log.append)
+    res = verify_fuzz.campaign(seeds, 0.2, 5, 30, 1, tmp_path, log=log.append)
     text = "\n".join(log) + "\n" + verify_fuzz.table(res, 0)
     bad = [r for r in res if r["outcome"] in ("internal", "contradicted")]
     assert not bad, text
     outcomes = {r["outcome"] for r in res}
-    # the campaign exercised both kinds of answers
+    # the campaign exercised both kinds of answers, and the checks of the
+    # verdicts ran
     assert "verdicts" in outcomes and "refused" in outcomes, text
     assert sum(1 for r in res if r["outcome"] == "verdicts") >= 10, text
+    assert not any(r["harness"] for r in res), text
 
 
 # ---------------------------------------------------------------- typed operands of literal arithmetic
