@@ -280,7 +280,25 @@ class PouCompiler:
 
     def expr_as(self, e, t):
         """f(env) -> value of e converted to type t."""
+        if (t is not None and not isinstance(t, LiteralT) and isinstance(e.type, LiteralT)
+                and isinstance(e, (ast.BinOp, ast.Call))):
+            # an untyped expression with a generic call in it (TRUNC(1.0E10)
+            # + 1 into a LINT): the context gives the type, down to the call
+            # (computed as a DINT, TRUNC saturated where C computes a LINT)
+            f = self.in_context(e, t)
+            if f is not None:
+                return f
         return conv_fn(self.expr(e), e.type, t)
+
+    def in_context(self, e, t):
+        """f(env) of untyped expression e computed in type t, or None."""
+        if isinstance(e, ast.BinOp) and (e.op in ARITH or e.op == "**"):
+            fres = stdlib.resolve(ARITH.get(e.op, "EXPT"), [e.left.type, e.right.type])
+            return self.apply_std(fres, [e.left, e.right], t)
+        if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
+                and isinstance(e.target.result, LiteralT):
+            return self.std_call(e, t)
+        return None
 
     def lit_value(self, e):
         t = e.type
@@ -405,15 +423,16 @@ class PouCompiler:
                 eno = self.writer(a.value, BOOL)
         return en, eno
 
-    def std_call(self, c):
+    def std_call(self, c, ctx_t=None):
         fres = c.target
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
-        f = self.apply_std(fres, args, c.type)
+        rt = c.type if ctx_t is None else ctx_t
+        f = self.apply_std(fres, args, rt)
         en, eno = self.en_eno(c)
         if en is None and eno is None:
             return f
-        dflt = self.m.init.default(concrete(c.type)) if not isinstance(c.type, LiteralT) else 0
+        dflt = self.m.init.default(concrete(rt)) if not isinstance(rt, LiteralT) else 0
 
         def guarded(env):
             if en is not None and not en(env):
