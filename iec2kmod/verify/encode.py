@@ -561,7 +561,23 @@ class Encoder:
 
     # ------------------------------------------------------ expressions
     def expr_as(self, e, t, frame, g):
+        if (t is not None and not isinstance(t, LiteralT) and isinstance(e.type, LiteralT)
+                and isinstance(e, (ast.BinOp, ast.Call))):
+            # as the interpreter: the context types an untyped expression
+            # down to its generic calls (TRUNC(1.0E10) + 1 into a LINT)
+            v = self.in_context(e, t, frame, g)
+            if v is not None:
+                return v
         return self.conv(self.expr(e, frame, g), e.type, t, frame, e.pos)
+
+    def in_context(self, e, t, frame, g):
+        if isinstance(e, ast.BinOp) and (e.op in ARITH or e.op == "**"):
+            fres = stdlib.resolve(ARITH.get(e.op, "EXPT"), [e.left.type, e.right.type])
+            return self.apply_std(fres, [e.left, e.right], t, frame, g, e.pos)
+        if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
+                and isinstance(e.target.result, LiteralT):
+            return self.std_call(e, frame, g, t)
+        return None
 
     def expr(self, e, frame, g):
         if isinstance(e, ast.Lit):
@@ -638,20 +654,21 @@ class Encoder:
                 eno = a.value
         return en, eno
 
-    def std_call(self, c, frame, g):
+    def std_call(self, c, frame, g, ctx_t=None):
         fres = c.target
+        rt = c.type if ctx_t is None else ctx_t
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
         en, eno = self.en_eno(c, frame, g)
         g2 = land(g, en) if en is not None else g
-        v = self.apply_std(fres, args, c.type, frame, g2, c.pos)
+        v = self.apply_std(fres, args, rt, frame, g2, c.pos)
         if eno is not None:
             self.write(eno, en if en is not None else TRUE, BOOL, frame, g, c.pos)
         if en is not None:
-            if isinstance(c.type, LiteralT):
+            if isinstance(rt, LiteralT):
                 self.refuse(frame.pou, c.pos, "EN on a function of untyped literals")
-            dflt = const_of(self.m.init.default(concrete(c.type)), concrete(c.type))
-            return ite(en, self.conv(v, c.type, c.type), dflt)
+            dflt = const_of(self.m.init.default(concrete(rt)), concrete(rt))
+            return ite(en, self.conv(v, rt, rt), dflt)
         return v
 
     def apply_std(self, fres, args, ctx_t, frame, g, pos):

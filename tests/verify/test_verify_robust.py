@@ -187,10 +187,12 @@ TRUNC_LITERAL = """
 def test_typed_operand_of_literal_arithmetic(tmp_path, capsys):
     # progen seed 2000196 (size 0.2): MOD(TRUNC(1.5), 2) is untyped literal
     # arithmetic over a DINT the encoding holds as a bit-vector: 'sort
-    # mismatch' (exit 70); the typed operand enters as its signed value
+    # mismatch' (exit 70); the typed operand enters as its signed value.
+    # TRUNC(1.0E10) + 1 into a LINT is a LINT TRUNC (the context types the
+    # untyped expression down to the call), as in C and the interpreter
     proj = project(tmp_path, TRUNC_LITERAL)
     rc, out, err = run(capsys, "verify", proj, "--instance", "p", "-p", "k = 1",
-                       "-p", "m = -3", "-p", "n = 2147483648", "--depth", "2",
+                       "-p", "m = -3", "-p", "n = 10000000001", "--depth", "2",
                        "--cex-dir", tmp_path)
     assert "internal error" not in err, err
     assert rc == 0, out + err
