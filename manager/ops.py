@@ -248,11 +248,27 @@ def unload(config_module: str, progress: Progress = _quiet) -> List[str]:
     Whatever state the tasks are in (running, stopped, stopped on a fault)
     and whatever was left half done (a slot never published, a resource
     never started) does not matter: every module that can go goes.  A task
-    that does not come back from its cycle (ETIMEDOUT) stops it all, before
-    anything is removed: what it may still run stays loaded.  Raises
-    PLCError naming what is left loaded, if anything is."""
+    that does not come back from its cycle (ETIMEDOUT) keeps loaded only
+    what it may still run: its resource module, the program types it runs
+    (their slots are cleared one by one: the kernel's grace period of a
+    slot waits only for the tasks that run it), and so the configuration;
+    the other resources and program types go.  Raises PLCError naming the
+    task and what is left loaded, if anything is."""
     removed: List[str] = []
     problems: List[str] = []
+    stuck = False
+
+    def kernel(what: str, fn, *args) -> bool:
+        nonlocal stuck
+        try:
+            _kernel_call(c, what, fn, *args)
+            return True
+        except PLCError as e:
+            stuck = True
+            if not problems:
+                problems.append(str(e))
+            progress(f"  {e}")
+            return False
 
     def remove(m: str) -> None:
         t0 = time.perf_counter()
@@ -269,15 +285,17 @@ def unload(config_module: str, progress: Progress = _quiet) -> List[str]:
 
     try:
         with Client() as c:
-            _kernel_call(c, "stop", c.stop)
+            kernel("stop", c.stop)
             st = c.status()
             for r in st.resources:
                 remove(r.module)
-            try:
-                _kernel_call(c, "clear", c.clear)
-            except PLCError as e:
-                problems.append(str(e))
-                progress(f"  {e}")
+            if not kernel("clear", c.clear):
+                # every slot is empty, but the old bodies of the slots a
+                # task still inside its cycle runs stay referenced: the
+                # others are released slot by slot
+                for s in st.slots:
+                    with contextlib.suppress(KernelError):
+                        c.clear(s.index)
     except NotLoaded:
         pass
     for m in kmod.holders(config_module):
@@ -285,8 +303,10 @@ def unload(config_module: str, progress: Progress = _quiet) -> List[str]:
     remove(config_module)
     if config_module in kmod.loaded():
         left = kmod.holders(config_module) + [config_module]
-        raise PLCError(f"{problems[0] if problems else 'unload failed'}; still loaded: "
-                       f"{', '.join(left)}")
+        gone = f"; removed {', '.join(removed)}" if removed else ""
+        again = " (stop again once that cycle has ended)" if stuck else ""
+        raise PLCError(f"{problems[0] if problems else 'unload failed'}{gone}; still loaded: "
+                       f"{', '.join(left)}{again}")
     return removed
 
 
@@ -311,14 +331,22 @@ def stop(keep_loaded: bool = False, resource: Optional[str] = None,
                 progress(line)
             progress(f"stopped resource {r.name} ({len(r.tasks)} tasks)")
             return
-        _kernel_call(c, "stop", c.stop)
-        st = _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()), "stop",
-                         fail_on_fault=False)
-        for line in fault_facts(st):
-            progress(line)
-        progress(f"stopped every task of {st.configuration}")
-        if keep_loaded:
-            return
+        try:
+            _kernel_call(c, "stop", c.stop)
+        except PLCError:
+            # a task does not come back from its cycle: with --keep-loaded
+            # that is the answer; otherwise unload() stops again and
+            # removes everything that task cannot still run
+            if keep_loaded:
+                raise
+        else:
+            st = _wait_tasks(c, lambda s: all(t.state != "running" for t in s.tasks()),
+                             "stop", fail_on_fault=False)
+            for line in fault_facts(st):
+                progress(line)
+            progress(f"stopped every task of {st.configuration}")
+            if keep_loaded:
+                return
     config = st.configuration
     removed = unload(st.module, progress)
     State.remove(config)

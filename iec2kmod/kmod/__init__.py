@@ -447,7 +447,8 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
                       "single_event": single_events[id(tp.single.var)] if tp.single else -1,
                       "loop_budget": DEFAULT_LOOP_BUDGET, "image": image,
                       "watchdog_ns": tp.watchdog_ns, "watchdog_overruns": tp.watchdog_overruns,
-                      "copy_in": copy_in, "copy_out": copy_out, "events": events, "run": run})
+                      "copy_in": copy_in, "copy_out": copy_out, "events": events, "run": run,
+                      "slots": sorted({slot_of[ip.pou.key] for ip in tp.instances})})
         for ip in tp.instances:
             for b in ip.bindings:
                 init += b.lines(ip.c_name, lambda g, n=tp.index: f"task{n}_image.{g.c_name}")

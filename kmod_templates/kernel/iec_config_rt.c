@@ -11,9 +11,10 @@
  *    the read-side critical sections;
  *  - publishing a new type: check the interface hash, take a reference on
  *    the new module, rcu_replace_pointer, then a grace period: wait until
- *    every cycle that was running at the replacement has ended (a later
- *    cycle sees the new pointer: the var_lock orders it), then drop the
- *    old module's reference;
+ *    every cycle that was running at the replacement in a task that runs
+ *    the slot (iec_task.slots) has ended (a later cycle sees the new
+ *    pointer: the var_lock orders it), then drop the old module's
+ *    reference;
  *  - clearing a slot (manager, before removing a program module) does the
  *    same with NULL;
  *  - a swap in two halves: a build inserted with stage=1 only waits in its
@@ -160,12 +161,27 @@ static bool iec_gp_passed(void)
 	return true;
 }
 
+/* Whether @t's programs run the body of slot @only (-1: any slot). */
+static bool iec_task_runs_slot(const struct iec_task *t, long only)
+{
+	u32 i;
+
+	if (only < 0)
+		return true;
+	for (i = 0; i < t->nslots; i++)
+		if (t->slots[i] == only)
+			return true;
+	return false;
+}
+
 /*
- * The grace period: waits until every task cycle running now has ended,
- * at most the bound of the slowest such task.  -ETIMEDOUT (after naming
- * the task) if one did not end.  The caller holds iec_gft_mutex.
+ * The grace period: waits until every task cycle running now that may
+ * run a body of slot @only (-1: of any slot) has ended, at most the bound
+ * of the slowest such task.  A task that runs none of the slot's bodies
+ * cannot hold a pointer to one: it is not waited for.  -ETIMEDOUT (after
+ * naming the task) if one did not end.  The caller holds iec_gft_mutex.
  */
-static int iec_gft_grace_period(const char *what)
+static int iec_gft_grace_period(const char *what, long only)
 {
 	struct iec_resource *r;
 	s64 longest = -1;
@@ -179,6 +195,10 @@ static int iec_gft_grace_period(const char *what)
 
 			/* the lock orders the replaced pointer before the
 			 * task's next cycle_begin, or that begin before us */
+			if (!iec_task_runs_slot(t, only)) {
+				t->gp_snap = 0;		/* even: not waited for */
+				continue;
+			}
 			raw_spin_lock(&t->var_lock);
 			t->gp_snap = t->cycle_seq;
 			raw_spin_unlock(&t->var_lock);
@@ -218,7 +238,7 @@ static int iec_gft_sync(long only, const char *what)
 			any = true;
 	if (!any)
 		return 0;
-	ret = iec_gft_grace_period(what);
+	ret = iec_gft_grace_period(what, only);
 	for (i = 0; i < iec_cfg->nslots; i++) {
 		struct iec_gft_slot *slot = &iec_cfg->slots[i];
 

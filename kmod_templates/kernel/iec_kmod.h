@@ -161,6 +161,13 @@ struct iec_task {
 	void (*copy_in)(void);
 	void (*run)(struct iec_ctx *ctx);
 	void (*copy_out)(void);
+	/*
+	 * The GFT slots whose bodies run() calls, ascending: the grace
+	 * period of one slot waits only for the tasks that run it, so a
+	 * task stuck in one program type does not hold up the others.
+	 */
+	const u32 *slots;
+	u32 nslots;
 
 	/* runtime */
 	struct iec_resource *res;

@@ -7,12 +7,17 @@ loop budget), far longer than the kernel's bound on waiting for a task
 periods).  While that cycle runs (each check is verified to have run inside
 one cycle, and repeated in a new one if a slow TCG guest let it end):
 
-* `stop rheavy` and `clear <slot>` through sysfs fail with ETIMEDOUT
-  within the bound, and the kernel log names the task and how long it has
-  been inside its cycle;
+* `stop rheavy` and `clear all` through sysfs fail with ETIMEDOUT within
+  the bound, and the kernel log names the task and how long it has been
+  inside its cycle; `clear <slot of Beat>` succeeds at once (the grace
+  period of a slot waits only for the tasks that run it);
 * the task's resource module and its program type's module cannot be
   removed (code the task may still run): rmmod is refused, nothing freed;
 * `clear all` fails the same way, the program types stay loaded.
+
+* `plc-manager stop` removes everything else (the healthy resource and
+  the program type the stuck task does not run), names the task and what
+  stays loaded, and exits 1.
 
 Once the cycle has ended, `plc-manager stop` removes everything.  The
 kernel log stays free of WARNING/BUG/Oops/stalls (the guest fixture
@@ -185,17 +190,21 @@ def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, st
         def timed_out(rc, out):
             return rc != 0 and "timed out" in out.lower()
 
-        # sysfs stop, and a clear of the other program type's slot (the
-        # grace period waits for every cycle in progress): ETIMEDOUT after
-        # the bound
+        # sysfs stop: ETIMEDOUT after the bound
         text = guest.run(f"cat {sysfs(manifest)}/status").output
-        beat_slot = next(ln.split()[1] for ln in text.splitlines()
-                         if ln.startswith("slot ") and ln.split()[2] == "BEAT")
+        slot_of = {ln.split()[2]: ln.split()[1] for ln in text.splitlines()
+                   if ln.startswith("slot ")}
         guest_s = {}
-        for cmd in ("stop rheavy", f"clear {beat_slot}"):
-            rc, out, guest_s[cmd] = check(cmd, lambda: guest_timed(guest, f"echo {cmd} > {ctl}"))
-            assert timed_out(rc, out), (cmd, out, guest.dmesg(since=mark))
-            assert guest_s[cmd] < 1.0, guest_s
+        cmd = "stop rheavy"
+        rc, out, guest_s[cmd] = check(cmd, lambda: guest_timed(guest, f"echo {cmd} > {ctl}"))
+        assert timed_out(rc, out), (cmd, out, guest.dmesg(since=mark))
+        assert guest_s[cmd] < 1.0, guest_s
+        # a slot the stuck task does not run is not held up by it (the
+        # slot it runs: `clear all` below)
+        cmd = f"clear {slot_of['BEAT']}"
+        rc, out, guest_s[cmd] = check(cmd, lambda: guest_timed(guest, f"echo {cmd} > {ctl}"))
+        assert rc == 0, (cmd, out, guest.dmesg(since=mark))
+        assert guest_s[cmd] < 0.5, guest_s
 
         # what the task may still run cannot be removed: refused, not freed
         for m in manifest["modules"]:
@@ -204,12 +213,38 @@ def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, st
                 assert r.exit_code != 0, r.output
         assert sorted(loaded_modules(guest)) == sorted(manifest["load_order"])
 
-        # clear all, the last check (no long cycle after it: the slots are empty)
+        # clear all, the last check (no long cycle after it: the slots are
+        # empty; the grace period waits for the cycles in progress of the
+        # tasks that run a slot: ETIMEDOUT after the bound)
         rc, out, guest_s["clear all"] = check(
             "clear all", lambda: guest_timed(guest, f"echo clear all > {ctl}"), early=True)
         assert timed_out(rc, out), (out, guest.dmesg(since=mark))
         assert guest_s["clear all"] < 1.0, guest_s
         assert sorted(loaded_modules(guest)) == sorted(manifest["load_order"])
+
+        # still in that cycle, plc-manager stop: its stop times out, and it
+        # goes on removing what the stuck task cannot be running (the
+        # other resource, BEAT's program type: the grace period of BEAT's
+        # slot does not wait for rheavy.heavy).  Removing any module waits
+        # for an RCU grace period, which the FIFO task spinning on its CPU
+        # holds up until its cycle ends: so the stop either ends with those
+        # removed and the rest named (exit 1), or, the cycle over, with
+        # everything removed (exit 0); never with nothing removed.
+        assert in_cycle_ms(guest, manifest) > 0
+        rc, out = pm(guest, pmdir, "stop")
+        assert "stop: task rheavy.heavy (inside one cycle for" in out, out
+        left = sorted(loaded_modules(guest))
+        stays = sorted(m["name"] for m in manifest["modules"]
+                       if m["name"].endswith("_rheavy") or m["name"].startswith("iec_stuck_p_heavy")
+                       or m["kind"] == "configuration")
+        assert len(stays) == 3, manifest["modules"]
+        if rc == 0:
+            assert left == [] and "nothing of stuck is loaded" in out, (left, out)
+        else:
+            assert rc == 1 and left == stays, (rc, left, out)
+            assert "still loaded:" in out and "stop again once that cycle has ended" in out
+        stop_outcome = "everything removed once the cycle ended" if rc == 0 else \
+            f"left loaded {', '.join(left)}"
 
         log = guest.dmesg(since=mark)
         for what in ("stop", "clear"):
@@ -218,18 +253,21 @@ def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, st
         assert "stays loaded until that cycle ends" in log, log
 
         # the cycle ends: everything goes
-        assert pm(guest, pmdir, "write", "load", "0")[0] == 0
-        wait_until(lambda: in_cycle_ms(guest, manifest) < 0, "the end of the long cycle",
-                   10 * LONG_CYCLE_S + 30)
+        if rc != 0:
+            assert pm(guest, pmdir, "write", "load", "0")[0] == 0
+            wait_until(lambda: in_cycle_ms(guest, manifest) < 0, "the end of the long cycle",
+                       10 * LONG_CYCLE_S + 30)
         print(f"\nlong cycle: {calib}; bound {WAIT_MS} ms + 4 x 10 ms periods; "
               f"gave up after (guest clock, 10 ms resolution): " +
-              ", ".join(f"{k} {v * 1000:.0f} ms" for k, v in guest_s.items()))
+              ", ".join(f"{k} {v * 1000:.0f} ms" for k, v in guest_s.items()) +
+              f"; plc-manager stop in the cycle: exit {rc}, {stop_outcome}")
     finally:
         # never leave the guest stuck: wait for the cycle, then stop
         deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:
+        rc, out = 0, "nothing was loaded"
+        while loaded_modules(guest) and time.monotonic() < deadline:
             rc, out = pm(guest, pmdir, "stop")
-            if rc == 0 or "nothing is loaded" in out:
+            if rc == 0:
                 break
             time.sleep(1)
     assert rc == 0, out
@@ -238,9 +276,9 @@ def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, st
 
 
 @pytest.fixture(scope="module")
-def beat_v2(stuck, kdir):
-    """The Beat program type rebuilt with another algorithm (same
-    interface): a module to swap in."""
+def v2(stuck, kdir):
+    """Both program types rebuilt with another algorithm (same
+    interfaces): {type name: module to swap in}."""
     import subprocess
     import sys
     from iec2kmod import kbuild
@@ -248,51 +286,66 @@ def beat_v2(stuck, kdir):
     src = tree.parent / "stuck_v2_src"
     src.mkdir(exist_ok=True)
     text = (HERE / "projects" / "stuck" / "stuck.st").read_text()
-    assert "beats := beats + 1;" in text
-    (src / "stuck.st").write_text(text.replace("beats := beats + 1;", "beats := beats + 2;"))
+    for a in ("beats := beats + 1;", "done := done + 1;"):
+        assert a in text
+        text = text.replace(a, a.replace("+ 1", "+ 2"))
+    (src / "stuck.st").write_text(text)
     out = tree.parent / "stuck_v2"
     p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "gen", str(src), "-o", str(out)],
                        cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stdout + p.stderr
-    (d,) = [p for p in out.iterdir() if p.name.startswith("iec_stuck_p_beat_")]
-    kbuild.build_modules(str(d), kdir=kdir, extra_args=[
-        f"KBUILD_EXTRA_SYMBOLS={tree / 'Module.symvers'}"]).check()
-    return d / f"{d.name}.ko"
+    kos = {}
+    for t in ("beat", "heavy"):
+        (d,) = [p for p in out.iterdir() if p.name.startswith(f"iec_stuck_p_{t}_")]
+        kbuild.build_modules(str(d), kdir=kdir, extra_args=[
+            f"KBUILD_EXTRA_SYMBOLS={tree / 'Module.symvers'}"]).check()
+        kos[t.upper()] = d / f"{d.name}.ko"
+    return kos
 
 
-def test_a_swap_does_not_wait_for_ever_for_a_long_cycle(guest, stuck, beat_v2):
+def test_a_swap_does_not_wait_for_ever_for_a_long_cycle(guest, stuck, v2):
     """insmod of a new build publishes it at once and returns within the
     bound although a cycle in progress may still run an old body; the old
-    module stays loaded (refused by rmmod) until the cycle has ended."""
+    module stays loaded (refused by rmmod) until the cycle has ended.  A
+    swap of the other program type, which the long cycle does not run, is
+    not held up at all: its old module is released at once."""
     tree, manifest, pmdir = stuck
-    old = next(m["name"] for m in manifest["modules"] if m["name"].startswith("iec_stuck_p_beat"))
+    old = {t: next(m["name"] for m in manifest["modules"]
+                   if m["name"].startswith(f"iec_stuck_p_{t.lower()}_")) for t in v2}
     rc, out = pm(guest, pmdir, "load", tree)
     assert rc == 0, out
     try:
         lc = LongCycles(guest, manifest, pmdir)
 
         def swap():
-            rc, out, secs = guest_timed(guest, f"insmod {beat_v2}")
-            rm = guest.run(f"rmmod {old}")
-            return rc, out, secs, rm
-        rc, out, secs, rm = lc.check("insmod", swap, early=True)
+            rc, out, secs = guest_timed(guest, f"insmod {v2['HEAVY']}")
+            rm = guest.run(f"rmmod {old['HEAVY']}")
+            beat = guest_timed(guest, f"insmod {v2['BEAT']}")
+            refs = guest.run(f"cat /sys/module/{old['BEAT']}/refcnt").output.strip()
+            return rc, out, secs, rm, beat, refs
+        rc, out, secs, rm, beat, refs = lc.check("insmod", swap, early=True)
         assert rc == 0, out
         assert secs < 1.0, secs
-        assert rm.exit_code != 0 and old in loaded_modules(guest), rm.output
+        assert rm.exit_code != 0 and old["HEAVY"] in loaded_modules(guest), rm.output
+        assert beat[0] == 0 and beat[2] < 0.5, beat
+        assert refs == "0", refs          # BEAT's old body: no reference left
         text = guest.run(f"cat {sysfs(manifest)}/status").output
-        assert f" module {beat_v2.stem} " in text, text
+        assert f" module {v2['HEAVY'].stem} " in text, text
+        assert f" module {v2['BEAT'].stem} " in text, text
         log = guest.dmesg(since=lc.mark)
         assert "publish: task rheavy.heavy does not come back: inside one cycle for" in log, log
-        assert f"slot BEAT: {old} stays loaded until that cycle ends" in log, log
-        print(f"\ninsmod of a new build during a long cycle: {secs * 1000:.0f} ms "
-              f"(guest clock; bound {WAIT_MS} ms + 4 x 10 ms)")
+        assert f"slot HEAVY: {old['HEAVY']} stays loaded until that cycle ends" in log, log
+        assert f"slot BEAT: {old['BEAT']} stays loaded" not in log, log
+        print(f"\ninsmod of a new build during a long cycle: {secs * 1000:.0f} ms; of the other "
+              f"type: {beat[2] * 1000:.0f} ms (guest clock; bound {WAIT_MS} ms + 4 x 10 ms)")
         wait_until(lambda: in_cycle_ms(guest, manifest) < 0, "the end of the long cycle",
                    10 * LONG_CYCLE_S + 30)
     finally:
         deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:
+        rc, out = 0, "nothing was loaded"
+        while loaded_modules(guest) and time.monotonic() < deadline:
             rc, out = pm(guest, pmdir, "stop")
-            if rc == 0 or "nothing is loaded" in out:
+            if rc == 0:
                 break
             time.sleep(1)
     assert rc == 0, out

@@ -2,7 +2,8 @@
 """plc-manager when the kernel gives up waiting for a task (ETIMEDOUT from
 a stop or a slot clear: a task does not come back from its cycle within
 the kernel's bound): one line naming the task and how long it has been
-inside its cycle, exit 1, nothing else attempted.  The kernel side is
+inside its cycle, exit 1; a full stop still removes every module that task
+cannot be running.  The kernel side is
 tests/qemu/test_bounded_waits.py."""
 
 import errno
@@ -11,7 +12,7 @@ import pytest
 
 from plc_manager import cli, ops
 from plc_manager.errors import PLCError
-from plc_manager.netlink import KernelError, Resource, Status, Task
+from plc_manager.netlink import KernelError, Resource, Slot, Status, Task
 
 pytestmark = pytest.mark.unit
 
@@ -81,14 +82,85 @@ def test_cli_prints_one_line_and_exits_1(monkeypatch, capsys):
     assert len(err) == 1 and err[0].startswith("plc-manager: stop: task rheavy.heavy "), err
 
 
-def test_unload_stops_at_the_timeout_and_removes_nothing(monkeypatch):
-    fake = FakeClient()
-    removed = []
+class StuckKernel:
+    """The modules of that configuration: rheavy.heavy is inside a cycle
+    that runs the HEAVY body, so its resource module and the HEAVY program
+    type are in use; the clear of every slot and of HEAVY's time out, the
+    clear of BEAT's slot (a slot rheavy.heavy does not run) releases it."""
+
+    def __init__(self):
+        self.loaded = {"iec_stuck_config": [], "iec_stuck_r_rheavy": ["iec_stuck_config"],
+                       "iec_stuck_r_rbeat": ["iec_stuck_config"],
+                       "iec_stuck_p_heavy_1": ["iec_stuck_config"],
+                       "iec_stuck_p_beat_1": ["iec_stuck_config"]}
+        self.busy = {"iec_stuck_r_rheavy", "iec_stuck_p_heavy_1", "iec_stuck_p_beat_1"}
+        self.removed = []
+
+    def remove(self, name):
+        if name not in self.loaded:
+            raise ops.kmod.ModuleError(f"remove {name}: not loaded", errno.ENOENT)
+        if name in self.busy or self.holders(name):
+            raise ops.kmod.ModuleError(f"remove {name}: in use", errno.EWOULDBLOCK)
+        del self.loaded[name]
+        self.removed.append(name)
+
+    def holders(self, name):
+        return sorted(m for m, uses in self.loaded.items() if name in uses)
+
+
+def test_unload_removes_what_the_stuck_task_cannot_run(monkeypatch):
+    fake, k = FakeClient(), StuckKernel()
+    fake.status = lambda: Status(**{**_status().__dict__, "slots": [
+        Slot(0, "HEAVY", "0" * 16, "iec_stuck_p_heavy_1", "b1", 0, 1),
+        Slot(1, "BEAT", "1" * 16, "iec_stuck_p_beat_1", "b1", 0, 1)]})
+
+    def clear(slot=None):
+        fake.calls.append(f"clear {slot}")
+        if slot == 1:
+            k.busy.discard("iec_stuck_p_beat_1")      # its old body's reference dropped
+            return
+        raise KernelError(errno.ETIMEDOUT, "")
+    fake.clear = clear
     monkeypatch.setattr(ops, "Client", lambda: fake)
-    monkeypatch.setattr(ops.kmod, "remove", removed.append)
-    with pytest.raises(PLCError, match=r"^stop: task rheavy\.heavy \(inside one cycle"):
+    monkeypatch.setattr(ops.kmod, "remove", k.remove)
+    monkeypatch.setattr(ops.kmod, "holders", k.holders)
+    monkeypatch.setattr(ops.kmod, "loaded", lambda: list(k.loaded))
+    with pytest.raises(PLCError) as e:
         ops.unload("iec_stuck_config")
-    assert removed == []
+    msg = str(e.value)
+    assert "\n" not in msg
+    assert msg.startswith("stop: task rheavy.heavy (inside one cycle for 3456 ms) does not "
+                          "come back"), msg
+    assert k.removed == ["iec_stuck_r_rbeat", "iec_stuck_p_beat_1"]
+    assert msg.endswith("; removed iec_stuck_r_rbeat, iec_stuck_p_beat_1; still loaded: "
+                        "iec_stuck_p_heavy_1, iec_stuck_r_rheavy, iec_stuck_config "
+                        "(stop again once that cycle has ended)"), msg
+    assert fake.calls.count("clear None") == 1 and "clear 0" in fake.calls
+
+    # once the cycle has ended, the same unload removes the rest
+    k.busy.clear()
+    fake.stop = lambda resource=None: None
+    fake.clear = lambda slot=None: None
+    assert ops.unload("iec_stuck_config") == ["iec_stuck_r_rheavy", "iec_stuck_p_heavy_1",
+                                              "iec_stuck_config"]
+    assert k.loaded == {}
+
+
+def test_full_stop_goes_on_to_unload_past_a_stuck_task(monkeypatch):
+    """`plc-manager stop` (not --keep-loaded): the timeout of its stop is
+    not the end; unload() removes what it can and names what is left."""
+    fake = FakeClient()
+    calls = []
+    monkeypatch.setattr(ops, "connect", lambda what="": fake)
+    monkeypatch.setattr(ops.kmod, "require", lambda *a: None)
+
+    def unload(module, progress):
+        calls.append(module)
+        raise PLCError("stop: task rheavy.heavy ... still loaded: x")
+    monkeypatch.setattr(ops, "unload", unload)
+    with pytest.raises(PLCError, match="still loaded"):
+        ops.stop()
+    assert calls == ["iec_stuck_config"]
 
 
 def test_other_kernel_errors_pass_through(monkeypatch):
