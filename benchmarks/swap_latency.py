@@ -156,7 +156,8 @@ for i in range(loads):
             s = rep["steps"][0]
             res["swap"].append([s["latency_ms"], s["perform_ms"], prep["steps"][0]["insert_ms"],
                                 s["confirm_ms"], s["publication_to_first_ms"], s["remove_ms"],
-                                prep["check_ms"], prep["prepare_ms"], rep["total_ms"]])
+                                prep["check_ms"], prep["prepare_ms"], rep["total_ms"],
+                                rep.get("phases", {})])
         with Client() as c:
             st = c.status()
             res["overruns"] = sum(t.overruns for t in st.tasks()) - o0
@@ -220,6 +221,11 @@ def run(clock: str, work: Path, ma, ko_a: Path, ko_b: Path, loads: int, swaps: i
     print(f"{'    whole command (confirm, rm)':34}{stats([x[8] for x in sw])}")
     print(f"{'      confirm slot':34}{stats([x[3] for x in sw])}")
     print(f"{'      remove old module':34}{stats([x[5] for x in sw])}")
+    phases = [p for p in sw[0][9]] if sw and len(sw[0]) > 9 else []
+    if phases:
+        print("    where the whole command's time goes:")
+        for p in phases:
+            print(f"{'      ' + p:34}{stats([x[9].get(p) for x in sw])}")
     print("target: publication -> first new cycle <= 2 task periods + one grace period "
           "(1 ms task: ~2-3 ms); whole command <= 50 ms")
     print(f"overruns of the 10 tasks during {len(sw)} swaps: {res['overruns']} "

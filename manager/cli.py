@@ -211,6 +211,7 @@ def cmd_swap(a) -> int:
     if a.json:
         print(json.dumps({"check_ms": rep.check_ms, "prepare_ms": rep.prepare_ms,
                           "published": rep.published, "total_ms": rep.total_ms,
+                          "phases": rep.phases,
                           "steps": [s.__dict__ for s in rep.steps],
                           "restarted": rep.restarted}))
     elif rep.steps and rep.published:

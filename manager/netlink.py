@@ -85,6 +85,8 @@ ATTRIBUTES = [
     ("IEC_A_FAULT_NS", "int64"),
     ("IEC_A_STAGED", "asciiz"),
     ("IEC_A_FIRST_RUN_NS", "int64"),
+    ("IEC_A_SLOTS_ONLY", "flag"),
+    ("IEC_A_FIRST_RUN_TASK", "asciiz"),
 ]
 
 STATES = {0: "stopped", 1: "running", 2: "fault"}
@@ -171,6 +173,7 @@ class Slot:
     publications: int
     staged: Optional[str] = None        # build id inserted with stage=1, not published
     first_run_ns: Optional[int] = None  # CLOCK_REALTIME of the running body's first cycle
+    first_run_task: Optional[str] = None  # "res.task" whose cycle that was
 
 
 @dataclass
@@ -268,7 +271,8 @@ def _status_from(msg) -> Status:
                           module=s.get("IEC_A_MODULE"), build_id=s.get("IEC_A_BUILD_ID"),
                           since_ns=s["IEC_A_SINCE_NS"], publications=s["IEC_A_PUBLICATIONS"],
                           staged=s.get("IEC_A_STAGED"),
-                          first_run_ns=s.get("IEC_A_FIRST_RUN_NS") or None))
+                          first_run_ns=s.get("IEC_A_FIRST_RUN_NS") or None,
+                          first_run_task=s.get("IEC_A_FIRST_RUN_TASK")))
     return Status(abi=a["IEC_A_ABI"], configuration=a["IEC_A_NAME"], module=a["IEC_A_MODULE"],
                   source_hash=a["IEC_A_SOURCE_HASH"], interface_hash=a["IEC_A_IFACE_HASH"],
                   now_ns=a["IEC_A_NOW_NS"], forced=a["IEC_A_NFORCED"],
@@ -333,8 +337,17 @@ class Client:
             attrs.append(["IEC_A_VALUE", value])
         return ["IEC_A_VAR", {"attrs": attrs}]
 
-    def status(self) -> Status:
-        for m in self._request("IEC_CMD_STATUS"):
+    def status(self, slots_only: bool = False) -> Status:
+        """The status; *slots_only*: without the resources (resources is
+        empty: a reply a fraction of the size, for polling the slots)."""
+        attrs = [["IEC_A_SLOTS_ONLY", True]] if slots_only else []
+        try:
+            msgs = self._request("IEC_CMD_STATUS", attrs)
+        except KernelError as e:
+            if not (slots_only and e.code == errno.EINVAL):
+                raise
+            msgs = self._request("IEC_CMD_STATUS")  # a module older than the flag
+        for m in msgs:
             if m["cmd"] == CMD["IEC_CMD_STATUS"] and m["attrs"]:
                 return _status_from(m)
         raise PLCError("the configuration module sent no status")

@@ -72,9 +72,7 @@ def running_state(st: Status) -> Optional[State]:
     s = State.load(st.configuration)
     if s is None:
         return None
-    m = s.manifest
-    if m.get("interface_hash") != st.interface_hash or \
-            m.get("source_hash") != st.source_hash:
+    if s.interface_hash != st.interface_hash or s.source_hash != st.source_hash:
         return None
     return s
 
@@ -418,6 +416,14 @@ class SwapReport:
     restarted: List[str] = field(default_factory=list)     # tasks restarted (--restart)
     prepare_ms: float = 0.0          # checks + inserting the staged builds
     published: bool = False
+    # where the command's time went, in order: {"connect": ms, ...}
+    phases: Dict[str, float] = field(default_factory=dict)
+
+    def mark(self, phase: str, t0: float) -> float:
+        """Records *phase* as lasting from *t0* to now; returns now."""
+        now = time.perf_counter()
+        self.phases[phase] = self.phases.get(phase, 0.0) + _ms(t0, now)
+        return now
 
 
 def _tasks_running_type(manifest: Optional[dict], type_name: str) -> List[str]:
@@ -448,7 +454,7 @@ def swap(new: str, restart: bool = False, progress: Progress = _quiet,
     t_wall = time.time_ns()
     rep = SwapReport()
     with connect("swap") as c:
-        st = c.status()
+        st = c.status(slots_only=True)
         state = running_state(st)
         if any(s.staged for s in st.slots):
             raise UsageError("a swap is prepared already (staged: " +
@@ -475,8 +481,9 @@ def swap(new: str, restart: bool = False, progress: Progress = _quiet,
             _check_interface(cand, st, state)
         for cand in cands:
             _check_candidate(cand, st, loaded)
-        manifest = state.manifest if state is not None else cands[0].manifest
+        manifest = None
         if restart:
+            manifest = state.manifest if state is not None else cands[0].manifest
             _require_instances(manifest)
         rep.check_ms = _ms(t_cmd, time.perf_counter())
         steps = _prepare(c, cands, st, progress)
@@ -488,7 +495,7 @@ def swap(new: str, restart: bool = False, progress: Progress = _quiet,
             rep.total_ms = rep.prepare_ms
             return rep
         _perform(c, steps, state, t_cmd, t_wall, progress,
-                 {cand.type_name.upper(): str(cand.ko) for cand in cands})
+                 {cand.type_name.upper(): str(cand.ko) for cand in cands}, rep=rep)
         rep.published = True
         if restart:
             rep.restarted = _restart_faulted(c, manifest, [x.type_name for x in cands],
@@ -548,12 +555,15 @@ def publish(restart: bool = False, progress: Progress = _quiet) -> SwapReport:
     t_wall = time.time_ns()
     rep = SwapReport()
     with connect("swap --publish") as c:
-        st = c.status()
+        t = rep.mark("connect", t_cmd)
+        st = c.status(slots_only=True)
+        t = rep.mark("status", t)
         state = running_state(st)
+        t = rep.mark("saved state", t)
         staged = [s for s in st.slots if s.staged]
         if not staged:
             raise UsageError("nothing is prepared: plc-manager swap --prepare NEW first")
-        manifest = state.manifest if state is not None else None
+        manifest = state.manifest if state is not None and restart else None
         if restart and not (manifest and "instances" in manifest):
             raise UsageError("swap --restart needs the manifest of the running configuration "
                              "(saved by plc-manager load) to know which tasks run the "
@@ -565,7 +575,8 @@ def publish(restart: bool = False, progress: Progress = _quiet) -> SwapReport:
             step = SwapStep(s.type_name, s.module, s.build_id, mod or "?", s.staged)
             step.staged = True
             rep.steps.append(step)
-        _perform(c, rep.steps, state, t_cmd, t_wall, progress)
+        rep.mark("modules", t)
+        _perform(c, rep.steps, state, t_cmd, t_wall, progress, rep=rep)
         rep.published = True
         if restart:
             rep.restarted = _restart_faulted(c, manifest, [s.type_name for s in staged],
@@ -626,25 +637,21 @@ def _prepare(c: Client, cands: Sequence[Candidate], st: Status,
 
 def _record(state: State, step: SwapStep, ko: Optional[str]) -> None:
     """The saved state: *step*'s new build runs in its slot now."""
-    for t in state.manifest["program_types"]:
-        if t["name"].upper() == step.type_name.upper():
-            t["module"] = step.new_module
-            t["build_id"] = step.new_build
-            if ko:
-                t["ko"] = ko
+    state.record(step.type_name, step.new_module, step.new_build, ko)
 
 
 def _perform(c: Client, steps: List[SwapStep], state: Optional[State], t_cmd: float,
-             t_wall: int, progress: Progress, kos: Optional[Dict[str, str]] = None) -> None:
+             t_wall: int, progress: Progress, kos: Optional[Dict[str, str]] = None,
+             rep: Optional[SwapReport] = None) -> None:
     """Publishes the staged builds (one command, every slot), then confirms
     each slot, waits for a cycle of each new body, removes the old modules."""
-    manifest = state.manifest if state is not None else None
     kos = kos or {}
+    rep = rep or SwapReport()
     t_perform = time.time_ns()
     t0 = time.perf_counter()
     _kernel_call(c, "publish", c.publish)     # pointer swaps, then one grace period
     t1 = time.perf_counter()
-    st = c.status()
+    st = c.status(slots_only=True)
     t2 = time.perf_counter()
     for step in steps:
         s2 = st.slot(step.type_name)
@@ -657,44 +664,54 @@ def _perform(c: Client, steps: List[SwapStep], state: Optional[State], t_cmd: fl
         step.publish_ms = (s2.since_ns - t_wall) / 1e6
         step.perform_ms = (s2.since_ns - t_perform) / 1e6
         step.staged = False
-    # wait for a cycle that certainly ran each new body: the kernel stamps
-    # a body's first cycle; a task using the type must also show two more
-    # cycles than at the confirmation (the name of the task for the report)
+    # wait for the first cycle of each new body: the kernel stamps it with
+    # its time and its task (slots-only polls, a fraction of a status).  A
+    # type that no running periodic task runs has none to wait for: the
+    # full status, which says which tasks run, is asked for only if a
+    # first cycle is not there within 10 ms.
     deadline = time.monotonic() + 5.0
-    pending = {step.type_name for step in steps}
-    watch = {}
-    for step in steps:
-        using = _tasks_running_type(manifest, step.type_name)
-        watch[step.type_name] = {t.path: t.cycles for t in st.tasks()
-                                 if t.path.lower() in using and t.state == "running" and
-                                 t.interval_ns}
-        if not watch[step.type_name]:
-            pending.discard(step.type_name)
-    while pending and time.monotonic() < deadline:
-        st = c.status()
-        for step in steps:
-            if step.type_name not in pending:
-                continue
+    ask_tasks = time.monotonic() + 0.010
+    pending = list(steps)
+    told = False
+    while True:
+        for step in list(pending):
             s = st.slot(step.type_name)
-            done = [t.path for t in st.tasks() if t.path in watch[step.type_name] and
-                    t.cycles >= watch[step.type_name][t.path] + 2]
-            if s is not None and s.first_run_ns and done:
+            if s is not None and s.first_run_ns:
                 step.first_cycle_ms = _ms(t2, time.perf_counter())
-                step.first_cycle_task = done[0]
+                step.first_cycle_task = s.first_run_task
                 step.publication_to_first_ms = (s.first_run_ns - s.since_ns) / 1e6
-                pending.discard(step.type_name)
                 step.latency_ms = (s.first_run_ns - t_wall) / 1e6
+                pending.remove(step)
+        if not pending or time.monotonic() > deadline:
+            break
+        if not told and time.monotonic() > ask_tasks:
+            told = True
+            st = c.status()
+            running = {t.path.lower() for t in st.tasks()
+                       if t.state == "running" and t.interval_ns}
+            manifest = state.manifest if state is not None else None
+            pending = [step for step in pending
+                       if running & set(_tasks_running_type(manifest, step.type_name))]
+            continue
+        time.sleep(0.001)
+        st = c.status(slots_only=True)
+    rep.phases["publish"] = _ms(t0, t1)
+    rep.phases["confirm"] = _ms(t1, t2)
+    t = rep.mark("first cycle", t2)
     for step in steps:
         if not step.latency_ms:
             step.latency_ms = _ms(t_cmd, time.perf_counter())
     for step in steps:
         if step.old_module:
             _remove_old(c, step)
+        t = rep.mark("remove old", t)
         if state is not None:
             _record(state, step, kos.get(step.type_name.upper()))
         _report_step(step, progress)
+        t = rep.mark("report", t)
     if state is not None:
         state.save()
+        rep.mark("save state", t)
 
 
 def _remove_old(c: Client, step: SwapStep) -> None:
@@ -725,7 +742,7 @@ def _report_step(step: SwapStep, progress: Progress) -> None:
              f"{step.new_build})")
     if step.first_cycle_ms is not None:
         progress(f"  new body ran       {step.first_cycle_ms:8.2f} ms   "
-                 f"(cycles of task {step.first_cycle_task}; its first cycle "
+                 f"(first cycle in task {step.first_cycle_task or '?'}, "
                  f"{step.publication_to_first_ms:.2f} ms after the publication)")
     else:
         progress("  new body ran            -      (no running periodic task uses it: "
@@ -799,8 +816,9 @@ class Variables:
         else:
             s = running_state(st)
             if s is not None:
-                manifest = s.manifest
-                self.source = "manifest"
+                with contextlib.suppress(PLCError):     # its copy is gone: the kernel's table
+                    manifest = s.manifest
+                    self.source = "manifest"
         if manifest:
             # the manifest lists exactly the kernel's table, with the types
             for v in manifest["variables"]:

@@ -268,60 +268,130 @@ def state_dir() -> Path:
 
 
 class State:
-    """What plc-manager remembers about the running configuration: the
-    manifest it was loaded from (a copy: the project directory may be
-    regenerated for a swap), the project directory, and which build runs in
-    each slot."""
+    """What plc-manager remembers about the running configuration, in two
+    files of state_dir():
 
-    def __init__(self, data: dict) -> None:
+    <configuration>.json           small, rewritten by every swap: the
+                                   configuration, its source and interface
+                                   hashes, the project directory, and the
+                                   build each swapped slot runs now;
+    <configuration>.manifest.json  the manifest it was loaded from (a copy:
+                                   the project directory may be regenerated
+                                   for a swap), written once by load, read
+                                   only by a command that needs it
+                                   (variables, instances).
+
+    A swap thus reads and writes a few hundred bytes, not a plant's
+    manifest (megabytes, tens of ms to parse in the guest)."""
+
+    def __init__(self, data: dict, manifest: Optional[dict] = None,
+                 manifest_dirty: bool = False) -> None:
         self.data = data
+        self.data.setdefault("slots", {})
+        self._manifest = manifest
+        self._manifest_dirty = manifest_dirty
+        if manifest is not None:
+            self._apply(manifest)
+
+    @property
+    def configuration(self) -> str:
+        return self.data["configuration"]
+
+    @property
+    def interface_hash(self) -> Optional[str]:
+        return self.data.get("interface_hash")
+
+    @property
+    def source_hash(self) -> Optional[str]:
+        return self.data.get("source_hash")
 
     @property
     def manifest(self) -> dict:
-        return self.data["manifest"]
+        """The manifest, with the swapped slots' builds (read on first use)."""
+        if self._manifest is None:
+            p = self.manifest_path(self.configuration)
+            try:
+                m = json.loads(p.read_text())
+            except (OSError, ValueError) as e:
+                raise PLCError(f"the manager's copy of the manifest, {p}, cannot be read "
+                               f"({getattr(e, 'strerror', None) or e}): `plc-manager stop` "
+                               f"and load again") from None
+            self._apply(m)
+            self._manifest = m
+        return self._manifest
+
+    def _apply(self, m: dict) -> None:
+        for t in m.get("program_types", []):
+            rec = self.data["slots"].get(t["name"].upper())
+            if rec:
+                t.update(rec)
+
+    def record(self, type_name: str, module: str, build_id: str, ko: Optional[str]) -> None:
+        """Records that *module* (build *build_id*, file *ko*) runs in the
+        slot of *type_name* now (a swap: same interface)."""
+        rec = {"module": module, "build_id": build_id}
+        if ko:
+            rec["ko"] = ko
+        self.data["slots"].setdefault(type_name.upper(), {}).update(rec)
+        if self._manifest is not None:
+            self._apply(self._manifest)
 
     @classmethod
     def path(cls, configuration: str) -> Path:
         return state_dir() / f"{configuration.lower()}.json"
 
     @classmethod
+    def manifest_path(cls, configuration: str) -> Path:
+        return state_dir() / f"{configuration.lower()}.manifest.json"
+
+    @classmethod
     def load(cls, configuration: str) -> Optional["State"]:
         try:
-            return cls(json.loads(cls.path(configuration).read_text()))
+            data = json.loads(cls.path(configuration).read_text())
         except (OSError, ValueError):
             return None
+        if not isinstance(data, dict) or "configuration" not in data:
+            return None
+        if "manifest" in data:          # the one-file state of earlier versions
+            m = data.pop("manifest")
+            data.update(interface_hash=m.get("interface_hash"),
+                        source_hash=m.get("source_hash"))
+            return cls(data, m, manifest_dirty=True)
+        return cls(data)
 
     @classmethod
     def create(cls, project: Project) -> "State":
+        m = project.m
         return cls({"configuration": project.configuration, "project": str(project.path),
-                    "manifest": project.m})
+                    "interface_hash": m.get("interface_hash"),
+                    "source_hash": m.get("source_hash"), "slots": {}},
+                   m, manifest_dirty=True)
 
-    def save(self) -> None:
-        p = self.path(self.data["configuration"])
+    @staticmethod
+    def _write(p: Path, text: str) -> None:
         try:
             p.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=".state-")
             with os.fdopen(fd, "w") as f:
-                # dumps, not dump: json.dump streams through the pure-Python
-                # encoder, four times slower on a plant-sized manifest (about
-                # two seconds of `load` in the icount guest)
-                f.write(json.dumps(self.data))
+                f.write(text)
             os.replace(tmp, p)
         except OSError as e:
             raise PLCError(f"cannot save the manager's state in {p.parent}: {e.strerror}") \
                 from None
 
+    def save(self) -> None:
+        # dumps, not dump: json.dump streams through the pure-Python
+        # encoder, four times slower on a plant-sized manifest (about two
+        # seconds of `load` in the icount guest)
+        if self._manifest_dirty:
+            self._write(self.manifest_path(self.configuration), json.dumps(self._manifest))
+            self._manifest_dirty = False
+        self._write(self.path(self.configuration), json.dumps(self.data))
+
     @classmethod
     def remove(cls, configuration: str) -> None:
-        try:
-            cls.path(configuration).unlink()
-        except OSError:
-            pass
-
-    def swapped(self, cand: Candidate) -> None:
-        """Record that *cand* runs in its slot now (same interface)."""
-        for t in self.manifest["program_types"]:
-            if t["name"].upper() == cand.type_name.upper():
-                t["module"] = cand.module
-                t["build_id"] = cand.build_id
-                t["ko"] = str(cand.ko)
+        for p in (cls.path(configuration), cls.manifest_path(configuration)):
+            try:
+                p.unlink()
+            except OSError:
+                pass

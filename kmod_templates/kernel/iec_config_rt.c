@@ -117,8 +117,11 @@ int iec2kmod_run_program(u32 slot, void *self, struct iec_ctx *ctx)
 	if (slot >= iec_cfg->nslots)
 		return -EINVAL;
 	type = rcu_dereference_raw(iec_cfg->slots[slot].cur);
-	if (type && unlikely(!READ_ONCE(type->first_run_ns)))
-		cmpxchg64(&type->first_run_ns, 0, ktime_get_real_ns());
+	/* a task's programs run on its own ctx (iec_task_cycle()) */
+	if (type && unlikely(!READ_ONCE(type->first_run_ns)) &&
+	    !cmpxchg64(&type->first_run_ns, 0, ktime_get_real_ns()))
+		WRITE_ONCE(type->first_run_task,
+			   container_of(ctx, struct iec_task, ctx)->task_id + 1);
 	if (!type) {
 		ret = -ENOENT;
 	} else if (type->uses_fpu) {

@@ -545,6 +545,24 @@ cancel:
  * rcu_read_lock(): a replaced module is freed only after the
  * synchronize_rcu() of module removal, so what we read stays valid.
  */
+/* "res.task" of the task with @task_id; the caller holds iec_resources_lock */
+static int iec_put_task_path(struct sk_buff *skb, int attr, u32 task_id)
+{
+	struct iec_resource *r;
+	char path[128];
+	u32 k;
+
+	list_for_each_entry(r, &iec_resources, node)
+		for (k = 0; k < r->ntasks; k++)
+			if (r->tasks[k].task_id == task_id) {
+				snprintf(path, sizeof(path), "%s.%s", r->name,
+					 r->tasks[k].name);
+				return nla_put_string(skb, attr, path);
+			}
+	return 0;	/* its resource is gone */
+}
+
+/* One GFT slot; the caller holds iec_resources_lock. */
 static int iec_put_slot(struct sk_buff *skb, u32 i)
 {
 	const struct iec_gft_slot *slot = &iec_cfg->slots[i];
@@ -565,7 +583,10 @@ static int iec_put_slot(struct sk_buff *skb, u32 i)
 	    (p && (nla_put_string(skb, IEC_A_MODULE, module_name(p->owner)) ||
 		   nla_put_string(skb, IEC_A_BUILD_ID, p->build_id) ||
 		   nla_put_s64(skb, IEC_A_FIRST_RUN_NS, READ_ONCE(p->first_run_ns),
-			       IEC_A_PAD))))
+			       IEC_A_PAD) ||
+		   (READ_ONCE(p->first_run_task) &&
+		    iec_put_task_path(skb, IEC_A_FIRST_RUN_TASK,
+				      READ_ONCE(p->first_run_task) - 1)))))
 		err = -EMSGSIZE;
 	/* a staged build is dropped under iec_ctl_mutex (held): it stays */
 	staged = READ_ONCE(slot->staged);
@@ -594,12 +615,17 @@ static size_t iec_status_size(void)
 			     IEC_HIST_BUCKETS * sizeof(u64);
 	}
 	for (i = 0; i < iec_cfg->nslots; i++)
-		n += 320 + strlen(iec_cfg->slots[i].type_name) + MODULE_NAME_LEN;
+		n += 460 + strlen(iec_cfg->slots[i].type_name) + MODULE_NAME_LEN;
 	return n;
 }
 
+/*
+ * The status; with SLOTS_ONLY without the resources and their tasks (the
+ * swap's confirmation polls the slots: a reply a tenth of the size).
+ */
 static int iec_nl_status(struct sk_buff *skb, struct genl_info *info)
 {
+	bool slots_only = nla_get_flag(info->attrs[IEC_A_SLOTS_ONLY]);
 	struct iec_resource *r;
 	struct sk_buff *msg;
 	void *hdr;
@@ -625,7 +651,7 @@ static int iec_nl_status(struct sk_buff *skb, struct genl_info *info)
 	    nla_put_u32(msg, IEC_A_NFORCED, iec_forced_count()))
 		goto out_free;
 	list_for_each_entry(r, &iec_resources, node)
-		if (iec_put_resource(msg, r))
+		if (!slots_only && iec_put_resource(msg, r))
 			goto out_free;
 	for (i = 0; i < iec_cfg->nslots; i++)
 		if (iec_put_slot(msg, i))
@@ -1224,6 +1250,10 @@ static const struct nla_policy iec_nl_res_policy[IEC_A_MAX + 1] = {
 	[IEC_A_NAME] = { .type = NLA_NUL_STRING, .len = 63 },
 };
 
+static const struct nla_policy iec_nl_status_policy[IEC_A_MAX + 1] = {
+	[IEC_A_SLOTS_ONLY] = { .type = NLA_FLAG },
+};
+
 static const struct nla_policy iec_nl_slot_policy[IEC_A_MAX + 1] = {
 	[IEC_A_SLOT_INDEX] = { .type = NLA_U32 },
 };
@@ -1233,7 +1263,7 @@ static const struct genl_ops iec_nl_ops[] = {
 		.cmd = IEC_CMD_STATUS,
 		.flags = GENL_ADMIN_PERM,
 		.doit = iec_nl_status,
-		.policy = iec_nl_none_policy,
+		.policy = iec_nl_status_policy,
 		.maxattr = IEC_A_MAX,
 	},
 	{

@@ -66,6 +66,8 @@ struct iec_program_type {
 	struct iec_program_type *retired_next;
 	/* CLOCK_REALTIME of the first cycle that ran this body, 0 before */
 	u64 first_run_ns;
+	/* 1 + task_id of the task whose cycle that was, 0 before */
+	u32 first_run_task;
 };
 
 struct iec_gft_slot {

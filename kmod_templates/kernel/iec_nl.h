@@ -9,7 +9,7 @@
  * CAP_NET_ADMIN (GENL_ADMIN_PERM) and is validated strictly against its
  * own policy: an attribute a command does not take is refused.
  *
- *   IEC_CMD_STATUS      -> CONFIG attributes, RESOURCE nests (with TASK
+ *   IEC_CMD_STATUS [SLOTS_ONLY] -> CONFIG attributes, RESOURCE nests (with TASK
  *                          nests), SLOT nests
  *   IEC_CMD_VAR_GET     VAR{PATH | TABLE+INDEX}...  -> VAR{...VALUE}...
  *   IEC_CMD_VAR_LIST    (dump) one message per variable, no VALUE
@@ -108,6 +108,8 @@ enum iec_nl_attr {
 	IEC_A_FAULT_NS,		/* s64: CLOCK_REALTIME of its last fault */
 	IEC_A_STAGED,		/* string: build id staged in a slot */
 	IEC_A_FIRST_RUN_NS,	/* s64: CLOCK_REALTIME of the body's first cycle */
+	IEC_A_SLOTS_ONLY,	/* flag: a STATUS without the resources */
+	IEC_A_FIRST_RUN_TASK,	/* string: "res.task" whose cycle ran the body first */
 	__IEC_A_MAX
 };
 #define IEC_A_MAX (__IEC_A_MAX - 1)

@@ -233,7 +233,7 @@ class FakeClient:
     def __init__(self, st):
         self.st = st
 
-    def status(self):
+    def status(self, slots_only=False):
         return self.st
 
     def __enter__(self):

@@ -46,7 +46,7 @@ class FakeClient:
     def __exit__(self, *exc):
         pass
 
-    def status(self):
+    def status(self, slots_only=False):
         self.calls.append("status")
         return _status()
 
