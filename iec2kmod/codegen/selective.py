@@ -52,8 +52,12 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
 4. Settling.  An evaluation settles (the next call may skip) when it
    changed nothing it could read again: its written state (the members the
    body may write: outputs, internals, inputs it assigns, edge memories;
-   not those an ST body assigns as a whole before anything reads them,
-   whose value at the start is never read; nested instances called
+   not the outputs and internals whose value at the start an ST body
+   never reads: on every path it assigns them as a whole, without reading
+   them, before anything else mentions them (definite assignment through
+   IF and CASE branches with an ELSE; a mention in a condition, a loop, a
+   call or an index counts as a read); an input the body assigns stays,
+   since the caller's next call stores over it; nested instances called
    selectively report instead, through ``ctx->sel_changed``), the
    externals and in-outs' targets that anything in it writes are as they
    were when it started, no nested evaluation
@@ -72,8 +76,14 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
    may write: any evaluation counts), or, when the caller provably reads
    nothing of it from before the call (SelectivePlan.feedback), only that
    it ended unsettled.  A block evaluated fast IEC_SEL_BUSY_AFTER times in
-   a row is then evaluated plainly IEC_SEL_BUSY times (no comparison, no
-   copy) before it is checked again.
+   a row is then evaluated plainly (no comparison, no copy) for the next
+   IEC_SEL_BUSY task cycles (``ctx->sel_cycle``) before it is checked
+   again; each time it goes on changing after such a period, the next one
+   is twice as long (up to IEC_SEL_BUSY << IEC_SEL_BUSY_LEVELS), and a full
+   evaluation starts over from IEC_SEL_BUSY.  A plain run counts in
+   ``ctx->sel_plain`` (evaluations too, reported with sel_evaluated), and
+   a full evaluation of an enclosing block that saw that count move during
+   its body does not settle: a plain run is a change.
 5. Faults.  A block is skipped only after an evaluation that ended without
    fault, on the same arguments: it would run without fault again.  The
    loop budget is the one thing outside the argument set that an
@@ -303,7 +313,10 @@ class SelectivePlan:
                     continue      # reports its changes itself (ctx->sel_changed)
                 if not il and not w and not _called(stmts, v):
                     continue      # never called, never written
-            elif not il and (not w or _assigned_first(stmts, v)):
+            elif not il and (not w or (v.section != "VAR_INPUT" and
+                                       not _entry_read(stmts, v))):
+                # an input the body writes stays: the caller's next call
+                # stores over it, and the evaluation would write it again
                 continue
             out.append((N.var(v.name), v.type))
         for v in pou.inputs:
@@ -378,8 +391,9 @@ class SelectivePlan:
         lines = [f"/* selective execution state of {pou.name} (iec2kmod/codegen/selective.py) */",
                  f"{name} {{", "\tiec_u32 tok;\t\t/* IEC_SEL_TOKEN: settled */",
                  "\tiec_u32 epoch;\t\t/* ctx->sel_epoch of the last evaluation */",
-                 "\tiec_u8 busy;\t\t/* plain evaluations left before the next check */",
-                 "\tiec_u8 fast;\t\t/* fast evaluations in a row */"]
+                 "\tiec_u64 busy_end;\t/* plain runs while ctx->sel_cycle is below */",
+                 "\tiec_u8 fast;\t\t/* fast evaluations in a row */",
+                 "\tiec_u8 level;\t\t/* the next busy period: IEC_SEL_BUSY << level */"]
         if b.loops:
             lines.append("\tiec_u32 cost;\t\t/* loop budget used by the last evaluation */")
         if pou.kind == "PROGRAM":
@@ -448,7 +462,8 @@ class SelectivePlan:
         # the evaluation
         out += ["static __attribute__((__noinline__, __unused__)) void",
                 f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why, bool fb)", "{",
-                "\tbool sel_full, sel_settle, sel_saved = false;"]
+                "\tbool sel_full, sel_settle, sel_saved = false;",
+                "\tiec_u64 sel_plain = 0;"]
         if b.loops:
             out.append("\tiec_u32 sel_budget;")
         out += ["",
@@ -472,10 +487,16 @@ class SelectivePlan:
         for m, t in b.written:
             out.append("\t\t" + _copy(f"{s}.w_{m}", f"self->{m}", t))
         out += ["\t\tsel_saved = ctx->sel_changed;", "\t\tctx->sel_changed = false;",
+                "\t\tsel_plain = ctx->sel_plain;",
                 f"\t\t{s}.fast = 0;",
+                f"\t\t{s}.level = 0;",
                 f"\t}} else if (++{s}.fast >= IEC_SEL_BUSY_AFTER) {{",
-                "\t\t/* the arguments changed at every evaluation for a while */",
-                f"\t\t{s}.busy = IEC_SEL_BUSY;",
+                "\t\t/* the arguments changed at every evaluation for a while:",
+                "\t\t * plain runs, twice as many as last time if they kept",
+                "\t\t * changing after the last plain runs too */",
+                f"\t\t{s}.busy_end = ctx->sel_cycle + 1 + (IEC_SEL_BUSY << {s}.level);",
+                f"\t\tif ({s}.level < IEC_SEL_BUSY_LEVELS)",
+                f"\t\t\t{s}.level++;",
                 f"\t\t{s}.fast = 0;",
                 "\t}"]
         if b.loops:
@@ -489,13 +510,23 @@ class SelectivePlan:
                 "\t\tctx->sel_changed = true;",
                 "\t\treturn;",
                 "\t}",
-                "\tif (!(" + _disjunction(["ctx->sel_changed"] + after, "\t      ") + ") &&",
+                "\tif (!(" + _disjunction(["ctx->sel_changed", "ctx->sel_plain != sel_plain"] +
+                                          after, "\t      ") + ") &&",
                 "\t    sel_settle)",
                 f"\t\t{s}.tok = IEC_SEL_TOKEN;",
                 "\t/* to a caller that may read this state from before the call:",
                 "\t * every evaluation may have changed it; to one that does not:",
                 "\t * whether this block would be evaluated again */",
                 f"\tctx->sel_changed = sel_saved || fb || {s}.tok != IEC_SEL_TOKEN;",
+                "}", ""]
+        out += ["/* arguments that kept changing: evaluated plainly for a while, then",
+                " * checked again (the next check makes a fast or a full evaluation,",
+                " * and the shadows are taken anew) */",
+                "static inline __attribute__((__always_inline__, __unused__)) void",
+                f"{prefix}_plain({st} *self, struct iec_ctx *ctx)", "{",
+                "\t/* an evaluation, and a change an enclosing full one sees */",
+                "\tctx->sel_plain++;",
+                f"\t{prefix}_body(self, ctx);",
                 "}", ""]
         out += ["static inline __attribute__((__always_inline__, __unused__)) void",
                 f"{prefix}_run({st} *self, struct iec_ctx *ctx, bool fb)", "{", "\tint why;", ""]
@@ -505,13 +536,8 @@ class SelectivePlan:
                     "\t\tself->sel.tok = 0;",
                     "\t\treturn;",
                     "\t}"]
-        out += ["\t/* arguments that kept changing: evaluated plainly for a while,",
-                "\t * then checked again (the next check makes a fast or a full",
-                "\t * evaluation, and the shadows are taken anew) */",
-                f"\tif ({s}.busy && --{s}.busy) {{",
-                "\t\tctx->sel_evaluated++;",
-                f"\t\t{prefix}_body(self, ctx);",
-                "\t\tctx->sel_changed = true;",
+        out += [f"\tif (ctx->sel_cycle < {s}.busy_end) {{",
+                f"\t\t{prefix}_plain(self, ctx);",
                 "\t\treturn;",
                 "\t}",
                 f"\twhy = {prefix}_check(self, ctx);",
@@ -550,27 +576,67 @@ class SelectivePlan:
         return self._param_w[key]
 
 
+def _walk(node):
+    """analysis.walk, and the targets of assignments too (their variable
+    and their index expressions: ``a[k] := 0`` reads k)."""
+    for n in analysis.walk(node):
+        yield n
+        if isinstance(n, ast.Assign):
+            yield from analysis.walk(n.target)
+
+
 def _mentions(node, var) -> bool:
-    return any(getattr(n, "symbol", None) is var or getattr(n, "target", None) is var
-               for n in analysis.walk(node))
+    key = var.name.upper()
+    return any(getattr(n, "symbol", None) is var or getattr(n, "target", None) is var or
+               (isinstance(n, ast.For) and n.var.upper() == key)
+               for n in _walk(node))
 
 
 def _called(stmts, var) -> bool:
     return any(isinstance(n, ast.Call) and (n.target is var or getattr(
-        getattr(n, "ref", None), "symbol", None) is var) for n in analysis.walk(stmts))
+        getattr(n, "ref", None), "symbol", None) is var) for n in _walk(stmts))
 
 
-def _assigned_first(stmts, var) -> bool:
-    """Is the first top-level statement that mentions *var* an assignment
-    of the whole variable that does not read it?  (Then no evaluation reads
-    the value it had when the evaluation started.)"""
-    for st in stmts:
-        if not _mentions(st, var):
-            continue
-        t = getattr(st, "target", None)
-        return isinstance(st, ast.Assign) and getattr(t, "symbol", None) is var and \
-            not t.accessors and not _mentions(st.value, var)
-    return False
+def _entry_read(stmts, var) -> bool:
+    """May an evaluation of the ST statements read the value *var* had
+    when it started?  No only when, on every path, each mention of *var*
+    comes after an assignment of the whole variable that does not read it
+    (definite assignment through IF and CASE with an ELSE; a loop, a
+    condition or anything else that mentions it counts as a read)."""
+    return _seq_status(stmts, var) == "read"
+
+
+def _seq_status(stmts, var):
+    """'read': the entry value may be read; 'assigned': the whole variable
+    is assigned on every path before any read; 'none': neither."""
+    for st in stmts or []:
+        s = _stmt_status(st, var)
+        if s != "none":
+            return s
+    return "none"
+
+
+def _stmt_status(st, var):
+    if not _mentions(st, var):
+        return "none"
+    if isinstance(st, ast.Assign):
+        t = st.target
+        whole = getattr(t, "symbol", None) is var and not t.accessors
+        return "assigned" if whole and not _mentions(st.value, var) else "read"
+    if isinstance(st, ast.If):
+        if any(_mentions(c, var) for c, _ in st.branches):
+            return "read"
+        paths = [b for _, b in st.branches] + [st.else_]
+    elif isinstance(st, ast.Case):
+        if _mentions(st.selector, var) or any(_mentions(lab, var) for lab, _ in st.elements):
+            return "read"
+        paths = [b for _, b in st.elements] + [st.else_]
+    else:
+        return "read"
+    status = [_seq_status(b, var) if b is not None else "none" for b in paths]
+    if "read" in status:
+        return "read"
+    return "assigned" if all(s == "assigned" for s in status) else "none"
 
 
 def _feedback(caller, inst) -> bool:
@@ -579,11 +645,11 @@ def _feedback(caller, inst) -> bool:
             getattr(caller, "sfc", None) is not None:
         return True
     body = node.body or []
-    calls = [n for n in analysis.walk(body) if isinstance(n, ast.Call) and n.target is inst
+    calls = [n for n in _walk(body) if isinstance(n, ast.Call) and n.target is inst
              and getattr(n, "ref", None) is None]
     if len(calls) != 1:
         return True
-    loops = [n for n in analysis.walk(body) if isinstance(n, (ast.For, ast.While, ast.Repeat))]
+    loops = [n for n in _walk(body) if isinstance(n, (ast.For, ast.While, ast.Repeat))]
     if any(_mentions(lp, inst) for lp in loops):
         return True
     first = next((st for st in body if _mentions(st, inst)), None)
@@ -700,7 +766,7 @@ def writes(stmts, var, inout_written=None) -> bool:
     other than by calling it: an assignment, a FOR over it, an IL store,
     passing it (or a part) to a call as an output or VAR_IN_OUT."""
     key = var.name.upper()
-    for n in analysis.walk(stmts):
+    for n in _walk(stmts):
         if isinstance(n, ast.Assign) and getattr(n.target, "symbol", None) is var:
             return True
         if isinstance(n, ast.For) and n.var.upper() == key:

@@ -466,6 +466,7 @@ static int iec_put_task(struct sk_buff *skb, struct iec_task *t)
 	const struct iec_task_stats *s = &t->stats;
 	u64 cycles = READ_ONCE(s->cycles);
 	struct nlattr *nest;
+	u64 evaluated;
 
 	nest = nla_nest_start(skb, IEC_A_TASK);
 	if (!nest)
@@ -494,9 +495,9 @@ static int iec_put_task(struct sk_buff *skb, struct iec_task *t)
 			IEC_A_PAD))
 		goto cancel;
 	/* selective execution: the task's counts of blocks (iec_sel.h) */
-	if ((READ_ONCE(t->ctx.sel_evaluated) || READ_ONCE(t->ctx.sel_skipped)) &&
-	    (nla_put_u64_64bit(skb, IEC_A_SEL_EVALUATED,
-			       READ_ONCE(t->ctx.sel_evaluated), IEC_A_PAD) ||
+	evaluated = READ_ONCE(t->ctx.sel_evaluated) + READ_ONCE(t->ctx.sel_plain);
+	if ((evaluated || READ_ONCE(t->ctx.sel_skipped)) &&
+	    (nla_put_u64_64bit(skb, IEC_A_SEL_EVALUATED, evaluated, IEC_A_PAD) ||
 	     nla_put_u64_64bit(skb, IEC_A_SEL_SKIPPED,
 			       READ_ONCE(t->ctx.sel_skipped), IEC_A_PAD)))
 		goto cancel;

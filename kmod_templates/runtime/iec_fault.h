@@ -80,8 +80,10 @@ struct iec_ctx {
 	/* selective execution (iec_sel.h, iec2kmod --selective) */
 	iec_u32 sel_epoch;		/* bumped by writes into instances */
 	bool sel_changed;		/* a nested evaluation changed its state */
-	iec_u64 sel_evaluated;		/* blocks evaluated */
+	iec_u64 sel_evaluated;		/* blocks evaluated, but: */
+	iec_u64 sel_plain;		/* blocks evaluated plainly while busy */
 	iec_u64 sel_skipped;		/* blocks skipped */
+	iec_u64 sel_cycle;		/* cycles begun: busy periods end by it */
 	/* frame area of the running program's module, see iec_frame_push() */
 	iec_u8 *frame_base;
 	iec_u32 frame_size;
@@ -101,6 +103,7 @@ static inline void iec_ctx_init(struct iec_ctx *ctx, iec_u32 loop_budget)
 static inline void iec_ctx_cycle_begin(struct iec_ctx *ctx, iec_s64 now_ns)
 {
 	ctx->now_ns = now_ns;
+	ctx->sel_cycle++;
 	ctx->loop_budget = ctx->loop_budget_cycle;
 	ctx->budget_fault = IEC_FAULT_LOOP;
 }

@@ -27,6 +27,8 @@ iec_sel_ne(const void *a, const void *b, iec_size_t n)
 	iec_u32 x4, y4;
 	iec_u16 x2, y2;
 
+	/* unrolled: n is a constant, no loop counter is left at the call */
+	_Pragma("GCC unroll 16")
 	while (n >= 8) {
 		iec_memcpy(&x8, p, 8);
 		iec_memcpy(&y8, q, 8);
@@ -59,12 +61,16 @@ iec_sel_ne(const void *a, const void *b, iec_size_t n)
 
 /*
  * A block whose arguments changed at IEC_SEL_BUSY_AFTER evaluations in a
- * row is evaluated plainly (no comparison, no copy) IEC_SEL_BUSY times
- * before it is checked again: what selective execution costs when
- * everything changes.
+ * row is evaluated plainly (no comparison, no copy) in the next
+ * IEC_SEL_BUSY task cycles before it is checked again; if they changed
+ * again at the next IEC_SEL_BUSY_AFTER evaluations, the next plain period
+ * is twice as long, up to IEC_SEL_BUSY << IEC_SEL_BUSY_LEVELS cycles (a
+ * full evaluation starts again from IEC_SEL_BUSY): what selective
+ * execution costs when everything changes.
  */
 #define IEC_SEL_BUSY_AFTER	2
-#define IEC_SEL_BUSY		32
+#define IEC_SEL_BUSY		16
+#define IEC_SEL_BUSY_LEVELS	4
 
 /* Bytes from the start of an instance to the end of its last input. */
 #define IEC_SEL_SPAN(type, last)					\

@@ -387,9 +387,10 @@ int main(int argc, char **argv)
 	for (i = 0; i < sim_ntasks; i++)
 		printf("n %s %lld\n", sim_tasks[i].name, cycles[i]);
 	for (i = 0; i < sim_ntasks; i++)
-		if (ctx[i].sel_evaluated || ctx[i].sel_skipped)
+		if (ctx[i].sel_evaluated || ctx[i].sel_plain || ctx[i].sel_skipped)
 			printf("s %s %llu %llu\n", sim_tasks[i].name,
-			       (unsigned long long)ctx[i].sel_evaluated,
+			       (unsigned long long)(ctx[i].sel_evaluated +
+						    ctx[i].sel_plain),
 			       (unsigned long long)ctx[i].sel_skipped);
 	for (i = 0; i < nevents; i++)
 		free(events[i].s);

@@ -397,3 +397,89 @@ def test_generated_code_deterministic_and_plain_unchanged(tmp_path):
     assert "sel" in one.header and "_run(" in "".join(b for _, b in one.bodies.values())
     blob = plain.header + "".join(b for _, b in plain.bodies.values())
     assert "iec_sel" not in blob and "_run(" not in blob and "IEC_SEL_TOKEN" not in blob
+
+
+def test_state_read_in_an_assignment_target(tmp_path):
+    """A member read only inside an assignment's target (``b[k] := ...``)
+    is read (the written-state analysis must see it: k is assigned whole
+    right after, so it would otherwise be left out): its change keeps the
+    block from settling.  Here k changes
+    from 0 to 3 in the first evaluation while nothing else of the written
+    state changes; the second (plain) evaluation clears b[3], so a skip
+    there would leave b[3] TRUE.  And a caller that reads a nested
+    instance's output in an index before calling it (feedback through a
+    target) is told every evaluation of it."""
+    text = """
+FUNCTION_BLOCK Stale
+VAR_INPUT go : BOOL; END_VAR
+VAR_OUTPUT b : ARRAY[0..9] OF BOOL := [FALSE, FALSE, FALSE, TRUE]; END_VAR
+VAR k : INT; END_VAR
+b[k] := FALSE;
+k := 3;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Inner
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT q : INT; END_VAR
+q := x;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Outer
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT flags : ARRAY[0..9] OF BOOL; END_VAR
+VAR d : Inner; END_VAR
+flags[d.q] := TRUE;
+d(x := x);
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL sel : INT; hit : BOOL; seen : WORD; END_VAR
+VAR s : Stale; o : Outer; i : INT; END_VAR
+s(go := TRUE);
+hit := s.b[3];
+o(x := sel);
+seen := 0;
+FOR i := 0 TO 9 DO
+    IF o.flags[i] THEN seen := seen OR SHL(WORD#1, i); END_IF;
+END_FOR;
+END_PROGRAM
+""" + CONFIG.format(globals="sel : INT; hit : BOOL; seen : WORD;")
+    rows = [(0, "sel", 0), (50, "sel", 3), (150, "sel", 5), (250, "sel", 5)]
+    a, b = _both(tmp_path, text, rows, 400)
+    assert b.values_at()["hit"] is False
+    assert b.values_at()["seen"] == (1 << 0) | (1 << 3) | (1 << 5)
+    assert _skipped(b) > 20, b.selective
+
+
+def test_written_state_leaves_out_what_is_assigned_before_it_is_read(tmp_path):
+    """The written state of a block (rule 4) leaves out the outputs and
+    internals it assigns whole on every path before anything reads them
+    (through IF and CASE with an ELSE) and keeps those read first on some
+    path; the skipped runs stay invisible."""
+    text = """
+FUNCTION_BLOCK Dev
+VAR_INPUT a, b : BOOL; n : INT; END_VAR
+VAR_OUTPUT st, w, latch, first : INT; END_VAR
+VAR tmp : INT; END_VAR
+tmp := n * 2;
+IF a THEN st := 1; ELSIF b THEN st := 2; ELSE st := 0; END_IF;
+CASE n OF 1: w := tmp; ELSE w := st; END_CASE;
+IF a THEN first := 5; END_IF;
+IF first > latch THEN latch := first; END_IF;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL x : INT; fa, fb : BOOL; out : INT; END_VAR
+VAR d : Dev; END_VAR
+d(a := fa, b := fb, n := x);
+out := d.st + d.w + d.latch;
+END_PROGRAM
+""" + CONFIG.format(globals="x : INT; fa, fb : BOOL; out : INT;")
+    project = _project(tmp_path, text)
+    plan = SelectivePlan(project, "all")
+    dev = next(b for b in plan.blocks.values() if b.pou.name == "Dev")
+    assert [m for m, _ in dev.written] == ["v_latch", "v_first"], dev.written
+    rows = [(0, "x", 1), (40, "fa", "TRUE"), (80, "fa", "FALSE"), (120, "fb", "TRUE"),
+            (200, "x", 2), (260, "fb", "FALSE")]
+    a, b = _both(tmp_path, text, rows, 400)
+    assert _skipped(b) > 5, b.selective

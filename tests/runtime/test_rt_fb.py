@@ -27,7 +27,8 @@ class Ctx(C.Structure):
                 ("fault", C.c_int), ("fault_pou", C.c_char_p), ("fault_line", C.c_int),
                 ("fault_count", C.c_uint32), ("sel_epoch", C.c_uint32),
                 ("sel_changed", C.c_bool), ("sel_evaluated", C.c_uint64),
-                ("sel_skipped", C.c_uint64), ("frame_base", C.c_void_p),
+                ("sel_plain", C.c_uint64), ("sel_skipped", C.c_uint64),
+                ("sel_cycle", C.c_uint64), ("frame_base", C.c_void_p),
                 ("frame_size", C.c_uint32), ("frame_used", C.c_uint32),
                 ("task_id", C.c_uint32)]
 
