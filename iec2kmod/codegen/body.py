@@ -546,7 +546,8 @@ class BodyEmitter:
         target = c.target
         if isinstance(target, Var):           # a function block instance
             lines = self.fb_call(f, c, target)
-            return self.wrap(f, lines, pos, check=not _fb_pou(c).standard or f.may_fault)
+            check = (not _fb_pou(c).standard or f.may_fault) and not f.checked
+            return self.wrap(f, lines, pos, check=check)
         code = self.expr.emit(f, c)
         return self.wrap(f, [f"(void){code};"], pos)
 
@@ -558,6 +559,7 @@ class BodyEmitter:
         the block's body leaves its outputs where they are."""
         pou = _fb_pou(c)
         lines = []
+        sel_end = None
         if c.ref is not None:
             # an element of an array of instances: its index is computed
             # (and checked) once, before the arguments
@@ -627,7 +629,11 @@ class BodyEmitter:
                 # fb: the caller may read the instance's state from before the
                 # call (selective.py, rule 4)
                 fb = "true" if self.sel.feedback(self.pou, inst) else "false"
-                lines.append(f"{N.pou_prefix(pou)}_run(&{base}, ctx, {fb});")
+                # a skipped block cannot have faulted: the check is only
+                # after a run
+                lines += [f"if ({N.pou_prefix(pou)}_run(&{base}, ctx, {fb}))",
+                          self.ind + self.fault_check(f.pos)]
+                sel_end = len(lines)
             else:
                 lines.append(f"{body_fn}(&{base}, ctx);")
             if kind == "plain":
@@ -653,6 +659,8 @@ class BodyEmitter:
                 out += ["else {"] + self.indent(self.checked_store(f, eno.value, Raw("0", BOOL))) \
                     + ["}"]
             return out
+        # a selective call that ends the lines has made the statement's check
+        f.checked = sel_end == len(lines)
         return lines
 
     # ---------------------------------------- left to right, fault by fault

@@ -61,6 +61,7 @@ class Frame:
         self.may_fault = False
         self.pooled: dict[str, int] = {}
         self.calls = 0        # user FUNCTION calls emitted into pre
+        self.checked = False  # the lines end with the statement's fault check
 
     def temp(self, t, prefix="tmp"):
         """A temporary of IEC type t for this statement.  In a POU body,

@@ -528,21 +528,24 @@ class SelectivePlan:
                 "\tctx->sel_plain++;",
                 f"\t{prefix}_body(self, ctx);",
                 "}", ""]
-        out += ["static inline __attribute__((__always_inline__, __unused__)) void",
+        out += ["/* false: skipped (nothing ran, nothing can have faulted) */",
+                "static inline __attribute__((__always_inline__, __unused__)) bool",
                 f"{prefix}_run({st} *self, struct iec_ctx *ctx, bool fb)", "{", "\tint why;", ""]
         if pou.kind == "PROGRAM":
             out += ["\tif (self->sel.plain) {",
                     f"\t\t{prefix}_body(self, ctx);",
                     "\t\tself->sel.tok = 0;",
-                    "\t\treturn;",
+                    "\t\treturn true;",
                     "\t}"]
-        out += [f"\tif (ctx->sel_cycle < {s}.busy_end) {{",
+        out += [f"\tif (iec_likely(ctx->sel_cycle < {s}.busy_end)) {{",
                 f"\t\t{prefix}_plain(self, ctx);",
-                "\t\treturn;",
+                "\t\treturn true;",
                 "\t}",
                 f"\twhy = {prefix}_check(self, ctx);",
-                "\tif (why)",
-                f"\t\t{prefix}_eval(self, ctx, why, fb);",
+                "\tif (!why)",
+                "\t\treturn false;",
+                f"\t{prefix}_eval(self, ctx, why, fb);",
+                "\treturn true;",
                 "}"]
         return out
 
