@@ -44,7 +44,10 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
    (the last-input comparison: the stores into an instance are the
    caller's statements, the globals are copied in by the task, written by
    other tasks and by the manager; comparing at the call is the one point
-   every writer passes).  A skip needs: the block's token equals the
+   every writer passes: flags set by the writers would need every store
+   into a global, through a VAR_IN_OUT pointer or by the manager to know
+   the blocks that read it).  The comparisons are unrolled word loads, the
+   inputs one span.  A skip needs: the block's token equals the
    module's ``IEC_SEL_TOKEN`` (set by an evaluation that settled, below),
    the task's epoch is the one the block last saw, nothing in the argument
    set differs, and the loop budget left is larger than what the last
@@ -104,9 +107,12 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
    the body as plain code and clears the instance's token.
 
 Generated C: a struct ``<prefix>_sel`` member ``sel`` at the end of the
-instance struct, and ``<prefix>_run(self, ctx)`` beside ``<prefix>_body``
-in the POU's file; selective calls call ``_run``.  The counters
-``ctx->sel_evaluated`` and ``ctx->sel_skipped`` count blocks per task."""
+instance struct, and ``<prefix>_run(self, ctx, fb)`` beside
+``<prefix>_body`` in the POU's file; selective calls call ``_run``, which
+returns false when it skipped the block (the caller checks for a fault
+only after a run).  The counters ``ctx->sel_evaluated`` (plus
+``ctx->sel_plain``, the plain runs of busy blocks) and
+``ctx->sel_skipped`` count blocks per task."""
 
 from __future__ import annotations
 
