@@ -187,7 +187,8 @@ def cmd_load(a) -> int:
     if a.json:
         print(json.dumps({"configuration": rep.configuration,
                           "modules": [{"name": n, "insert_ms": ms} for n, ms in rep.modules],
-                          "start_ms": rep.start_ms, "total_ms": rep.total_ms}))
+                          "start_ms": rep.start_ms, "total_ms": rep.total_ms,
+                          "phases": rep.phases}))
     return 0
 
 

@@ -153,6 +153,13 @@ class LoadReport:
     modules: List[Tuple[str, float]] = field(default_factory=list)   # name, ms
     start_ms: Optional[float] = None
     total_ms: float = 0.0
+    # where the command's time went, in order: {"project": ms, ...}
+    phases: Dict[str, float] = field(default_factory=dict)
+
+    def mark(self, phase: str, t0: float) -> float:
+        now = time.perf_counter()
+        self.phases[phase] = self.phases.get(phase, 0.0) + _ms(t0, now)
+        return now
 
 
 def _loaded_configurations() -> List[str]:
@@ -166,10 +173,15 @@ def _loaded_configurations() -> List[str]:
 def load(path: str, start: bool = True, progress: Progress = _quiet) -> LoadReport:
     kmod.require(kmod.CAP_SYS_MODULE, "load")
     t_all = time.perf_counter()
+    phases: Dict[str, float] = {}
     proj = Project.open(path)
+    t = time.perf_counter()
+    phases["open project"] = _ms(t_all, t)
     proj.check_built()
     proj.check_kernel()
     proj.check_modules()
+    t2 = time.perf_counter()
+    phases["check modules"] = _ms(t, t2)
     loaded = kmod.loaded()
     running = _loaded_configurations()
     if running:
@@ -178,7 +190,8 @@ def load(path: str, start: bool = True, progress: Progress = _quiet) -> LoadRepo
     clash = [n for n in proj.m["load_order"] if n in loaded]
     if clash:
         raise PLCError(f"module {clash[0]} is loaded already (plc-manager stop first)")
-    rep = LoadReport(proj.configuration)
+    rep = LoadReport(proj.configuration, phases=phases)
+    t = rep.mark("loaded modules", t2)
     progress(f"loading {proj.configuration} from {proj.path} "
              f"({len(proj.m['load_order'])} modules)")
     inserted: List[str] = []
@@ -190,22 +203,26 @@ def load(path: str, start: bool = True, progress: Progress = _quiet) -> LoadRepo
             inserted.append(name)
             rep.modules.append((name, dt))
             progress(f"  inserted {name:<44} {dt:8.1f} ms")
+        t = rep.mark("insert", t)
         with connect() as c:
             st = c.status()
-            for t in proj.m["program_types"]:
-                s = st.slot(t["name"])
-                if s is None or s.build_id != t["build_id"]:
-                    raise PLCError(f"slot {t['name']} does not run build {t['build_id']}")
+            for pt in proj.m["program_types"]:
+                s = st.slot(pt["name"])
+                if s is None or s.build_id != pt["build_id"]:
+                    raise PLCError(f"slot {pt['name']} does not run build {pt['build_id']}")
             names = {r.name.lower() for r in st.resources}
             for r in proj.m["resources"]:
                 if r["name"].lower() not in names:
                     raise PLCError(f"resource {r['name']} did not register")
+            t = rep.mark("confirm", t)
             State.create(proj).save()
+            t = rep.mark("save state", t)
             if start:
                 t0 = time.perf_counter()
                 c.start()
                 _wait_tasks(c, _all_running, "start")
                 rep.start_ms = _ms(t0, time.perf_counter())
+                rep.mark("start", t)
                 progress(f"  started every task{'':<32} {rep.start_ms:8.1f} ms")
     except BaseException as e:
         if inserted:
@@ -216,6 +233,7 @@ def load(path: str, start: bool = True, progress: Progress = _quiet) -> LoadRepo
     rep.total_ms = _ms(t_all, time.perf_counter())
     progress(f"loaded {proj.configuration}: {len(inserted)} modules in "
              f"{rep.total_ms:.0f} ms{'' if start else ' (tasks stopped)'}")
+    progress("  " + ", ".join(f"{k} {v:.0f} ms" for k, v in rep.phases.items()))
     return rep
 
 
