@@ -91,6 +91,7 @@ from ..diagnostics import Diagnostics, SourceFile
 from .encode import TRUE, Encoder, Frame, Refuse, const_of, land
 from .engine import System, check
 from .model import SymbolicMachine
+from .ranges import range_candidates
 from .props import (Prop, PropChecker, config_scope, instance_of_path, parse_expr,
                     scan_pragmas)
 
@@ -203,7 +204,7 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
 
     def fix(t):
         t = z3.substitute(t, *cpairs) if cpairs else t
-        return t
+        return z3.simplify(t)
 
     ts = System(
         state=[(leaf, leaf.var, const_of(leaf.init, leaf.type), fix(leaf.c[leaf.k]))
@@ -212,7 +213,8 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
         faults=[(fix(c), kind, pou, src, pos) for c, kind, pou, src, pos in enc.faults],
         props=[(n, fix(t)) for n, t in post_props],
         assume=fix(land(*assumes)) if assumes else TRUE)
-    ts.invariants = [(n, fix(t)) for n, t in sym.invariant_candidates(lambda lf: lf.var)]
+    ts.invariants = ([(n, fix(t)) for n, t in sym.invariant_candidates(lambda lf: lf.var)]
+                     + range_candidates(ts.state))
     out = Outcome(props=[c[1] for c in checked if c[0].kind == "property"], system=ts,
                   sym=sym, state_terms={n: fix_all(t, cpairs) for n, t in state_terms.items()})
     out.leaves = len(state)

@@ -354,6 +354,8 @@ class Encoder:
                      f"verify: {what} cannot be encoded exactly")
 
     def fault(self, g, cond, what, frame, pos):
+        if z3.is_expr(cond) and z3.is_false(z3.simplify(cond)):
+            return          # cannot happen (a constant index in range...)
         c = land(g, cond)
         if not z3.is_false(c):
             self.faults.append((c, what, frame.pou.name, frame.pou.src, pos))

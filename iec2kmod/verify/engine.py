@@ -38,6 +38,7 @@ class Result:
     model: object = None      # violated: the z3 model of the path
     fault: tuple | None = None
     invariants: list = field(default_factory=list)
+    abstract: bool = False    # proved on the floating-point abstraction
 
 
 @dataclass
@@ -98,7 +99,9 @@ def _fault_term(ts, pairs):
 
 
 def houdini(ts: System, timeout_ms: int):
-    """The subset of ts.invariants that holds initially and is inductive."""
+    """The subset of ts.invariants that holds initially and is inductive
+    (all candidates assumed in the pre-state; every solver answer "sat"
+    drops the candidates its post-state falsifies, until "unsat")."""
     cands = []
     init_pairs = [(var, init) for _, var, init, _ in ts.state]
     for name, term in ts.invariants:
@@ -120,18 +123,22 @@ def houdini(ts: System, timeout_ms: int):
         s.push()
         for _, term in cands:
             s.add(Unroller.sub(term, pre_pairs))
-        bad = []
-        for i, (name, term) in enumerate(cands):
-            s.push()
-            s.add(lnot(Unroller.sub(term, post_pairs)))
-            r = s.check()
+        posts = [Unroller.sub(term, post_pairs) for _, term in cands]
+        s.add(lor(*[lnot(p) for p in posts]))
+        r = s.check()
+        if r == z3.unsat:
             s.pop()
-            if r != z3.unsat:
-                bad.append(i)
-        s.pop()
-        if not bad:
             return cands
-        cands = [c for i, c in enumerate(cands) if i not in bad]
+        if r != z3.sat:
+            s.pop()
+            return []
+        m = s.model()
+        keep = [c for c, p in zip(cands, posts)
+                if not z3.is_false(m.eval(p, model_completion=True))]
+        s.pop()
+        if len(keep) == len(cands):     # cannot happen with an exact model
+            return []
+        cands = keep
     return []
 
 
@@ -174,14 +181,105 @@ def restrict(ts: System, roots):
     return System(state, inputs, ts.faults, ts.props, ts.assume, inv)
 
 
+# FP operations whose bit-level encoding is what makes REAL slow
+_FP_ARITH = {z3.Z3_OP_FPA_ADD, z3.Z3_OP_FPA_SUB, z3.Z3_OP_FPA_MUL, z3.Z3_OP_FPA_DIV,
+             z3.Z3_OP_FPA_REM, z3.Z3_OP_FPA_FMA, z3.Z3_OP_FPA_SQRT,
+             z3.Z3_OP_FPA_ROUND_TO_INTEGRAL, z3.Z3_OP_FPA_TO_FP,
+             z3.Z3_OP_FPA_TO_FP_UNSIGNED, z3.Z3_OP_FPA_TO_SBV, z3.Z3_OP_FPA_TO_UBV}
+
+
+def _fp_ops(roots, control_only=False):
+    """The outermost floating-point operations of the terms; control_only:
+    those the terms reach only through the conditions of if-then-else (a
+    value that only decides a branch, like a timer preset compared with a
+    clock), the others being read as data and kept."""
+    seen = set()
+    found = {}
+    stack = [(t, False) for t in roots if z3.is_expr(t)]
+    if control_only:
+        # the nodes reached as data, first
+        data = set()
+        todo = [t for t in roots if z3.is_expr(t)]
+        while todo:
+            t = todo.pop()
+            i = t.get_id()
+            if i in data:
+                continue
+            data.add(i)
+            ch = t.children()
+            if z3.is_app(t) and t.decl().kind() == z3.Z3_OP_ITE:
+                ch = ch[1:]
+            todo.extend(ch)
+    while stack:
+        t, _ = stack.pop()
+        i = t.get_id()
+        if i in seen:
+            continue
+        seen.add(i)
+        if z3.is_app(t) and t.decl().kind() in _FP_ARITH and (not control_only or i not in data):
+            found[i] = t
+            continue
+        stack.extend((c, False) for c in t.children())
+    return list(found.values())
+
+
+def abstract_fp(ts: System, control_only=False):
+    """An over-approximation of ts: every floating-point arithmetic
+    operation or conversion replaced by a fresh input, any value of its
+    sort in every cycle; comparisons, selections and everything else exact.
+    Every path of ts is a path of the result (its inputs taking the values
+    the operations computed), so what k-induction proves on it holds for
+    ts; a violation of it proves nothing and is never reported (the exact
+    system decides then).  None when ts has no such operation."""
+    inputs = list(ts.inputs)
+    state = list(ts.state)
+    faults, props, assume, invs = list(ts.faults), list(ts.props), ts.assume, list(ts.invariants)
+    n = 0
+    while True:
+        ops = _fp_ops([p for *_, p in state] + [c for c, *_ in faults]
+                      + [t for _, t in props] + [assume] + [t for _, t in invs], control_only)
+        if not ops:
+            break
+        pairs = []
+        for t in ops:
+            c = z3.simplify(t)
+            if z3.is_fp_value(c) or z3.is_bv_value(c):
+                pairs.append((t, c))        # constant operands: its value, exactly
+                continue
+            v = z3.Const(f"$abs{n}", t.sort())
+            n += 1
+            pairs.append((t, v))
+            inputs.append((None, v, TRUE))
+
+        def sub(t):
+            return z3.substitute(t, *pairs)
+        state = [(leaf, var, init, sub(post)) for leaf, var, init, post in state]
+        faults = [(sub(c), *rest) for c, *rest in faults]
+        props = [(nm, sub(t)) for nm, t in props]
+        assume = sub(assume)
+        invs = [(nm, sub(t)) for nm, t in invs]
+    if n == 0:
+        return None
+    return System(state, inputs, faults, props, assume, invs)
+
+
 def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
     """Results for every property, the first one 'no runtime error'.  Each
     one is decided on its own cone of influence; the properties are checked
-    on runs without a runtime error unless none can happen (proved)."""
+    on runs without a runtime error unless none can happen (proved).  The
+    candidate invariants are proved once, by Houdini on the whole system
+    (on its floating-point abstraction when it has floating-point
+    operations: a sound over-approximation, so what is inductive there holds
+    in every reachable state); each property uses those of its cone."""
+    a = abstract_fp(ts)
+    proved = {n for n, _ in houdini(a if a is not None else ts, timeout_ms)}
+    ts = System(ts.state, ts.inputs, ts.faults, ts.props, ts.assume,
+                [(n, t) for n, t in ts.invariants if n in proved and not _fp_ops([t])])
     fault_roots = [c for c, *_ in ts.faults]
     t0 = time.perf_counter()
     sub = restrict(ts, fault_roots)
-    first = check_one(sub, "no runtime error", None, depth, timeout_ms, no_fault=False)
+    sub.props = []
+    first = _decide(sub, "no runtime error", None, depth, timeout_ms, no_fault=False)
     first.seconds = time.perf_counter() - t0
     results = [first]
     invs = set()
@@ -189,22 +287,54 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
         t0 = time.perf_counter()
         no_fault = first.status != "proved" and bool(ts.faults)
         sub = restrict(ts, [term] + (fault_roots if no_fault else []))
-        r = check_one(sub, name, term, depth, timeout_ms, no_fault=no_fault)
+        sub.props = [(name, term)]
+        if not no_fault:
+            sub.faults = []     # not read: the property alone, on every run
+        r = _decide(sub, name, term, depth, timeout_ms, no_fault=no_fault)
         r.seconds = time.perf_counter() - t0
         results.append(r)
         invs.update(n for n, _ in r.invariants)
     return results, sorted(invs)
 
 
-def check_one(ts: System, name, prop, depth, timeout_ms, no_fault):
+def _decide(ts, name, prop, depth, timeout_ms, no_fault):
+    """check_one, first on over-approximations of ts when it has
+    floating-point operations (abstract_fp: all of them free; then only
+    those that only decide branches), each cut to its own cone of
+    influence: a proof there is a proof; otherwise the exact system
+    decides.  ts.invariants are already proved."""
+    for control_only in (False, True):
+        a = abstract_fp(ts, control_only)
+        if a is None:
+            break
+        ap = None
+        if prop is not None:
+            ap = dict(a.props).get(name)
+            if ap is None:
+                break
+        fault_roots = [c for c, *_ in a.faults]
+        a = restrict(a, ([ap] if ap is not None else [])
+                     + (fault_roots if no_fault or prop is None else []))
+        r = check_one(a, name, ap, depth, timeout_ms, no_fault, stop_early=True,
+                      proved_inv=a.invariants)
+        if r.status == "proved":
+            r.abstract = True
+            return r
+    return check_one(ts, name, prop, depth, timeout_ms, no_fault, proved_inv=ts.invariants)
+
+
+def check_one(ts: System, name, prop, depth, timeout_ms, no_fault, stop_early=False,
+              proved_inv=None):
     """BMC to ``depth`` cycles and k-induction of one property (prop None:
-    no runtime error)."""
+    no runtime error).  stop_early: give up at the first violation found
+    (on an abstraction, that is not a verdict).  proved_inv: the invariants
+    to use, already proved (else Houdini proves ts.invariants' subset)."""
     res = Result(name)
     if prop is not None and z3.is_true(z3.simplify(prop)):
         # true after every cycle from every state: no solving needed
         res.status, res.k = "proved", 1
         return res
-    inv = houdini(ts, timeout_ms)
+    inv = houdini(ts, timeout_ms) if proved_inv is None else proved_inv
     res.invariants = inv
 
     def viol(pairs):
@@ -238,6 +368,9 @@ def check_one(ts: System, name, prop, depth, timeout_ms, no_fault):
         if no_fault and prop is not None:
             base.add(lnot(_fault_term(ts, pairs)))
         r = base.check()
+        if r == z3.sat and stop_early:
+            res.status, res.cycle = "violated", k
+            return res
         if r == z3.sat:
             res.status, res.cycle, res.model = "violated", k, base.model()
             if prop is None:

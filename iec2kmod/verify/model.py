@@ -424,7 +424,10 @@ class SymbolicMachine:
             if leaf.role != "state":
                 continue
             v = var_of(leaf)
-            if leaf.name.endswith(".$S") and leaf.hidden:
+            if leaf.name == "$tick":
+                w = v.size()
+                out.append(("$tick < hyperperiod", z3.ULE(v, z3.BitVecVal(self.ticks - 1, w))))
+            elif leaf.name.endswith(".$S") and leaf.hidden:
                 out.append((f"{leaf.name} valid", z3.ULE(v, z3.BitVecVal(3, 2))))
             elif leaf.name.endswith(".$EL") and leaf.hidden:
                 out.append((f"{leaf.name} >= 0", v >= bv_lit(0, 64)))

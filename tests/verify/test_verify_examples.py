@@ -38,7 +38,8 @@ def _pragmas(d):
 
 
 @pytest.mark.parametrize("example", ["traffic_light", "motor_il", "conveyor_counter",
-                                     "packaging_il_st", "tank_level"])
+                                     "packaging_il_st", "tank_level", "elevator", "hvac",
+                                     "two_resources"])
 def test_example_properties_proved(example, capsys, tmp_path):
     d = ROOT / "examples" / example
     n = _pragmas(d)
