@@ -483,3 +483,47 @@ END_PROGRAM
             (200, "x", 2), (260, "fb", "FALSE")]
     a, b = _both(tmp_path, text, rows, 400)
     assert _skipped(b) > 5, b.selective
+
+
+def test_plain_runs_of_a_busy_block_keep_its_caller_unsettled(tmp_path):
+    """A block whose arguments kept changing runs plainly for a while
+    (rule 4); a full evaluation of its caller during that time must not
+    settle, or the caller would be skipped and a block that never settles
+    (a counter) would stop.  The phases give the inner counter short busy
+    periods (its level was reset while only x changed) that outlast the
+    long one of its caller: the caller's full evaluation at the end of
+    its period meets the counter still running plainly."""
+    text = """
+FUNCTION_BLOCK Count
+VAR_INPUT y : INT; END_VAR
+VAR_OUTPUT n : DINT; END_VAR
+n := n + 1;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Wrap
+VAR_INPUT x, y : INT; END_VAR
+VAR_OUTPUT n : DINT; s : INT; END_VAR
+VAR c : Count; END_VAR
+s := x;
+c(y := y);
+n := c.n;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL x, y : INT; out : DINT; END_VAR
+VAR w : Wrap; END_VAR
+w(x := x, y := y);
+out := w.n;
+END_PROGRAM
+""" + CONFIG.format(globals="x, y : INT; out : DINT;")
+    rows, c, x, y = [], 0, 0, 0
+    for phase, n in (("y", 40), ("x", 30), ("xy", 20)):
+        for _ in range(n):
+            for v in phase:
+                x, y = (x + 1, y) if v == "x" else (x, y + 1)
+                rows.append((c * 10, v, x if v == "x" else y))
+            c += 1
+    cycles = c + 600
+    a, b = _both(tmp_path, text, rows, cycles * 10 - 5)
+    assert b.values_at()["out"] == cycles
+    assert _evaluated(b) >= 2 * cycles, b.selective
