@@ -24,9 +24,10 @@ MANIFEST = "manifest.json"
 class Project:
     """A project directory and its manifest."""
 
-    def __init__(self, path: Path, manifest: dict) -> None:
+    def __init__(self, path: Path, manifest: dict, text: Optional[str] = None) -> None:
         self.path = path
         self.m = manifest
+        self.text = text        # the manifest file as read (State copies it as it is)
 
     @classmethod
     def open(cls, path) -> "Project":
@@ -39,7 +40,8 @@ class Project:
         if not f.is_file():
             raise UsageError(f"{path}: no {MANIFEST} (not a project written by `iec2kmod gen`)")
         try:
-            m = json.loads(f.read_text())
+            text = f.read_text()
+            m = json.loads(text)
         except (OSError, ValueError) as e:
             raise UsageError(f"{f}: unreadable manifest: {e}") from None
         if not isinstance(m, dict):
@@ -54,7 +56,7 @@ class Project:
             raise UsageError(f"{f}: the manifest was changed after `iec2kmod gen` wrote it "
                              f"(its digest does not match): run `iec2kmod gen` and "
                              f"`iec2kmod build` again")
-        return cls(p, m)
+        return cls(p, m, text)
 
     # ------------------------------------------------------------------
     @property
@@ -285,11 +287,15 @@ class State:
     manifest (megabytes, tens of ms to parse in the guest)."""
 
     def __init__(self, data: dict, manifest: Optional[dict] = None,
-                 manifest_dirty: bool = False) -> None:
+                 manifest_dirty: bool = False, manifest_text: Optional[str] = None) -> None:
         self.data = data
         self.data.setdefault("slots", {})
         self._manifest = manifest
         self._manifest_dirty = manifest_dirty
+        # the file the manifest was read from, written as it is (no slot of
+        # it is swapped yet): a plant's manifest takes a third of a second to
+        # serialise again in the guest
+        self._manifest_text = manifest_text
         if manifest is not None:
             self._apply(manifest)
 
@@ -365,7 +371,7 @@ class State:
         return cls({"configuration": project.configuration, "project": str(project.path),
                     "interface_hash": m.get("interface_hash"),
                     "source_hash": m.get("source_hash"), "slots": {}},
-                   m, manifest_dirty=True)
+                   m, manifest_dirty=True, manifest_text=getattr(project, "text", None))
 
     @staticmethod
     def _write(p: Path, text: str) -> None:
@@ -384,8 +390,13 @@ class State:
         # encoder, four times slower on a plant-sized manifest (about two
         # seconds of `load` in the icount guest)
         if self._manifest_dirty:
-            self._write(self.manifest_path(self.configuration), json.dumps(self._manifest))
+            # the swaps are in the small file (applied on reading)
+            text = self._manifest_text
+            if text is None:
+                text = json.dumps(self._manifest)
+            self._write(self.manifest_path(self.configuration), text)
             self._manifest_dirty = False
+            self._manifest_text = None
         self._write(self.path(self.configuration), json.dumps(self.data))
 
     @classmethod

@@ -83,3 +83,10 @@ def test_a_lost_manifest_copy_is_a_clear_error_and_remove_takes_both(sdir):
     State.remove("Plant")
     assert list(sdir.iterdir()) == []
     assert State.load("Plant") is None
+
+
+def test_load_copies_the_manifest_file_as_it_was_read(sdir, tmp_path):
+    p = FakeProject()
+    p.text = json.dumps(p.m, indent=1)          # not what json.dumps would write
+    State.create(p).save()
+    assert (sdir / "plant.manifest.json").read_text() == p.text
