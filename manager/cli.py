@@ -344,6 +344,40 @@ def _quiet(_msg: str) -> None:
     pass
 
 
+def cmd_shell(a) -> int:
+    """Resident mode: reads commands from standard input, one per line (a
+    plc-manager command line without `plc-manager`, shell quoting), and runs
+    each in this process.  Python, pyroute2 and the manager are loaded once
+    (seconds in a slow guest), so a `swap --publish` sent here takes only its
+    own time.  After each command a line `= N` (its exit status);
+    `quit` or the end of the input ends the shell (exit 0)."""
+    import shlex
+    from . import netlink, ops  # noqa: F401  (loaded now, not by the first command)
+    netlink._classes()
+    for line in sys.stdin:
+        try:
+            words = shlex.split(line, comments=True)
+        except ValueError as e:
+            print(f"{PROG}: {e}", file=sys.stderr, flush=True)
+            print("= 2", flush=True)
+            continue
+        if not words:
+            continue
+        if words[0] in ("quit", "exit"):
+            break
+        if words[0] == "shell":
+            print(f"{PROG}: already in the shell", file=sys.stderr, flush=True)
+            rc = 2
+        else:
+            try:
+                rc = main(words)
+            except SystemExit as e:         # argparse: usage error or --help
+                rc = e.code if isinstance(e.code, int) else 2
+        sys.stderr.flush()
+        print(f"= {rc}", flush=True)
+    return 0
+
+
 # ---------------------------------------------------------------------------
 
 def build_parser() -> argparse.ArgumentParser:
@@ -416,6 +450,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--count", type=int, metavar="N", help="refresh N times, then exit")
     s.add_argument("--json", action="store_true", help="one JSON line per refresh")
     s.set_defaults(func=cmd_watch)
+
+    s = sub.add_parser("shell", help="resident mode: run commands read from standard "
+                                     "input, one per line, in this process")
+    s.set_defaults(func=cmd_shell)
 
     s = sub.add_parser("vars", help="list the variables")
     s.add_argument("pattern", nargs="?", help="glob, e.g. 'main.c1.*'")
