@@ -34,6 +34,7 @@ from __future__ import annotations
 import contextlib
 import difflib
 import errno
+import gc
 import time
 from pathlib import Path
 from dataclasses import dataclass, field
@@ -564,10 +565,29 @@ def _restart_faulted(c: Client, manifest: dict, types: Sequence[str],
             progress(f"  task {t.path} runs again ({t.cycles - before[t.path]} cycles since "
                      f"the restart, state kept)")
     return sorted(paths)
+@contextlib.contextmanager
+def _no_gc():
+    """The cyclic garbage collector off for a short command whose latency
+    counts (a full collection in a resident process costs tens of ms in a
+    slow guest); it runs again after."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+
+
 def publish(restart: bool = False, progress: Progress = _quiet) -> SwapReport:
     """The second half of a prepared swap (swap --prepare): publishes
     every staged build at once, confirms, removes the old modules;
     *restart* as for swap()."""
+    with _no_gc():
+        return _publish(restart, progress)
+
+
+def _publish(restart: bool, progress: Progress) -> SwapReport:
     kmod.require(kmod.CAP_SYS_MODULE, "swap --publish")
     t_cmd = time.perf_counter()
     t_wall = time.time_ns()
