@@ -29,6 +29,12 @@ PROJECTS = [
     ("examples/conveyor_counter", "example"),
     ("examples/packaging_il_st", "example"),
     ("examples/tank_level", "example"),
+    ("examples/elevator", "example"),
+    ("examples/hvac", "example"),
+    ("examples/two_resources", "example"),
+    ("examples/pid_loop", "example"),
+    ("examples/watchdog_event", "example"),
+    ("examples/alarm_handler", "example"),
     ("tests/verify/diff/press.il", "example (IL, tests)"),
     ("tests/verify/broken/star_delta_no_interlock", "broken"),
     ("tests/verify/broken/crossing_latched_green", "broken"),
@@ -45,6 +51,7 @@ def main(argv=None):
     from iec2kmod.frontend import run
     from iec2kmod.verify import build
     from iec2kmod.verify.engine import check
+    from iec2kmod.verify.encode import Refuse
     only = set(args.only.split(",")) if args.only else None
     print(f"iec2kmod verify benchmark, depth {args.depth}; load average "
           + " ".join(f"{x:.2f}" for x in os.getloadavg()))
@@ -58,12 +65,20 @@ def main(argv=None):
             print(f"{rel}: front end errors")
             continue
         w0, c0 = time.perf_counter(), time.process_time()
-        out = build(fe.project, [], [], None, Diagnostics())
+        try:
+            out = build(fe.project, [], [], None, Diagnostics())
+        except Refuse as exc:
+            print(f"\n{rel} ({kind}): refused: {exc.message}")
+            continue
         wb, cb = time.perf_counter() - w0, time.process_time() - c0
         print(f"\n{rel} ({kind}): {out.leaves} state variables, {out.inputs} inputs, "
               f"{len(out.system.props)} properties; encoding {wb:.2f} s ({cb:.2f} s CPU)")
         w0, c0 = time.perf_counter(), time.process_time()
-        results, _ = check(out.system, args.depth, 300_000)
+        try:
+            results, _ = check(out.system, args.depth, 300_000)
+        except Refuse as exc:
+            print(f"  refused: {exc.message}")
+            continue
         wall, cpu = time.perf_counter() - w0, time.process_time() - c0
         for r in results:
             if r.status == "proved":

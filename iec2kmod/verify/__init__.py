@@ -66,7 +66,12 @@ interpreter's storage layout and initial values):
     without a runtime error.
 
 What is refused, with an error naming the construct (never approximated):
-STRING/WSTRING values and the string functions, FOR loops whose step is
+STRING/WSTRING values and the string functions -- lazily: they are not
+encoded, a non-string value computed from them (FIND, LEN, a comparison) is
+a stand-in, and a check whose cone of influence reads a stand-in (the
+property, or the runtime-error check through a guard) is refused naming the
+construct; checks that read none are decided exactly, the strings having no
+effect on them (the string functions cannot fault) --, FOR loops whose step is
 not constant, IL backward jumps, EXPT and the
 transcendental functions (LN LOG EXP SIN COS TAN ASIN ACOS ATAN ATAN2),
 conversions between REAL and TIME, of enumerations, and BCD, and
@@ -75,7 +80,12 @@ configurations without a periodic task.
 Properties are ST boolean expressions over the configuration's variables,
 from the command line or from {verify NAME: EXPR} pragmas in the sources
 (props.py), checked after every cycle; engine.py decides them by bounded
-model checking to --depth cycles and k-induction (proved for every depth).
+model checking to --depth cycles and k-induction (proved for every depth),
+each property on its cone of influence, with the invariants Houdini proves
+among candidates (timers' locations, enumeration ranges, and the intervals
+of the bit-vector state found by ranges.py); with REAL, first on sound
+over-approximations where floating-point operations are free inputs (a
+proof there is a proof; otherwise the exact encoding decides).
 A violation writes its input trace (CSV for `iec2kmod sim --inputs`) and a
 VCD of the run, replayed in the reference interpreter before it is
 reported (cex.py)."""
@@ -161,11 +171,16 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     if diags.errors:
         return None
     enc = Encoder(sym)
+    enc.lazy_strings = True
 
     def evaluate(p, pou, inst, e):
         frame = Frame(inst, pou)
         n0 = len(enc.faults)
+        r0 = set(enc.refused)
         v = enc.expr_as(e, _BOOL, frame, TRUE)
+        for name in set(enc.refused) - r0:      # located in the property's text
+            _, pos, msg = enc.refused[name]
+            enc.refused[name] = (p.src, pos, msg)
         if len(enc.faults) > n0:
             del enc.faults[n0:]
             raise Refuse(p.src, e.pos, "verify: a property that can fault (an index out of "
@@ -212,7 +227,9 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
         inputs=[(leaf, leaf.var, sym.domain(leaf, leaf.var)) for leaf in inputs],
         faults=[(fix(c), kind, pou, src, pos) for c, kind, pou, src, pos in enc.faults],
         props=[(n, fix(t)) for n, t in post_props],
-        assume=fix(land(*assumes)) if assumes else TRUE)
+        assume=fix(land(*assumes)) if assumes else TRUE,
+        refused=dict(enc.refused))
+    ts.stand_ins = list(enc.stand_ins)
     ts.invariants = ([(n, fix(t)) for n, t in sym.invariant_candidates(lambda lf: lf.var)]
                      + range_candidates(ts.state))
     out = Outcome(props=[c[1] for c in checked if c[0].kind == "property"], system=ts,

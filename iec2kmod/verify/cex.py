@@ -32,6 +32,8 @@ def input_values(out, result):
     for k in range(1, result.cycle + 1):
         vals = {}
         for leaf, var, _ in out.system.inputs:
+            if leaf is None:        # a stand-in (never read by a check that got a verdict)
+                continue
             name = f"{var}@b{k}"
             if name not in given:
                 vals[leaf.name] = leaf.init
@@ -65,7 +67,7 @@ def format_value(leaf, v):
 
 def write_trace(out, result, path):
     period = out.sym.period
-    leaves = {leaf.name: leaf for leaf, _, _ in out.system.inputs}
+    leaves = {leaf.name: leaf for leaf, _, _ in out.system.inputs if leaf is not None}
     last = {}
     rows = []
     for k, vals in input_values(out, result):

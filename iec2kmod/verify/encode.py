@@ -240,6 +240,9 @@ class Opaque:
         self.type = t
 
 
+REFUSED = "$refused"     # prefix of the stand-ins of values not encoded (lazy_strings)
+
+
 def copy_tree(v):
     """An independent copy of an array or structure value (its terms shared)."""
     if isinstance(v, list):
@@ -341,6 +344,16 @@ class Encoder:
         self.max_iter = getattr(sym, "max_iter", 16)
         self._ipc = {}
         self.time_step = 0
+        # lazy_strings: a STRING construct is not refused where it is met;
+        # a non-string value computed from strings (FIND, LEN, a string
+        # comparison) is a stand-in constant named REFUSED..., recorded here
+        # with the construct, and a check whose cone of influence reads one
+        # is refused naming it (engine.refusal); string values themselves
+        # are Opaque and never reach a term.  The string functions cannot
+        # fault (the interpreter's), and their other arguments are encoded.
+        self.lazy_strings = False
+        self.refused = {}         # stand-in name -> (src, pos, message)
+        self.stand_ins = []
 
     # ------------------------------------------------------- utilities
     def ipc(self, pou):
@@ -352,6 +365,21 @@ class Encoder:
     def refuse(self, pou, pos, what):
         raise Refuse(pou.src if pou is not None else None, pos,
                      f"verify: {what} cannot be encoded exactly")
+
+    def stand_in(self, pou, pos, what, t):
+        """lazy_strings: the stand-in of a value of type t computed by the
+        construct `what` (an Opaque for a string)."""
+        if not self.lazy_strings:
+            self.refuse(pou, pos, what)
+        ct = concrete(t) if t is not None else None
+        if ct is None or isinstance(base_of(ct), StringT):
+            return Opaque(what, ct)
+        name = f"{REFUSED}{len(self.refused)}"
+        self.refused[name] = (pou.src if pou is not None else None, pos,
+                              f"verify: {what} cannot be encoded exactly")
+        c = z3.Const(name, const_of(0, ct).sort())
+        self.stand_ins.append(c)
+        return c
 
     def fault(self, g, cond, what, frame, pos):
         if z3.is_expr(cond) and z3.is_false(z3.simplify(cond)):
@@ -365,7 +393,7 @@ class Encoder:
         interpreter's ``implicit``)."""
         if dst is None:
             return v
-        if isinstance(v, (list, dict, Instance)):
+        if isinstance(v, (list, dict, Instance, Opaque)):
             return v
         if isinstance(v, (int, float, bool)) and not isinstance(v, z3.ExprRef):
             # an exact literal value: convert in Python as the interpreter does
@@ -537,6 +565,8 @@ class Encoder:
             return frame.inst.e[sym.key]
         v = self.place(r, frame, g).get()
         if not z3.is_expr(v) and not isinstance(v, (list, dict, Instance)):
+            if self.lazy_strings and isinstance(v, Opaque):
+                return v
             self.refuse(frame.pou, r.pos, f"reading '{r.name}' (a STRING)")
         return v
 
@@ -544,6 +574,8 @@ class Encoder:
         """v prepared for storage in dst_t: converted, range-checked."""
         ct = concrete(dst_t)
         if isinstance(ct, StringT):
+            if self.lazy_strings and isinstance(v, Opaque):
+                return v
             self.refuse(frame.pou, pos, "a STRING value")
         v = self.conv(v, src_t, dst_t, frame, pos)
         if isinstance(ct, SubrangeT):
@@ -584,7 +616,7 @@ class Encoder:
     def expr(self, e, frame, g):
         if isinstance(e, ast.Lit):
             if e.kind in ("string", "wstring"):
-                self.refuse(frame.pou, e.pos, "a STRING literal")
+                return self.stand_in(frame.pou, e.pos, "a STRING literal", None)
             v = self.ipc(frame.pou).lit_value(e)
             if isinstance(e.type, LiteralT) or e.type is None:
                 return v
@@ -620,6 +652,8 @@ class Encoder:
             c = concrete(common(lt, rt))
             a = self.expr_as(e.left, c, frame, g)
             b = self.expr_as(e.right, c, frame, g)
+            if isinstance(a, Opaque) or isinstance(b, Opaque):
+                return self.stand_in(frame.pou, e.pos, f"a STRING comparison '{op}'", BOOL)
             return compare(op, a, b, c)
         t = concrete(e.type)
         a = self.expr_as(e.left, t, frame, g)
@@ -693,7 +727,10 @@ class Encoder:
             return self.literal_arith(fam, vals, res, frame, g, pos)
         if isinstance(base_of(res), StringT) or any(
                 isinstance(base_of(concrete(pt)), StringT) for pt in ptypes):
-            self.refuse(pou, pos, f"the string function {fres.name}")
+            if self.lazy_strings:
+                for a in args:      # their faults are the call's
+                    self.expr(a, frame, g)
+            return self.stand_in(pou, pos, f"the string function {fres.name}", res)
 
         def vals():
             return [self.expr_as(a, concrete(pt), frame, g) for a, pt in zip(args, ptypes)]

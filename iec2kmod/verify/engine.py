@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import z3
 
-from .encode import FALSE, TRUE, UNROLL, land, lnot, lor, smt_eq
+from .encode import FALSE, REFUSED, TRUE, UNROLL, Refuse, land, lnot, lor, smt_eq
 
 
 @dataclass
@@ -49,6 +49,10 @@ class System:
     props: list               # [(name, term)]
     assume: object            # term
     invariants: list = field(default_factory=list)   # [(name, term over state vars)]
+    # stand-ins of values not encoded (strings; free inputs here): name ->
+    # (src, pos, message); a check whose cone reads one is refused
+    refused: dict = field(default_factory=dict)
+    stand_ins: list = field(default_factory=list)     # their constants
 
 
 class Unroller:
@@ -263,6 +267,19 @@ def abstract_fp(ts: System, control_only=False):
     return System(state, inputs, faults, props, assume, invs)
 
 
+def refusal(ts: System, roots):
+    """Raises Refuse naming the construct when the cone of influence of the
+    roots reads a value the encoding does not represent (System.refused)."""
+    if not ts.refused:
+        return
+    sub = restrict(ts, roots)
+    used = free_consts([p for *_, p in sub.state] + list(roots) + [ts.assume])
+    names = sorted((str(t) for t in used.values() if str(t) in ts.refused),
+                   key=lambda n: int(n[len(REFUSED):]))
+    if names:
+        raise Refuse(*ts.refused[names[0]])
+
+
 def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
     """Results for every property, the first one 'no runtime error'.  Each
     one is decided on its own cone of influence; the properties are checked
@@ -271,11 +288,18 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
     (on its floating-point abstraction when it has floating-point
     operations: a sound over-approximation, so what is inductive there holds
     in every reachable state); each property uses those of its cone."""
+    fault_roots = [c for c, *_ in ts.faults]
+    refusal(ts, fault_roots)
+    for _, term in ts.props:
+        refusal(ts, [term])
     a = abstract_fp(ts)
-    proved = {n for n, _ in houdini(a if a is not None else ts, timeout_ms)}
+    h = a if a is not None else ts
+    # the stand-ins free in every cycle (an over-approximation)
+    h = System(h.state, h.inputs + [(None, c, TRUE) for c in ts.stand_ins], h.faults,
+               h.props, h.assume, h.invariants)
+    proved = {n for n, _ in houdini(h, timeout_ms)}
     ts = System(ts.state, ts.inputs, ts.faults, ts.props, ts.assume,
                 [(n, t) for n, t in ts.invariants if n in proved and not _fp_ops([t])])
-    fault_roots = [c for c, *_ in ts.faults]
     t0 = time.perf_counter()
     sub = restrict(ts, fault_roots)
     sub.props = []

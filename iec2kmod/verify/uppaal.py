@@ -94,7 +94,8 @@ class Exporter:
         from .model import SymbolicMachine
         self.sym = SymbolicMachine(project)
         sym = self.sym
-        self.input_names = [leaf.name for leaf, _, _ in self.out.system.inputs]
+        self.input_names = [leaf.name for leaf, _, _ in self.out.system.inputs
+                            if leaf is not None]
         if len(sym.tasks) != 1:
             raise Refuse(sym.cfg.src, sym.tasks[1].pos,
                          "export: a second task: only one periodic task can be exported")

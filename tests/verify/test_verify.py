@@ -224,6 +224,7 @@ def test_refusals_name_the_construct(tmp_path, capsys):
         VAR_OUTPUT n : INT; END_VAR
         VAR s : STRING := 'abc'; END_VAR
         n := LEN(s);
+        {verify small: n < 100}
         END_PROGRAM
         CONFIGURATION C
             RESOURCE R ON CPU0
@@ -234,6 +235,48 @@ def test_refusals_name_the_construct(tmp_path, capsys):
     """)
     rc, out, err = verify(capsys, proj)
     assert rc == 1 and "p.st:5:6: error: verify: the string function LEN cannot be" in err
+
+
+STRINGS = """
+    PROGRAM S
+    VAR_INPUT go : BOOL; d : INT; END_VAR
+    VAR_OUTPUT n, k, q : INT; msg : STRING[20]; END_VAR
+    VAR s : STRING[20] := 'abc'; END_VAR
+    IF go AND n < 10 THEN n := n + 1; END_IF;
+    msg := CONCAT('count ', INT_TO_STRING(n));
+    k := LEN(msg);
+    IF FIND(s, 'b') > 0 THEN q := 100 / d; END_IF;
+    END_PROGRAM
+    CONFIGURATION C
+        RESOURCE R ON CPU0
+            TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+            PROGRAM s WITH t : S (go := %IX0.0, d := %IW2);
+        END_RESOURCE
+    END_CONFIGURATION
+"""
+
+
+def test_strings_are_refused_only_where_a_check_reads_them(tmp_path, capsys):
+    """A STRING construct is refused when a check's cone of influence reads
+    a value computed from strings -- never approximated --, and a check that
+    does not read one is decided exactly: here the division's guard reads
+    FIND (the runtime-error check is refused naming FIND), a property on k
+    (LEN of a CONCAT) is refused naming LEN, and with the guard free of
+    strings a property on n is proved although CONCAT and LEN are there."""
+    proj = project(tmp_path, STRINGS)
+    rc, out, err = verify(capsys, proj, "--property", "R.s.n <= 10")
+    assert rc == 1 and "p.st:9:4: error: verify: the string function FIND cannot be " \
+                       "encoded exactly" in err, err
+    (proj / "p.st").write_text(textwrap.dedent(STRINGS).replace(
+        "IF FIND(s, 'b') > 0 THEN", "IF d <> 0 THEN"))
+    rc, out, err = verify(capsys, proj, "--property", "R.s.k < 100")
+    assert rc == 1 and "p.st:8:6: error: verify: the string function LEN cannot be " \
+                       "encoded exactly" in err, err
+    rc, out, err = verify(capsys, proj, "--property", "R.s.n <= 10")
+    assert rc == 0 and "proved" in out and "Traceback" not in err, out + err
+    rc, out, err = verify(capsys, proj, "--property", "R.s.msg = 'x'")
+    assert rc == 1 and "<--property 1>:1:1: error: verify: a STRING comparison '=' " \
+                       "cannot be encoded exactly" in err, err
 
 
 def test_bad_properties_are_diagnosed(tmp_path, capsys):

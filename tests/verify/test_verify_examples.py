@@ -39,7 +39,8 @@ def _pragmas(d):
 
 @pytest.mark.parametrize("example", ["traffic_light", "motor_il", "conveyor_counter",
                                      "packaging_il_st", "tank_level", "elevator", "hvac",
-                                     "two_resources"])
+                                     "two_resources", "pid_loop", "watchdog_event",
+                                     "alarm_handler"])
 def test_example_properties_proved(example, capsys, tmp_path):
     d = ROOT / "examples" / example
     n = _pragmas(d)
@@ -50,12 +51,19 @@ def test_example_properties_proved(example, capsys, tmp_path):
     assert out.out.count("proved (induction") == n + 1, out.out     # + no runtime error
 
 
-@pytest.mark.parametrize("example, construct", [
-    ("alarm_handler", "the string function FIND"),
-    ("watchdog_event", "the string function CONCAT"),
+@pytest.mark.parametrize("example, props, construct", [
+    # the trip depends on the alarm texts (FIND): a property reading it
+    ("alarm_handler", ["plc.annunciator.compressor_permit OR NOT alarms[1].latched"],
+     "the string function FIND"),
+    # a recipe slot is valid when LEN(name) > 0, and the runtime-error
+    # check reads that (the recipe's steps index tables)
+    ("batch_mixer", [], "the string function LEN"),
 ])
-def test_examples_outside_the_encoding_are_refused(example, construct, capsys):
-    rc = cli.main(["verify", str(ROOT / "examples" / example)])
+def test_examples_outside_the_encoding_are_refused(example, props, construct, capsys):
+    args = ["verify", str(ROOT / "examples" / example)]
+    for p in props:
+        args += ["--property", p]
+    rc = cli.main(args)
     err = capsys.readouterr().err
     assert rc == 1
     assert f"error: verify: {construct}" in err and "cannot be encoded" in err, err
