@@ -22,6 +22,7 @@ from pathlib import Path
 
 from . import __version__
 from .diagnostics import Diagnostic, Diagnostics, SourceFile
+from .stfast import CLOSES, OPENS, POU_END, body_tokens
 
 
 @dataclass
@@ -111,19 +112,6 @@ def split_source(src: SourceFile, pieces: int) -> list[SourceFile]:
     return parts
 
 
-# tokens of an ST body that matter for cutting it between statements;
-# comments, strings and pragmas are skipped whole
-_BODY_TOKENS = re.compile(
-    r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|\{[^}]*\}|"
-    r"(;)|\b(IF|CASE|FOR|WHILE|REPEAT|END_IF|END_CASE|END_FOR|END_WHILE|END_REPEAT|"
-    r"END_VAR|VAR\w*|PROGRAM|FUNCTION_BLOCK|FUNCTION|END_PROGRAM|END_FUNCTION_BLOCK|"
-    r"END_FUNCTION|TYPE|END_TYPE|CONFIGURATION|END_CONFIGURATION|ACTION|METHOD|USING)\b",
-    re.S | re.I)
-_OPENS = {"IF", "CASE", "FOR", "WHILE", "REPEAT"}
-_CLOSES = {"END_IF", "END_CASE", "END_FOR", "END_WHILE", "END_REPEAT"}
-_POU_END = {"END_PROGRAM", "END_FUNCTION_BLOCK", "END_FUNCTION"}
-
-
 def split_statements(src: SourceFile, pieces: int):
     """Cuts the ST body of the one POU in src between top-level statements
     into about ``pieces`` parts, for parsing one large POU on every core.
@@ -133,10 +121,9 @@ def split_statements(src: SourceFile, pieces: int):
     position is the real one.  None when src is not one POU with an ST body
     of enough statements (anything unexpected: no cut, a serial parse)."""
     text = src.text
-    toks = [(m.start(), m.end(), (m.group(2) or "").upper(), bool(m.group(1)))
-            for m in _BODY_TOKENS.finditer(text) if m.group(1) or m.group(2)]
+    toks = body_tokens(text)
     pous = [t for t in toks if t[2] in ("PROGRAM", "FUNCTION_BLOCK", "FUNCTION")]
-    ends = [t for t in toks if t[2] in _POU_END]
+    ends = [t for t in toks if t[2] in POU_END]
     if len(pous) != 1 or len(ends) != 1 or \
             any(t[2] in ("TYPE", "CONFIGURATION", "ACTION", "METHOD", "USING") for t in toks):
         return None
@@ -159,9 +146,9 @@ def split_statements(src: SourceFile, pieces: int):
     for a, b, word, semi in inside:
         if a < body_start:
             continue
-        if word in _OPENS:
+        if word in OPENS:
             depth += 1
-        elif word in _CLOSES:
+        elif word in CLOSES:
             depth -= 1
         elif semi and depth == 0:
             cuts.append(b)

@@ -49,8 +49,12 @@ def _pos(obj):
 
 
 def _expression(obj):
-    operands = obj.operands
-    ops = obj.ops
+    return climb(obj.operands, obj.ops)
+
+
+def climb(operands, ops):
+    """The precedence tree of a flat operand/operator sequence (the
+    Expression rule's, and iec2kmod.stfast's)."""
     if not ops:
         return operands[0]
     # precedence climbing over the flat sequence
@@ -131,6 +135,9 @@ def _path_ref(path, pos):
     return ast.Ref(pos, name, accessors)
 
 
+path_ref = _path_ref  # for iec2kmod.stfast
+
+
 def _signed_number(obj):
     """An IL operand such as -7 or -2.5: a literal with its sign."""
     text = obj.text
@@ -164,12 +171,18 @@ def _args(call_args):
     return out
 
 
+def simple_is_literal(text):
+    """Whether a SIMPLE_OPERAND token is a LITERAL (a VAR_PATH has no '#'
+    and no reserved word)."""
+    return "#" in text or not (text[0].isalpha() or text[0] == "_") or \
+        text.upper() in ("TRUE", "FALSE")
+
+
 def _simple(obj):
     """A SIMPLE_OPERAND token: the Ref or Lit the full Unary rule makes."""
     text = obj.text
-    if "#" in text or not (text[0].isalpha() or text[0] == "_") or \
-            text.upper() in ("TRUE", "FALSE"):
-        return _literal(obj)  # a LITERAL (a VAR_PATH has no '#' and no reserved word)
+    if simple_is_literal(text):
+        return _literal(obj)
     return _path_ref(text, _pos(obj))
 
 
@@ -448,20 +461,35 @@ FAST_PATHS = ("SIMPLE_OPERAND",)
 _NEVER = re.compile(r"(?!)")
 
 
+# ... and the hand-written statement parser (iec2kmod/stfast.py), on or off
+# with them
+_ST_FAST = [True]
+
+
 @contextmanager
 def fast_paths(enabled: bool):
-    """Switches the grammar's fast-path tokens on or off (process-wide, for
-    the parses inside the ``with`` block)."""
+    """Switches the grammar's fast-path tokens and iec2kmod.stfast on or off
+    (process-wide, for the parses inside the ``with`` block)."""
+    statement_parser()  # takes the tokens' expressions while they are on
     rules = [metamodel()[name]._tx_peg_rule for name in FAST_PATHS]
     saved = [r.regex for r in rules]
+    saved_st = _ST_FAST[0]
     if not enabled:
         for r in rules:
             r.regex = _NEVER
+        _ST_FAST[0] = False
     try:
         yield
     finally:
         for r, regex in zip(rules, saved):
             r.regex = regex
+        _ST_FAST[0] = saved_st
+
+
+@lru_cache(maxsize=1)
+def statement_parser():
+    from .stfast import StatementParser
+    return StatementParser(metamodel())
 
 
 def _model(src: SourceFile, reference: bool):
@@ -560,6 +588,12 @@ def _parse_source(src: SourceFile, diags: Diagnostics, reference: bool):
     _warn_pragmas(src, diags)
     if sys.getrecursionlimit() < RECURSION_LIMIT:
         sys.setrecursionlimit(RECURSION_LIMIT)
+    if not reference and _ST_FAST[0]:
+        unit = _parse_with_fast_statements(src, diags)
+        if unit is not None:
+            return unit
+        _ctx.src = src
+        _ctx.diags = diags
     try:
         model = _model(src, reference)
     except TextXSyntaxError as err:
@@ -587,6 +621,39 @@ def _parse_source(src: SourceFile, diags: Diagnostics, reference: bool):
         diags.error(src, _deepest_nesting(src.text),
                     "nested too deeply for the parser (simplify this expression or statement)")
         return None
+
+
+def _parse_with_fast_statements(src: SourceFile, diags: Diagnostics):
+    """The unit of src with iec2kmod.stfast taking the statements it knows
+    and textX the rest; None when stfast takes nothing or textX does not
+    agree (see the module docstring of stfast): then textX parses it all."""
+    from .stfast import fast_statements
+    got = fast_statements(src.text, statement_parser())
+    if got is None:
+        return None
+    text, taken = got
+    local = Diagnostics()
+    _ctx.src = src
+    _ctx.diags = local
+    try:
+        model = fast_model_from_str(text, file_name=src.path)
+        if not hasattr(model, "elements"):
+            return None
+        unit = to_ast(model, src, local)
+    except (TextXSyntaxError, TextXSemanticError, RecursionError):
+        return None
+    finally:
+        _ctx.src = None
+    if local.errors:
+        return None
+    pous = {p.pos: p for p in unit.pous}
+    for pos, stmts in taken.items():
+        pou = pous.get(pos)
+        if pou is None or pou.language != "ST":
+            return None
+        pou.body = sorted(pou.body + stmts, key=lambda s: s.pos)
+    diags.items += local.items
+    return unit
 
 
 def _deepest_nesting(text: str) -> int:

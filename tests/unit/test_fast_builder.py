@@ -5,8 +5,9 @@ diagnostics, so a fast path can never silently diverge:
 
 - the fast model builder (parser.FastBuilder) against textX's own
   model_from_str;
-- the grammar with its fast-path tokens (SIMPLE_OPERAND) against the
-  grammar without them."""
+- the grammar with its fast-path tokens (SIMPLE_OPERAND) and the
+  hand-written statement parser (iec2kmod/stfast.py) against the grammar
+  without them."""
 
 import random
 import re
@@ -129,6 +130,33 @@ SNIPPETS = [
     "PROGRAM p\n f(a, b c);\nEND_PROGRAM\n",
     "PROGRAM p\n IF a THEN ELSIF b THEN ELSE END_IF;\n WHILE a DO END_WHILE;\n CASE x OF 1: END_CASE;"
     "\nEND_PROGRAM\n",
+    # the statements iec2kmod.stfast parses, and their edges
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 1;; ; IF a THEN ELSIF b THEN ; ELSE END_IF\n b := 2;"
+    "\n if a then x := 1; elsif b then x := 2; else x := 3; end_if;\n IF a THEN x := 1; END_IF; ;"
+    "\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a.b.3 := NOT -x AND (a) OR - - 5 XOR NOT(b) & c <> d;\n"
+    " x := (* c *) a (* d *) + {p} b // e\n * (c);\n y := a MOD b mod 2 / 1.5e3 - INT#-5 + T#1s + 16#FF"
+    " + 'x' + TRUE + Color#Red + d.3 + e.f;\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 1; LD a\n ST b\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 1; b := INT#99999999; c := 2;\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 1; b := f(1) + c[2]; c := a ** 2; d := %IW1 + 1;"
+    " e := -a ** 2; IF a THEN RETURN; END_IF; f := 1\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 1; IF a THEN b := 1; END_IF c := 2; IF a THEN b := 1;"
+    " c := 3;\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 1;\n INITIAL_STEP s0: x(N); END_STEP\n"
+    " TRANSITION FROM s0 TO s1 := a; END_TRANSITION\n STEP s1: END_STEP\nEND_PROGRAM\n",
+    "FUNCTION_BLOCK fb\nVAR a : INT; END_VAR\n a := a + 1;\nACTION act: a := 2; END_ACTION\n"
+    "END_FUNCTION_BLOCK\nPROGRAM p\nVAR x : fb; y : INT; END_VAR\n y := y + 1; x(); y := y * 2;"
+    "\nEND_PROGRAM\n",
+    "FUNCTION f : INT\nVAR_INPUT a : INT; END_VAR\n f := a * 2;\nEND_FUNCTION\n"
+    "TYPE t : INT; END_TYPE\nCONFIGURATION c\n RESOURCE r ON cpu\n  TASK t (INTERVAL := T#1ms);"
+    "\n  PROGRAM i WITH t : p;\n END_RESOURCE\nEND_CONFIGURATION\n"
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := f(a); a := a - 1; IF a > 2 THEN a := 0; END_IF;\n"
+    "END_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 1 +\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := s.END_IF; b := 1;\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := x y; b := 1;\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n a := 1;\f b := 2;\nEND_PROGRAM\n",
 ]
 
 
@@ -195,3 +223,52 @@ def test_parallel_parse_is_the_sequential_parse():
     assert canon == [(dump(unit), [(d.path, d.line, d.col, d.message, d.source_line)
                                    for d in items]) for unit, items in sequential]
     assert canon[1][0] == ("NoneType", None) and canon[1][1][0][3].startswith("expected")
+
+
+def _progen():
+    sys.path.insert(0, str(ROOT / "tests" / "differential"))
+    try:
+        from progen import generate_unit
+    finally:
+        sys.path.remove(str(ROOT / "tests" / "differential"))
+    return generate_unit
+
+
+def test_same_model_on_random_programs():
+    """The programs of the differential campaign (every construct its
+    generator knows), whole and with random statements mutated."""
+    generate_unit = _progen()
+    rng = random.Random(7)
+    vocab = [";", ":=", "(", ")", "[1]", "**", "+", "NOT", "(* c *)", "x", "1", "IF", "THEN",
+             "END_IF", "ELSE", "f(1)", "&", "MOD", "=", "\f"]
+    for seed in range(24):
+        text = generate_unit(seed, size=0.5).standalone()
+        reference, fast = both(text, f"random{seed}.st")
+        assert reference[0][0] == "SourceUnit" and not [d for d in reference[1] if d[3] == "error"]
+        assert fast == reference, seed
+        lines = text.split("\n")
+        k = rng.randrange(len(lines))
+        words = lines[k].split(" ")
+        words[rng.randrange(len(words))] = rng.choice(vocab)
+        mutant = "\n".join(lines[:k] + [" ".join(words)] + lines[k + 1:])
+        reference, fast = both(mutant, f"random{seed}.st")
+        assert fast == reference, (seed, k, lines[k], " ".join(words))
+
+
+def test_the_statement_parser_takes_expression_dense_code():
+    """iec2kmod.stfast parses every statement of the dense benchmark POU
+    (textX sees only its declarations), with textX's own result."""
+    from iec2kmod.parser import statement_parser
+    from iec2kmod.stfast import fast_statements
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from gen_project import dense_pou
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    text = dense_pou(300)
+    rest, taken = fast_statements(text, statement_parser())
+    statements = [line for line in text.splitlines() if line.startswith("    ")]
+    assert [len(v) for v in taken.values()] == [len(statements)] and len(statements) >= 290
+    assert ":=" not in rest and rest.count("\n") == text.count("\n") and len(rest) == len(text)
+    reference, fast = both(text, "dense.st")
+    assert not reference[1] and fast == reference
