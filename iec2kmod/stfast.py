@@ -10,7 +10,7 @@ else to the grammar:
 - ``target := expression;`` where the target is a variable path without
   index (``a``, ``s.m``, ``w.3``);
 - ``IF ... THEN ... ELSIF ... ELSE ... END_IF`` over such statements;
-- the empty statement ``;``;
+- ``RETURN;``, ``EXIT;`` and the empty statement ``;``;
 - expressions of binary operators, unary operators, parentheses, variable
   paths without index and literals (no call, index, ``**`` or direct
   address).
@@ -206,6 +206,13 @@ class StatementParser:
             if word == "IF":
                 node, pos = self._if(pos)
                 out.append(node)
+                continue
+            if word in ("RETURN", "EXIT"):     # kw='RETURN' ';'
+                q = self._skip(pos + len(word))
+                if q >= self.end or text[q] != ";":
+                    raise Unsupported
+                out.append(ast.Return(pos) if word == "RETURN" else ast.Exit(pos))
+                pos = q + 1
                 continue
             m = self._var_path(text, pos)
             if not m:

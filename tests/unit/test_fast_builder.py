@@ -154,6 +154,8 @@ SNIPPETS = [
     "PROGRAM p\nVAR a : INT; END_VAR\n a := f(a); a := a - 1; IF a > 2 THEN a := 0; END_IF;\n"
     "END_PROGRAM\n",
     "PROGRAM p\nVAR a : INT; END_VAR\n a := 1 +\nEND_PROGRAM\n",
+    "PROGRAM p\nVAR a : INT; END_VAR\n IF a THEN RETURN; ELSE EXIT; END_IF; RETURN ; return;exit;"
+    " RETURN a := 1; EXIT\nEND_PROGRAM\n",
     "PROGRAM p\nVAR a : INT; END_VAR\n a := s.END_IF; b := 1;\nEND_PROGRAM\n",
     "PROGRAM p\nVAR a : INT; END_VAR\n a := x y; b := 1;\nEND_PROGRAM\n",
     "PROGRAM p\nVAR a : INT; END_VAR\n a := 1;\f b := 2;\nEND_PROGRAM\n",
