@@ -22,7 +22,7 @@ from pathlib import Path
 
 from . import __version__
 from .diagnostics import Diagnostic, Diagnostics, SourceFile
-from .stfast import CLOSES, OPENS, POU_END, body_tokens
+from .stfast import POU_END, body_tokens, statement_cuts
 
 
 @dataclass
@@ -128,34 +128,10 @@ def split_statements(src: SourceFile, pieces: int):
             any(t[2] in ("TYPE", "CONFIGURATION", "ACTION", "METHOD", "USING") for t in toks):
         return None
     head, end = pous[0], ends[0]
-    inside = [t for t in toks if head[1] <= t[0] < end[0]]
-    body_start = None
-    in_decl = False
-    for k, t in enumerate(inside):
-        if t[2].startswith("VAR") and not in_decl:
-            in_decl = True
-        elif t[2] == "END_VAR":
-            in_decl = False
-            body_start = t[1]
-        elif not in_decl:
-            break
-    if body_start is None:
+    cuts = statement_cuts([t for t in toks if head[1] <= t[0] < end[0]])
+    if cuts is None or len(cuts) - 1 < 4 * pieces:
         return None
-    depth = 0
-    cuts = []
-    for a, b, word, semi in inside:
-        if a < body_start:
-            continue
-        if word in OPENS:
-            depth += 1
-        elif word in CLOSES:
-            depth -= 1
-        elif semi and depth == 0:
-            cuts.append(b)
-        if depth < 0 or word.startswith("VAR") or word == "END_VAR":
-            return None
-    if depth != 0 or len(cuts) < 4 * pieces:
-        return None
+    body_start, cuts = cuts[0], cuts[1:]
     target = (end[0] - body_start) / pieces
     bounds = [body_start]
     for c in cuts:

@@ -101,6 +101,16 @@ def statement_pieces(text: str):
 
 
 def _pieces(inside, end):
+    cuts = statement_cuts(inside)
+    return list(zip(cuts, cuts[1:] + [end])) if cuts else None
+
+
+def statement_cuts(inside):
+    """Where the ST body of a POU starts (after its leading VAR blocks) and
+    where its top-level statements end, from the body_tokens() between its
+    header and its END keyword; None for a POU without VAR block, or with
+    anything else than statements in its body, or with unbalanced
+    IF/CASE/FOR/WHILE/REPEAT."""
     body_start = None
     in_decl = False
     first_body = len(inside)
@@ -124,14 +134,13 @@ def _pieces(inside, end):
             depth -= 1
         elif semi and depth == 0:
             cuts.append(b)
-        if depth < 0 or word.startswith("VAR") or word in ("END_VAR", "ACTION", "METHOD",
-                                                            "USING", "PROGRAM", "FUNCTION",
-                                                            "FUNCTION_BLOCK", "TYPE",
-                                                            "CONFIGURATION"):
+        if depth < 0 or word.startswith("VAR") or word in _NOT_IN_BODY:
             return None
-    if depth != 0:
-        return None
-    return list(zip(cuts, cuts[1:]))
+    return cuts if depth == 0 else None
+
+
+_NOT_IN_BODY = {"END_VAR", "ACTION", "METHOD", "USING", "PROGRAM", "FUNCTION", "FUNCTION_BLOCK",
+                "TYPE", "CONFIGURATION"}
 
 
 class Unsupported(Exception):

@@ -6,19 +6,16 @@ from __future__ import annotations
 
 from .. import ast
 from . import stdlib
+from .il import ILChecks, _CR
 from .symbols import POUInfo, Var
-from .types import (BOOL, ELEMENTARY, ERROR, INT, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
-                    LiteralT, StringT, StructT, SubrangeT, TIME, assignable, cat, common,
-                    concrete, identical, is_bit, is_bool, is_int, is_num, literal_fits)
+from .types import (BOOL, ELEMENTARY, ERROR, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
+                    LiteralT, StringT, StructT, SubrangeT, assignable, cat, common,
+                    concrete, identical, is_bit, is_bool, is_int, literal_fits)
 
 ARITH = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD"}
 COMPARE = {"=": "EQ", "<>": "NE", "<": "LT", ">": "GT", "<=": "LE", ">=": "GE"}
 LOGIC = {"AND", "OR", "XOR"}
 
-IL_LOGIC = {"AND": "AND", "ANDN": "AND", "OR": "OR", "ORN": "OR", "XOR": "XOR", "XORN": "XOR"}
-IL_ARITH = {"ADD": "ADD", "SUB": "SUB", "MUL": "MUL", "DIV": "DIV", "MOD": "MOD"}
-IL_COMPARE = {"GT", "GE", "EQ", "NE", "LE", "LT"}
-IL_FB_INPUT_OPS = {"S1", "R1", "CLK", "CU", "CD", "PV", "IN", "PT", "S", "R", "LD"}
 
 
 class EnumValue:
@@ -30,7 +27,7 @@ class EnumValue:
         self.value = enum.values[name.upper()][1]
 
 
-class BodyChecker:
+class BodyChecker(ILChecks):
     def __init__(self, project, declarer, diags, pou: POUInfo):
         self.p = project
         self.decl = declarer
@@ -455,7 +452,7 @@ class BodyChecker:
             try:
                 f = stdlib.resolve(name, [lt, rt])
             except stdlib.CallError as exc:
-                self.error(e.pos, f"operator {op}: {_operand_msg(exc, lt, rt)}")
+                self.error(e.pos, f"operator {op}: {stdlib.operand_message(exc, lt, rt)}")
                 return ERROR
             e.const = None
             self._fold(e, f.result)
@@ -681,7 +678,6 @@ class BodyChecker:
         if not self._order(c):
             self.args_exprs(c)
             return
-        params = pou.inputs + pou.inouts
         pos_params = [v for v in pou.vars.values() if v.section in ("VAR_INPUT", "VAR_IN_OUT")]
         given = {}
         npos = 0
@@ -767,274 +763,6 @@ class BodyChecker:
         t = self.expr(a.value)
         self.check_assign(t, param.type, a.value, None, what=f"input '{param.name}'")
 
-    # --------------------------------------------------------------- IL
-    def check_il(self, instrs):
-        labels = self.pou.labels
-        self._collect_labels(instrs, labels)
-        # first pass, silent: the current result's type at every jump, so
-        # that a label knows the type it is reached with
-        self.label_cr = {}
-        real_diags = self.diags
-        from ..diagnostics import Diagnostics
-        self.diags = Diagnostics()
-        self.il_list(instrs, None)
-        self.diags = real_diags
-        self.il_list(instrs, None)
-
-    def _collect_labels(self, instrs, labels):
-        for i in instrs:
-            if i.label:
-                up = i.label.upper()
-                if up in labels:
-                    self.error(i.label_pos, f"duplicate label '{i.label}'")
-                else:
-                    labels[up] = i
-            if i.nested:
-                for n in i.nested:
-                    if n.label:
-                        self.error(n.label_pos, "labels are not allowed inside a deferred "
-                                                "operation '( ... )'")
-
-    def il_list(self, instrs, cr):
-        for i in instrs:
-            if i.label:
-                jumped = self.label_cr.get(i.label.upper())
-                if cr is None:
-                    cr = jumped
-                elif jumped is not None:
-                    cr = _join_cr(i.label, cr, jumped)
-            i.cr_in = cr
-            cr = self.il_instr(i, cr)
-            i.cr_out = cr
-        return cr
-
-    def il_operand(self, i):
-        if i.operand is None:
-            self.error(i.pos, f"{i.op} needs an operand")
-            return ERROR
-        return self.expr(i.operand)
-
-    def need_cr(self, i, cr):
-        if cr is None:
-            self.error(i.pos, f"{i.op or i.fn}: no current result (load a value with LD first)")
-            return ERROR
-        if isinstance(cr, _Conflict):
-            self.error(i.pos, f"{i.op or i.fn}: the current result after label '{cr.label}' "
-                              f"is {cr.a.name} or {cr.b.name}, depending on the path")
-            return ERROR
-        return cr
-
-    def il_instr(self, i, cr):
-        op = i.op
-        if op == "NOP":
-            return cr
-        if op is None:
-            return self.il_function(i, cr)
-        if i.deferred:
-            inner = None
-            if i.operand is not None:
-                inner = self.expr(i.operand)
-            inner = self.il_list(i.nested, inner)
-            if inner is None:
-                self.error(i.pos, f"{op}( ... ) computes nothing")
-                return cr
-            return self.il_apply(i, op, self.need_cr(i, cr), inner, i.pos)
-        if op in ("LD", "LDN"):
-            t = self.il_operand(i)
-            if op == "LDN" and not isinstance(t, ErrorT) and not is_bit(t):
-                self.error(i.pos, f"LDN needs BOOL or a bit string, not {t.name}")
-            return t
-        if op in ("ST", "STN"):
-            cr = self.need_cr(i, cr)
-            if i.operand is None:
-                self.error(i.pos, f"{op} needs a variable")
-                return cr
-            if not isinstance(i.operand, ast.Ref):
-                self.error(i.operand.pos, f"{op} needs a variable")
-                return cr
-            tt = self.lvalue(i.operand)
-            if op == "STN" and not isinstance(cr, ErrorT) and not is_bit(cr):
-                self.error(i.pos, f"STN needs BOOL or a bit string, not {cr.name}")
-            self.check_assign(cr, tt, _CR(i.pos, cr), i.operand)
-            return cr
-        if op in ("S", "R") and isinstance(i.operand, ast.Ref):
-            sym = self.lookup(i.operand.name, i.operand.pos, report=False)
-            if isinstance(sym, Var) and isinstance(sym.type, FBType) and not i.operand.accessors:
-                return self.il_fb_input(i, op, cr)
-            cr = self.need_cr(i, cr)
-            tt = self.lvalue(i.operand)
-            if not isinstance(cr, ErrorT) and cr is not BOOL:
-                self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
-            if not isinstance(tt, ErrorT) and tt is not BOOL:
-                self.error(i.operand.pos, f"{op} needs a BOOL variable, not {tt.name}")
-            return cr
-        if op in IL_FB_INPUT_OPS:
-            return self.il_fb_input(i, op, cr)
-        if op == "NOT":
-            cr = self.need_cr(i, cr)
-            if i.operand is not None:
-                self.error(i.operand.pos, "NOT takes no operand")
-            if not isinstance(cr, ErrorT) and not is_bit(cr):
-                self.error(i.pos, f"NOT needs BOOL or a bit string, not {cr.name}")
-            return cr
-        if op in IL_LOGIC or op in IL_ARITH or op in IL_COMPARE:
-            cr = self.need_cr(i, cr)
-            t = self.il_operand(i)
-            return self.il_apply(i, op, cr, t, i.pos)
-        if op in ("JMP", "JMPC", "JMPCN"):
-            if op != "JMP":
-                cr = self.need_cr(i, cr)
-                if not isinstance(cr, ErrorT) and cr is not BOOL:
-                    self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
-            target = i.operand
-            if not isinstance(target, ast.Ref) or target.accessors:
-                self.error(i.pos, f"{op} needs a label")
-            elif target.name.upper() not in self.pou.labels:
-                self.error(target.pos, f"unknown label '{target.name}'")
-            elif cr is not None:
-                up = target.name.upper()
-                prev = self.label_cr.get(up)
-                self.label_cr[up] = cr if prev is None else _join_cr(target.name, prev, cr)
-            return cr if op != "JMP" else None
-        if op in ("RET", "RETC", "RETCN"):
-            if op != "RET":
-                cr = self.need_cr(i, cr)
-                if not isinstance(cr, ErrorT) and cr is not BOOL:
-                    self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
-            if i.operand is not None:
-                self.error(i.operand.pos, f"{op} takes no operand")
-            return None if op == "RET" else cr
-        if op in ("CAL", "CALC", "CALCN"):
-            if op != "CAL":
-                cr = self.need_cr(i, cr)
-                if not isinstance(cr, ErrorT) and cr is not BOOL:
-                    self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
-            v = self.lookup(i.fb, i.pos)
-            if v is None:
-                return cr
-            if not isinstance(v, Var) or not isinstance(v.type, FBType):
-                self.error(i.pos, f"CAL needs a function block instance; '{i.fb}' is not one")
-                return cr
-            v.used = True
-            self.pou.calls.add(v.type.pou.key)
-            args = i.args or []
-            if i.operands:
-                args = [ast.Arg(o.pos, "pos", None, o) for o in i.operands]
-            c = ast.Call(i.pos, i.fb, args)
-            c.target = v
-            self.bind_args(c, v.type.pou, is_function=False)
-            i.call = c
-            return cr
-        raise AssertionError(op)
-
-    def il_fb_input(self, i, op, cr):
-        cr = self.need_cr(i, cr)
-        if not isinstance(i.operand, ast.Ref) or i.operand.accessors:
-            self.error(i.pos, f"{op} needs a function block instance")
-            return cr
-        v = self.lookup(i.operand.name, i.operand.pos)
-        if v is None:
-            return cr
-        if not isinstance(v, Var) or not isinstance(v.type, FBType):
-            self.error(i.operand.pos, f"{op} needs a function block instance; '{i.operand.name}'"
-                                      f" is {getattr(getattr(v, 'type', None), 'name', 'not one')}")
-            return cr
-        v.used = True
-        i.operand.symbol = v
-        i.operand.type = v.type
-        param = v.type.pou.var(op)
-        if param is None or param.section != "VAR_INPUT":
-            self.error(i.pos, f"function block {v.type.name} has no input {op}")
-            return cr
-        self.check_assign(cr, param.type, _CR(i.pos, cr), None, what=f"input {op}")
-        return cr
-
-    def il_apply(self, i, op, cr, t, pos):
-        if isinstance(cr, ErrorT) or isinstance(t, ErrorT):
-            return ERROR
-        if op in IL_LOGIC:
-            if not is_bit(cr) or not is_bit(t):
-                self.error(pos, f"{op} needs BOOL or bit string operands, not "
-                                f"{(cr if not is_bit(cr) else t).name}")
-                return ERROR
-            c = common(cr, t)
-            if c is None:
-                self.error(pos, f"{op}: incompatible operands {cr.name} and {t.name}")
-                return ERROR
-            return concrete(c)
-        if op in IL_ARITH:
-            try:
-                return stdlib.resolve(IL_ARITH[op], [cr, t]).result
-            except stdlib.CallError as exc:
-                self.error(pos, f"{op}: {_operand_msg(exc, cr, t)}")
-                return ERROR
-        if op in IL_COMPARE:
-            if common(cr, t) is None:
-                self.error(pos, f"{op}: cannot compare {cr.name} with {t.name}")
-                return ERROR
-            return BOOL
-        self.error(pos, f"{op}( ... ) is not a deferrable operation")
-        return ERROR
-
-    def il_function(self, i, cr):
-        key = i.fn.upper()
-        if i.args is not None:
-            c = ast.Call(i.pos, i.fn, i.args)
-        else:
-            args = []
-            if cr is not None:
-                args.append(ast.Arg(i.pos, "pos", None, _CR(i.pos, cr)))
-            else:
-                self.error(i.pos, f"{i.fn}: no current result to pass as first argument")
-                return ERROR
-            args += [ast.Arg(o.pos, "pos", None, o) for o in i.operands]
-            c = ast.Call(i.pos, i.fn, args)
-        i.call = c
-        if key in self.p.pous or stdlib.is_std_function(key):
-            return self.call(c, statement=False)
-        self.error(i.pos, f"unknown IL operator or function '{i.fn}'")
-        return ERROR
-
-
-def _join_cr(label, a, b):
-    """The current result's type at a label reached with types a and b: the
-    same type, or an untyped literal's path taking the other path's type when
-    the literal fits it (a literal takes the type its context requires: ed.2
-    2.2.1, ed.3 6.3.3); otherwise a conflict, an error only if an instruction
-    reads the current result (LD replaces it)."""
-    if isinstance(a, _Conflict) or isinstance(b, _Conflict):
-        return a if isinstance(a, _Conflict) else b
-    if isinstance(a, ErrorT) or isinstance(b, ErrorT):
-        return a if isinstance(b, ErrorT) else b
-    if concrete(a) is concrete(b):
-        return b if isinstance(a, LiteralT) else a
-    if isinstance(a, LiteralT) and not isinstance(b, LiteralT) and literal_fits(a, b):
-        return b
-    if isinstance(b, LiteralT) and not isinstance(a, LiteralT) and literal_fits(b, a):
-        return a
-    return _Conflict(label, concrete(a), concrete(b))
-
-
-class _Conflict(ErrorT):
-    """The current result at a label reached with two different types."""
-
-    def __init__(self, label, a, b):
-        self.label = label
-        self.a = a
-        self.b = b
-
-
-class _CR(ast.Expr):
-    """The IL current result used as an expression (for type checks)."""
-
-    __slots__ = ("cr_type",)
-
-    def __init__(self, pos, t):
-        super().__init__(pos)
-        self.cr_type = t
-        self.type = t
-
-
 def _literal_value(e):
     if isinstance(e, ast.Lit) and e.kind == "int":
         return e.value
@@ -1064,14 +792,3 @@ def _tname(t):
 def _label_text(low, high):
     return f"{low!r}" + (f"..{high!r}" if high is not None else "")
 
-
-def _operand_msg(exc, lt, rt):
-    msg = str(exc)
-    if "incompatible" in msg:
-        s, d = concrete(lt), concrete(rt)
-        hint = ""
-        if isinstance(s, Elementary) and isinstance(d, Elementary) and \
-                stdlib.conversion(f"{s.name}_TO_{d.name}"):
-            hint = f": convert one operand explicitly, e.g. {s.name}_TO_{d.name}"
-        return f"incompatible operands {lt.name} and {rt.name}{hint}"
-    return msg

@@ -429,3 +429,17 @@ FUNCTION_BLOCKS = {
     "TOF": _fb("TOF", [("IN", BOOL), ("PT", TIME)], [("Q", BOOL), ("ET", TIME)]),
     **_counters(),
 }
+
+
+def operand_message(exc, lt, rt):
+    """The message for operands an operator refuses, with the conversion
+    function that would make them agree when there is one."""
+    msg = str(exc)
+    if "incompatible" in msg:
+        s, d = concrete(lt), concrete(rt)
+        hint = ""
+        if isinstance(s, Elementary) and isinstance(d, Elementary) and \
+                conversion(f"{s.name}_TO_{d.name}"):
+            hint = f": convert one operand explicitly, e.g. {s.name}_TO_{d.name}"
+        return f"incompatible operands {lt.name} and {rt.name}{hint}"
+    return msg

@@ -11,7 +11,7 @@ import re
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.body import IL_ARITH, IL_COMPARE, IL_LOGIC, _CR
+from ..checks.il import IL_ARITH, IL_COMPARE, IL_LOGIC, _CR
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT, FBType,
                             LiteralT, StringT, StructT, SubrangeT, concrete, identical)

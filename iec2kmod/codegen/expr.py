@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.body import EnumValue, _CR
+from ..checks.body import EnumValue
+from ..checks.il import _CR
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT, FBType,
                             LiteralT, StringT, StructT, SubrangeT, cat, common, concrete)

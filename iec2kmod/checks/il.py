@@ -1,0 +1,285 @@
+"""Pass 'resolve', Instruction List: the type of the current result along
+every path (labels and jumps included), each operator and operand checked
+against it.  Mixed into checks.body.BodyChecker, whose expression, call and
+assignment checks it uses."""
+
+from __future__ import annotations
+
+from .. import ast
+from . import stdlib
+from .symbols import Var
+from .types import BOOL, ERROR, ErrorT, FBType, LiteralT, common, concrete, is_bit, literal_fits
+
+IL_LOGIC = {"AND": "AND", "ANDN": "AND", "OR": "OR", "ORN": "OR", "XOR": "XOR", "XORN": "XOR"}
+IL_ARITH = {"ADD": "ADD", "SUB": "SUB", "MUL": "MUL", "DIV": "DIV", "MOD": "MOD"}
+IL_COMPARE = {"GT", "GE", "EQ", "NE", "LE", "LT"}
+IL_FB_INPUT_OPS = {"S1", "R1", "CLK", "CU", "CD", "PV", "IN", "PT", "S", "R", "LD"}
+
+
+class ILChecks:
+    def check_il(self, instrs):
+        labels = self.pou.labels
+        self._collect_labels(instrs, labels)
+        # first pass, silent: the current result's type at every jump, so
+        # that a label knows the type it is reached with
+        self.label_cr = {}
+        real_diags = self.diags
+        from ..diagnostics import Diagnostics
+        self.diags = Diagnostics()
+        self.il_list(instrs, None)
+        self.diags = real_diags
+        self.il_list(instrs, None)
+
+    def _collect_labels(self, instrs, labels):
+        for i in instrs:
+            if i.label:
+                up = i.label.upper()
+                if up in labels:
+                    self.error(i.label_pos, f"duplicate label '{i.label}'")
+                else:
+                    labels[up] = i
+            if i.nested:
+                for n in i.nested:
+                    if n.label:
+                        self.error(n.label_pos, "labels are not allowed inside a deferred "
+                                                "operation '( ... )'")
+
+    def il_list(self, instrs, cr):
+        for i in instrs:
+            if i.label:
+                jumped = self.label_cr.get(i.label.upper())
+                if cr is None:
+                    cr = jumped
+                elif jumped is not None:
+                    cr = _join_cr(i.label, cr, jumped)
+            i.cr_in = cr
+            cr = self.il_instr(i, cr)
+            i.cr_out = cr
+        return cr
+
+    def il_operand(self, i):
+        if i.operand is None:
+            self.error(i.pos, f"{i.op} needs an operand")
+            return ERROR
+        return self.expr(i.operand)
+
+    def need_cr(self, i, cr):
+        if cr is None:
+            self.error(i.pos, f"{i.op or i.fn}: no current result (load a value with LD first)")
+            return ERROR
+        if isinstance(cr, _Conflict):
+            self.error(i.pos, f"{i.op or i.fn}: the current result after label '{cr.label}' "
+                              f"is {cr.a.name} or {cr.b.name}, depending on the path")
+            return ERROR
+        return cr
+
+    def il_instr(self, i, cr):
+        op = i.op
+        if op == "NOP":
+            return cr
+        if op is None:
+            return self.il_function(i, cr)
+        if i.deferred:
+            inner = None
+            if i.operand is not None:
+                inner = self.expr(i.operand)
+            inner = self.il_list(i.nested, inner)
+            if inner is None:
+                self.error(i.pos, f"{op}( ... ) computes nothing")
+                return cr
+            return self.il_apply(i, op, self.need_cr(i, cr), inner, i.pos)
+        if op in ("LD", "LDN"):
+            t = self.il_operand(i)
+            if op == "LDN" and not isinstance(t, ErrorT) and not is_bit(t):
+                self.error(i.pos, f"LDN needs BOOL or a bit string, not {t.name}")
+            return t
+        if op in ("ST", "STN"):
+            cr = self.need_cr(i, cr)
+            if i.operand is None:
+                self.error(i.pos, f"{op} needs a variable")
+                return cr
+            if not isinstance(i.operand, ast.Ref):
+                self.error(i.operand.pos, f"{op} needs a variable")
+                return cr
+            tt = self.lvalue(i.operand)
+            if op == "STN" and not isinstance(cr, ErrorT) and not is_bit(cr):
+                self.error(i.pos, f"STN needs BOOL or a bit string, not {cr.name}")
+            self.check_assign(cr, tt, _CR(i.pos, cr), i.operand)
+            return cr
+        if op in ("S", "R") and isinstance(i.operand, ast.Ref):
+            sym = self.lookup(i.operand.name, i.operand.pos, report=False)
+            if isinstance(sym, Var) and isinstance(sym.type, FBType) and not i.operand.accessors:
+                return self.il_fb_input(i, op, cr)
+            cr = self.need_cr(i, cr)
+            tt = self.lvalue(i.operand)
+            if not isinstance(cr, ErrorT) and cr is not BOOL:
+                self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
+            if not isinstance(tt, ErrorT) and tt is not BOOL:
+                self.error(i.operand.pos, f"{op} needs a BOOL variable, not {tt.name}")
+            return cr
+        if op in IL_FB_INPUT_OPS:
+            return self.il_fb_input(i, op, cr)
+        if op == "NOT":
+            cr = self.need_cr(i, cr)
+            if i.operand is not None:
+                self.error(i.operand.pos, "NOT takes no operand")
+            if not isinstance(cr, ErrorT) and not is_bit(cr):
+                self.error(i.pos, f"NOT needs BOOL or a bit string, not {cr.name}")
+            return cr
+        if op in IL_LOGIC or op in IL_ARITH or op in IL_COMPARE:
+            cr = self.need_cr(i, cr)
+            t = self.il_operand(i)
+            return self.il_apply(i, op, cr, t, i.pos)
+        if op in ("JMP", "JMPC", "JMPCN"):
+            if op != "JMP":
+                cr = self.need_cr(i, cr)
+                if not isinstance(cr, ErrorT) and cr is not BOOL:
+                    self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
+            target = i.operand
+            if not isinstance(target, ast.Ref) or target.accessors:
+                self.error(i.pos, f"{op} needs a label")
+            elif target.name.upper() not in self.pou.labels:
+                self.error(target.pos, f"unknown label '{target.name}'")
+            elif cr is not None:
+                up = target.name.upper()
+                prev = self.label_cr.get(up)
+                self.label_cr[up] = cr if prev is None else _join_cr(target.name, prev, cr)
+            return cr if op != "JMP" else None
+        if op in ("RET", "RETC", "RETCN"):
+            if op != "RET":
+                cr = self.need_cr(i, cr)
+                if not isinstance(cr, ErrorT) and cr is not BOOL:
+                    self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
+            if i.operand is not None:
+                self.error(i.operand.pos, f"{op} takes no operand")
+            return None if op == "RET" else cr
+        if op in ("CAL", "CALC", "CALCN"):
+            if op != "CAL":
+                cr = self.need_cr(i, cr)
+                if not isinstance(cr, ErrorT) and cr is not BOOL:
+                    self.error(i.pos, f"{op} needs a BOOL current result, not {cr.name}")
+            v = self.lookup(i.fb, i.pos)
+            if v is None:
+                return cr
+            if not isinstance(v, Var) or not isinstance(v.type, FBType):
+                self.error(i.pos, f"CAL needs a function block instance; '{i.fb}' is not one")
+                return cr
+            v.used = True
+            self.pou.calls.add(v.type.pou.key)
+            args = i.args or []
+            if i.operands:
+                args = [ast.Arg(o.pos, "pos", None, o) for o in i.operands]
+            c = ast.Call(i.pos, i.fb, args)
+            c.target = v
+            self.bind_args(c, v.type.pou, is_function=False)
+            i.call = c
+            return cr
+        raise AssertionError(op)
+
+    def il_fb_input(self, i, op, cr):
+        cr = self.need_cr(i, cr)
+        if not isinstance(i.operand, ast.Ref) or i.operand.accessors:
+            self.error(i.pos, f"{op} needs a function block instance")
+            return cr
+        v = self.lookup(i.operand.name, i.operand.pos)
+        if v is None:
+            return cr
+        if not isinstance(v, Var) or not isinstance(v.type, FBType):
+            self.error(i.operand.pos, f"{op} needs a function block instance; '{i.operand.name}'"
+                                      f" is {getattr(getattr(v, 'type', None), 'name', 'not one')}")
+            return cr
+        v.used = True
+        i.operand.symbol = v
+        i.operand.type = v.type
+        param = v.type.pou.var(op)
+        if param is None or param.section != "VAR_INPUT":
+            self.error(i.pos, f"function block {v.type.name} has no input {op}")
+            return cr
+        self.check_assign(cr, param.type, _CR(i.pos, cr), None, what=f"input {op}")
+        return cr
+
+    def il_apply(self, i, op, cr, t, pos):
+        if isinstance(cr, ErrorT) or isinstance(t, ErrorT):
+            return ERROR
+        if op in IL_LOGIC:
+            if not is_bit(cr) or not is_bit(t):
+                self.error(pos, f"{op} needs BOOL or bit string operands, not "
+                                f"{(cr if not is_bit(cr) else t).name}")
+                return ERROR
+            c = common(cr, t)
+            if c is None:
+                self.error(pos, f"{op}: incompatible operands {cr.name} and {t.name}")
+                return ERROR
+            return concrete(c)
+        if op in IL_ARITH:
+            try:
+                return stdlib.resolve(IL_ARITH[op], [cr, t]).result
+            except stdlib.CallError as exc:
+                self.error(pos, f"{op}: {stdlib.operand_message(exc, cr, t)}")
+                return ERROR
+        if op in IL_COMPARE:
+            if common(cr, t) is None:
+                self.error(pos, f"{op}: cannot compare {cr.name} with {t.name}")
+                return ERROR
+            return BOOL
+        self.error(pos, f"{op}( ... ) is not a deferrable operation")
+        return ERROR
+
+    def il_function(self, i, cr):
+        key = i.fn.upper()
+        if i.args is not None:
+            c = ast.Call(i.pos, i.fn, i.args)
+        else:
+            args = []
+            if cr is not None:
+                args.append(ast.Arg(i.pos, "pos", None, _CR(i.pos, cr)))
+            else:
+                self.error(i.pos, f"{i.fn}: no current result to pass as first argument")
+                return ERROR
+            args += [ast.Arg(o.pos, "pos", None, o) for o in i.operands]
+            c = ast.Call(i.pos, i.fn, args)
+        i.call = c
+        if key in self.p.pous or stdlib.is_std_function(key):
+            return self.call(c, statement=False)
+        self.error(i.pos, f"unknown IL operator or function '{i.fn}'")
+        return ERROR
+
+
+def _join_cr(label, a, b):
+    """The current result's type at a label reached with types a and b: the
+    same type, or an untyped literal's path taking the other path's type when
+    the literal fits it (a literal takes the type its context requires: ed.2
+    2.2.1, ed.3 6.3.3); otherwise a conflict, an error only if an instruction
+    reads the current result (LD replaces it)."""
+    if isinstance(a, _Conflict) or isinstance(b, _Conflict):
+        return a if isinstance(a, _Conflict) else b
+    if isinstance(a, ErrorT) or isinstance(b, ErrorT):
+        return a if isinstance(b, ErrorT) else b
+    if concrete(a) is concrete(b):
+        return b if isinstance(a, LiteralT) else a
+    if isinstance(a, LiteralT) and not isinstance(b, LiteralT) and literal_fits(a, b):
+        return b
+    if isinstance(b, LiteralT) and not isinstance(a, LiteralT) and literal_fits(b, a):
+        return a
+    return _Conflict(label, concrete(a), concrete(b))
+
+
+class _Conflict(ErrorT):
+    """The current result at a label reached with two different types."""
+
+    def __init__(self, label, a, b):
+        self.label = label
+        self.a = a
+        self.b = b
+
+
+class _CR(ast.Expr):
+    """The IL current result used as an expression (for type checks)."""
+
+    __slots__ = ("cr_type",)
+
+    def __init__(self, pos, t):
+        super().__init__(pos)
+        self.cr_type = t
+        self.type = t
+
