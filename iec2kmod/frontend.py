@@ -1,6 +1,7 @@
 """The front end as a pipeline of named passes:
 
-    parse       files -> iec2kmod.ast units (textX), in parallel over files
+    parse       files -> iec2kmod.ast units (textX; the common ST statements by
+                the hand-written iec2kmod/stfast.py), in parallel over files
     declare     build the symbol tables: types, POUs, configurations
     resolve     name resolution and type checking of every POU body
     configure   configurations, resources, tasks, program instances
