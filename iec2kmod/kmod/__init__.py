@@ -301,7 +301,7 @@ def _generate_tree(project, out: Path, selective=None) -> dict:
         source_hash=source_hash, iface_hash=iface_hash, header=gen.header_name,
         image_header="iec_image.h", slots=slots, vars=cfg_vars, nevents=len(single_events),
         init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init)
-    runtime = ["iec_config_rt.c", "iec_ctl.c"] + _runtime_used([main, image_h], False)
+    runtime = ["iec_config_rt.c", "iec_ctl.c", "iec_vars.c"] + _runtime_used([main, image_h], False)
     _write_module(out, config_mod, {"main.c": main},
                   ["main.o"] + [f[:-2] + ".o" for f in runtime], [], runtime=runtime)
 

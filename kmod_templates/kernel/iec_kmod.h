@@ -5,7 +5,8 @@
  *   configuration module  the global image, the process image, the GFT,
  *                         the lock that makes copy-in/copy-out atomic,
  *                         sysfs and generic netlink (iec_config_rt.c,
- *                         iec_ctl.c); exports the iec2kmod_* functions
+ *                         iec_ctl.c, iec_vars.c); exports the iec2kmod_*
+ *                         functions
  *   resource module       program instances (their state), the resource's
  *                         globals, one kthread per TASK (iec_resource_rt.c)
  *   program-type module   the body of one program type and everything it
@@ -186,7 +187,7 @@ struct iec_task {
 	u32 late;			/* overrunning cycles in a row */
 
 	/*
-	 * Manager access to the task's program instances (iec_ctl.c).  The
+	 * Manager access to the task's program instances (iec_vars.c).  The
 	 * task holds var_lock briefly at both ends of a cycle
 	 * (iec2kmod_cycle_begin/end): forced values are written there, and
 	 * in_cycle tells the manager whether it may read or write the
@@ -288,7 +289,7 @@ unsigned long iec2kmod_wait_bound(s64 interval_ns);
 void iec2kmod_task_idle(struct iec_task *t);
 
 /*
- * Manager access (iec_ctl.c), called by the resource runtime:
+ * Manager access (iec_vars.c), called by the resource runtime:
  *  - iec2kmod_cycle_begin/end at both ends of every task cycle (they take
  *    the task's var_lock and write its forced instance variables);
  *  - iec2kmod_force_globals from a task's copy-out, under the image lock,

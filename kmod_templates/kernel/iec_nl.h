@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: GPL-2.0-only OR MIT */
 /*
  * iec_nl.h - the generic netlink protocol of the configuration module
- * (family IEC_NL_FAMILY, implemented in iec_ctl.c).  plc-manager mirrors
- * these numbers in manager/netlink.py; tests compare both.
+ * (family IEC_NL_FAMILY, implemented in iec_ctl.c and iec_vars.c).
+ * plc-manager mirrors these numbers in manager/netlink.py; tests compare
+ * both.
  *
  * One attribute space for the whole family: every nest (a resource, a
  * task, a slot, a variable) uses the same numbers.  Every command needs
