@@ -26,7 +26,13 @@ interpreter's storage layout and initial values):
     location and elapsed time);
   * inputs (free: any value of their type in every cycle, constrained only
     by --assume and {assume} pragmas): located %I addresses connected to
-    programs, globals no cycle writes, program inputs connected to nothing.
+    programs, globals no cycle writes, program inputs connected to nothing,
+    and the variables of READ_WRITE access paths (configuration and program
+    VAR_ACCESS) even when cycles write them: an HMI may write them between
+    any two cycles, so the next cycle reads whatever it wrote (a path that
+    reaches what a trace cannot write -- an FB's output -- is refused).
+    Writes by `plc-manager set/force` to other variables are outside the
+    proof: they bypass the program's declared interface.
     An enumeration or subrange input ranges over its declared values; a REAL
     input over the finite values (an input trace cannot write NaN or an
     infinity).  Variables no cycle writes and no one else may write are
@@ -202,10 +208,17 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
         if p.kind == "property":
             post_props.append((name, evaluate(p, pou, inst, e)))
     # classify the leaves
+    outside = _written_from_outside(sym)
     state, inputs, consts = [], [], []
     for leaf in sym.leaves:
         post = leaf.c[leaf.k]
-        if z3.is_expr(post) and post.eq(leaf.var):
+        if id(leaf) in outside:
+            # whatever the cycle leaves there, the next cycle reads what
+            # the outside wrote: a free input of every step
+            leaf.outside = True
+            leaf.role = "input"
+            inputs.append(leaf)
+        elif z3.is_expr(post) and post.eq(leaf.var):
             if leaf.candidate:
                 leaf.role = "input"
                 inputs.append(leaf)
@@ -240,6 +253,88 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     return out
 
 
+def _access_decl(blocks, name):
+    """The position of the access path declaration NAME among VAR_ACCESS blocks."""
+    for b in blocks or ():
+        if getattr(b, "kind", "") != "VAR_ACCESS":
+            continue
+        for d in b.decls:
+            if d.name.upper() == name.upper():
+                return d.pos
+    return None
+
+
+def _written_from_outside(sym):
+    """{id(Leaf)} of the variables an HMI may write between two cycles:
+    those named by a READ_WRITE access path, of the configuration
+    (VAR_ACCESS) or of a program (its VAR_ACCESS, for every instance).
+    Such a variable is a free input of every step, even when cycles write
+    it: a property proved with it holds whatever the HMI writes, whenever.
+    A path whose variables a trace cannot write (an FB instance's hidden
+    state, an output of an FB inside a program) is refused: a
+    counterexample through it could not be replayed."""
+    m = sym.machine
+    cfg = sym.cfg
+    writable = {e.path.upper() for e in m.table() if e.writable}
+    by_cell = {}
+    for leaf in sym.leaves:
+        by_cell.setdefault(id(leaf.c), []).append(leaf)
+    wanted = []       # (leaves, src, pos, access name)
+    cfg_blocks = getattr(cfg.node, "access", None)
+    for name, path, target, direction in cfg.access:
+        if direction != "READ_WRITE" or target is None:
+            continue
+        pos = _access_decl(cfg_blocks, name)
+        if path.startswith("%"):
+            hits = [lf for lf in sym.leaves if lf.keys == ("%", path.upper())]
+        elif id(target) in m.cells:
+            c, k = m.cells[id(target)]
+            root = sym._root_of(c)
+            hits = [lf for lf in sym.leaves if lf.keys[:2] == (root, k)]
+        else:
+            hits = _leaves_under(sym, _instance_path(m, cfg, path))
+        wanted.append((hits, target, cfg.src, pos, name))
+    for (ipath, _inst), pi in zip(m.instances, sym.programs):
+        for name, path, v, direction in pi.pou.access:
+            if direction != "READ_WRITE":
+                continue
+            pos = _access_decl(getattr(pi.pou.node, "blocks", None), name)
+            wanted.append((_leaves_under(sym, f"{ipath}.{path}"), v, pi.pou.src, pos, name))
+    out = set()
+    for hits, target, src, pos, name in wanted:
+        if not hits:
+            if isinstance(concrete(target.type), StringT):
+                continue    # strings are not encoded (a check reading one is refused)
+            raise Refuse(src, pos, f"verify: the READ_WRITE access path '{name}' names no "
+                                   "variable of the encoding")
+        for leaf in hits:
+            if leaf.hidden or leaf.name.upper() not in writable:
+                raise Refuse(src, pos, f"verify: the READ_WRITE access path '{name}' reaches "
+                                       f"{leaf.name}, which an input trace cannot write (an "
+                                       "FB's output or internal state): declare it READ_ONLY")
+            out.add(id(leaf))
+    return out
+
+
+def _instance_path(m, cfg, path):
+    """RES.INST.VAR... (or INST.VAR... with one resource) as the
+    interpreter names it."""
+    names = [p for p, _ in m.instances]
+    up = path.upper()
+    for p in names:
+        if up.startswith(p.upper() + "."):
+            return path
+    if len(cfg.resources) == 1 and cfg.resources[0].node.name:
+        return f"{cfg.resources[0].name}.{path}"
+    return path
+
+
+def _leaves_under(sym, prefix):
+    up = prefix.upper()
+    return [lf for lf in sym.leaves
+            if lf.name.upper() == up or lf.name.upper().startswith((up + ".", up + "["))]
+
+
 def fix_all(t, pairs):
     return z3.substitute(t, *pairs) if pairs else t
 
@@ -258,4 +353,4 @@ def verify(project, cli_props=(), cli_assumes=(), depth=20, instance=None, diags
     return out
 
 
-from ..checks.types import BOOL as _BOOL  # noqa: E402
+from ..checks.types import BOOL as _BOOL, StringT, concrete  # noqa: E402

@@ -5,7 +5,9 @@ violation before it is reported.
 
 Cycle k (1-based) of the task runs at (k-1) * period; the inputs of cycle k
 are written at that time, before the cycle runs, so `sim --inputs` applies
-them exactly when the verifier's cycle k reads them."""
+them exactly when the verifier's cycle k reads them.  A variable of a
+READ_WRITE access path is written before every cycle (the value the
+verifier chose, over whatever the previous cycle left there)."""
 
 from __future__ import annotations
 
@@ -36,7 +38,11 @@ def input_values(out, result):
                 continue
             name = f"{var}@b{k}"
             if name not in given:
-                vals[leaf.name] = leaf.init
+                if not leaf.outside:
+                    vals[leaf.name] = leaf.init
+                # a variable written from outside (READ_WRITE access path)
+                # the check does not read: not written, the cycles' own
+                # value stays (one of the behaviours the proof covers)
                 continue
             term = model.eval(z3.Const(name, var.sort()), model_completion=True)
             vals[leaf.name] = py_value(term, leaf.type)
@@ -74,8 +80,8 @@ def write_trace(out, result, path):
         t = (k - 1) * period
         for name in sorted(vals):
             v = vals[name]
-            if name in last and _same(last[name], v):
-                continue
+            if name in last and _same(last[name], v) and not leaves[name].outside:
+                continue    # written from outside: again, over what the cycle wrote
             last[name] = v
             rows.append((f"{t}ns", name, format_value(leaves[name], v)))
     # csv quoting: an element of a multi-dimensional array is 'a[0,5]'

@@ -37,6 +37,7 @@ class Leaf:
     candidate: bool = False   # may be an input (global, %I, unconnected program input)
     hidden: bool = False
     keys: tuple = ()     # (root name, keys...) to find it in another Machine
+    outside: bool = False     # written between cycles (a READ_WRITE access path)
 
 
 @dataclass

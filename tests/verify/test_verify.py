@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import random
+import re
 import textwrap
 from pathlib import Path
 
@@ -99,6 +100,70 @@ def test_violation_replays_in_sim(tmp_path, capsys):
         if int(row[0]) <= 40_000_000:
             last = dict(zip(head, row))
     assert int(last["R.c.n"]) == 5          # the property n < 5 is FALSE after cycle 5
+
+
+HMI = """
+    PROGRAM Ctr
+    VAR_OUTPUT n : INT; END_VAR
+    VAR limit : INT := 10; tmr : TON; END_VAR
+    {verify bounded: n <= 10}
+    {ACCESS}
+    IF n < limit THEN n := n + 1; END_IF;
+    tmr(IN := TRUE, PT := T#1s);
+    END_PROGRAM
+    CONFIGURATION C
+        RESOURCE R ON CPU0
+            TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+            PROGRAM c WITH t : Ctr;
+        END_RESOURCE
+        {CFG_ACCESS}
+    END_CONFIGURATION
+"""
+
+
+def _hmi(tmp_path, name, access="", cfg_access=""):
+    text = HMI.replace("{ACCESS}", access).replace("{CFG_ACCESS}", cfg_access)
+    d = tmp_path / name
+    d.mkdir()
+    (d / "p.st").write_text(textwrap.dedent(text))
+    return d
+
+
+def test_read_write_access_paths_are_written_between_cycles(tmp_path, capsys):
+    """A variable of a READ_WRITE access path is what the HMI wrote last,
+    whenever it wrote it: the cycle's own invariant (n stops at 10) does
+    not hold over it, READ_ONLY does not change the verdict, and the
+    counterexample (the HMI's writes in the trace) replays in sim."""
+    plain = _hmi(tmp_path, "plain")
+    rc, out, err = verify(capsys, plain, "--cex-dir", tmp_path)
+    assert rc == 0 and re.search(r"R\.c\.bounded +proved", out), out + err
+    ro = _hmi(tmp_path, "ro", cfg_access="VAR_ACCESS N : R.c.n : INT READ_ONLY; END_VAR")
+    rc, out, err = verify(capsys, ro, "--cex-dir", tmp_path)
+    assert rc == 0 and re.search(r"R\.c\.bounded +proved", out), out + err
+    for name, kw in (("cfg", {"cfg_access": "VAR_ACCESS N : R.c.n : INT READ_WRITE; END_VAR"}),
+                     ("prg", {"access": "VAR_ACCESS N_HMI : n : INT READ_WRITE; END_VAR"}),
+                     ("lim", {"access": "VAR_ACCESS L_HMI : limit : INT READ_WRITE; END_VAR"})):
+        proj = _hmi(tmp_path, name, **kw)
+        cex = tmp_path / f"cex_{name}"
+        rc, out, err = verify(capsys, proj, "--cex-dir", cex)
+        hit = re.search(r"R\.c\.bounded +violated at cycle (\d+)", out)
+        assert rc == 3 and hit, (name, out + err)
+        k = int(hit.group(1))
+        traces = sorted(cex.glob("*bounded*.csv"))
+        assert len(traces) == 1, sorted(p.name for p in cex.iterdir())
+        trace = traces[0]
+        rc, err, head, rows = sim_values(capsys, proj, trace, k, ["R.c.n"], tmp_path)
+        assert rc == 0, err
+        last = {}
+        for row in rows:
+            if int(row[0]) <= (k - 1) * 10_000_000:
+                last = dict(zip(head, row))
+        assert int(last["R.c.n"]) > 10, (name, rows)
+    # an FB's output cannot be written by a trace: refused, naming the path
+    bad = _hmi(tmp_path, "bad", access="VAR_ACCESS Q_HMI : tmr.Q : BOOL READ_WRITE; END_VAR")
+    rc, out, err = verify(capsys, bad, "--cex-dir", tmp_path)
+    assert rc != 0 and rc != 3, out + err
+    assert "access path 'Q_HMI'" in err and "READ_ONLY" in err, err
 
 
 def test_runtime_error_is_a_violation(tmp_path, capsys):
