@@ -149,6 +149,8 @@ class BlockInfo:
     inouts: list = field(default_factory=list)     # [Var] a FB's VAR_IN_OUT
     loops: bool = False
     layout: bool = False                  # instances carry the selective state
+    idempotent: bool = False              # rule 8: one evaluation settles
+    idem_note: str = ""                   # why not idempotent
 
     @property
     def skippable(self):
@@ -177,9 +179,11 @@ class SelectivePlan:
                 self.blocks[pou.key] = self._analyse(pou)
         for b in self.blocks.values():
             b.layout = b.skippable and self._type_wanted(b.pou)
+        self._prover = None
         for b in self.blocks.values():
             if b.layout:
-                b.written = self._written(b.pou)
+                b.idempotent, b.idem_note = self._idempotent(b)
+                b.written = [] if b.idempotent else self._written(b.pou)
 
     # ------------------------------------------------------------ pragmas
     def _read_pragmas(self):
@@ -332,6 +336,31 @@ class SelectivePlan:
                 out.append((f"h_{n}_prev", "iec_bool"))
         return out
 
+    def _idempotent(self, b):
+        """Rule 8: (proved idempotent, why not)."""
+        pou = b.pou
+        if b.loops:
+            return False, "a loop (the loop budget of a skip)"
+        closure, _ = self._closure(pou)
+        for p in closure:
+            if p.node is None or getattr(p, "sfc", None) is not None:
+                return False, f"{p.name}: no body to encode"
+        exts = [v for _, v in b.exts if v.section == "VAR_EXTERNAL"]
+        for _, v in b.exts:
+            if self._ext_written(pou, v):
+                return False, f"writes {v.name}"
+        inouts = [v for v in pou.vars.values() if v.section == "VAR_IN_OUT"]
+        for v in inouts:
+            if pou.kind == "FUNCTION_BLOCK" and self.param_written(pou, v):
+                return False, f"writes through {v.name}"
+        if inouts and any(writes(pou.node.body or [], v, self.param_written)
+                          for v in pou.inputs):
+            return False, "an in-out beside a body that writes its inputs"
+        if self._prover is None:
+            from ..verify.idempotent import Prover
+            self._prover = Prover(self.project)
+        return self._prover.idempotent(pou, exts, closure)
+
     # ---------------------------------------------------------- decisions
     def block(self, pou):
         return self.blocks.get(pou.key)
@@ -384,7 +413,8 @@ class SelectivePlan:
         out = []
         for key in sorted(self.blocks):
             b = self.blocks[key]
-            what = "selective" if b.layout else (f"always evaluated: {b.reason}" if b.reason
+            what = ("selective, idempotent" if b.idempotent else
+                    f"selective (confirm run: {b.idem_note})") if b.layout else (f"always evaluated: {b.reason}" if b.reason
                                                  else "always evaluated: not marked")
             out.append(f"{b.pou.kind.lower()} {b.pou.name}: {what}")
         return out
@@ -463,8 +493,77 @@ class SelectivePlan:
         out.append("\tif (" + " &&\n\t    ".join(cond) + ") {")
         if b.loops:
             out.append(f"\t\tctx->loop_budget -= {s}.cost;")
+        if b.idempotent:
+            # evaluations in a row with changed arguments (rule 8)
+            out += [f"\t\t{s}.fast = 0;", f"\t\t{s}.level = 0;"]
         out += ["\t\tctx->sel_skipped++;", "\t\treturn 0;", "\t}",
                 "\treturn sel_changed ? 1 : 2;", "}", ""]
+        if b.idempotent:
+            out += self._idempotent_eval(b, prefix, st, span)
+        else:
+            out += self._confirm_eval(b, prefix, st, span, after)
+        out += self._run_plain(b, prefix, st)
+        return out
+
+    def _copies(self, b, span):
+        s = "self->sel"
+        out = []
+        if span:
+            out.append(f"\tiec_memcpy(&{s}.i, self, {span});")
+        for v in b.inouts:
+            n = v.name.lower()
+            out.append(f"\t{s}.p_{n} = self->{N.var(v.name)};")
+            out.append(f"\tiec_memcpy(&{s}.d_{n}, self->{N.var(v.name)}, sizeof({s}.d_{n}));")
+        for k, (c, v) in enumerate(b.exts):
+            out.append(f"\tiec_memcpy(&{s}.e{k}, self->{c}, sizeof({s}.e{k}));")
+        return out
+
+    def _busy(self, ind):
+        s = "self->sel"
+        return [f"{ind}/* the arguments changed at every evaluation for a while:",
+                f"{ind} * plain runs, twice as many as last time if they kept",
+                f"{ind} * changing after the last plain runs too */",
+                f"{ind}{s}.busy_end = ctx->sel_cycle + 1 + (IEC_SEL_BUSY << {s}.level);",
+                f"{ind}if ({s}.level < IEC_SEL_BUSY_LEVELS)",
+                f"{ind}\t{s}.level++;",
+                f"{ind}{s}.fast = 0;"]
+
+    def _idempotent_eval(self, b, prefix, st, span):
+        """Rule 8: the type is proved idempotent, an evaluation without
+        fault settles it by itself (no written state, no confirm run)."""
+        s = "self->sel"
+        out = ["static __attribute__((__noinline__, __unused__)) void",
+               f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why, bool fb)", "{",
+               "\tbool sel_settle, sel_saved;", "",
+               "\tctx->sel_evaluated++;",
+               "\t/* proved idempotent: an evaluation without fault settles, the",
+               "\t * next one on the same arguments would change nothing",
+               "\t * (selective.py, rule 8) */",
+               f"\tsel_settle = {s}.epoch == ctx->sel_epoch;",
+               f"\t{s}.epoch = ctx->sel_epoch;",
+               f"\t{s}.tok = 0;"]
+        out += self._copies(b, span)
+        out += ["\tif (why == 2) {",
+                f"\t\t{s}.fast = 0;",
+                f"\t\t{s}.level = 0;",
+                f"\t}} else if (++{s}.fast >= IEC_SEL_BUSY_AFTER) {{"]
+        out += self._busy("\t\t")
+        out += ["\t\t/* plain runs follow: not settled */",
+                "\t\tsel_settle = false;",
+                "\t}",
+                "\tsel_saved = ctx->sel_changed;",
+                f"\t{prefix}_body(self, ctx);",
+                "\tif (ctx->fault != IEC_FAULT_NONE)",
+                "\t\treturn;",
+                "\tif (sel_settle)",
+                f"\t\t{s}.tok = IEC_SEL_TOKEN;",
+                f"\tctx->sel_changed = sel_saved || fb || {s}.tok != IEC_SEL_TOKEN;",
+                "}", ""]
+        return out
+
+    def _confirm_eval(self, b, prefix, st, span, after):
+        s = "self->sel"
+        out = []
         # the evaluation
         out += ["static __attribute__((__noinline__, __unused__)) void",
                 f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why, bool fb)", "{",
@@ -481,14 +580,7 @@ class SelectivePlan:
                 f"\tsel_settle = {s}.epoch == ctx->sel_epoch;",
                 f"\t{s}.epoch = ctx->sel_epoch;",
                 f"\t{s}.tok = 0;"]
-        if span:
-            out.append(f"\tiec_memcpy(&{s}.i, self, {span});")
-        for v in b.inouts:
-            n = v.name.lower()
-            out.append(f"\t{s}.p_{n} = self->{N.var(v.name)};")
-            out.append(f"\tiec_memcpy(&{s}.d_{n}, self->{N.var(v.name)}, sizeof({s}.d_{n}));")
-        for k, (c, v) in enumerate(b.exts):
-            out.append(f"\tiec_memcpy(&{s}.e{k}, self->{c}, sizeof({s}.e{k}));")
+        out += self._copies(b, span)
         out.append("\tif (sel_full) {")
         for m, t in b.written:
             out.append("\t\t" + _copy(f"{s}.w_{m}", f"self->{m}", t))
@@ -496,15 +588,9 @@ class SelectivePlan:
                 "\t\tsel_plain = ctx->sel_plain;",
                 f"\t\t{s}.fast = 0;",
                 f"\t\t{s}.level = 0;",
-                f"\t}} else if (++{s}.fast >= IEC_SEL_BUSY_AFTER) {{",
-                "\t\t/* the arguments changed at every evaluation for a while:",
-                "\t\t * plain runs, twice as many as last time if they kept",
-                "\t\t * changing after the last plain runs too */",
-                f"\t\t{s}.busy_end = ctx->sel_cycle + 1 + (IEC_SEL_BUSY << {s}.level);",
-                f"\t\tif ({s}.level < IEC_SEL_BUSY_LEVELS)",
-                f"\t\t\t{s}.level++;",
-                f"\t\t{s}.fast = 0;",
-                "\t}"]
+                f"\t}} else if (++{s}.fast >= IEC_SEL_BUSY_AFTER) {{"]
+        out += self._busy("\t\t")
+        out += ["\t}"]
         if b.loops:
             out.append("\tsel_budget = ctx->loop_budget;")
         out += [f"\t{prefix}_body(self, ctx);",
@@ -525,6 +611,12 @@ class SelectivePlan:
                 "\t * whether this block would be evaluated again */",
                 f"\tctx->sel_changed = sel_saved || fb || {s}.tok != IEC_SEL_TOKEN;",
                 "}", ""]
+        return out
+
+    def _run_plain(self, b, prefix, st):
+        pou = b.pou
+        s = "self->sel"
+        out = []
         out += ["/* arguments that kept changing: evaluated plainly for a while, then",
                 " * checked again (the next check makes a fast or a full evaluation,",
                 " * and the shadows are taken anew) */",

@@ -455,7 +455,8 @@ def test_written_state_leaves_out_what_is_assigned_before_it_is_read(tmp_path):
     """The written state of a block (rule 4) leaves out the outputs and
     internals it assigns whole on every path before anything reads them
     (through IF and CASE with an ELSE) and keeps those read first on some
-    path; the skipped runs stay invisible."""
+    path; the skipped runs stay invisible.  (first counts up: Dev is not
+    idempotent, rule 8, so it has a written state at all.)"""
     text = """
 FUNCTION_BLOCK Dev
 VAR_INPUT a, b : BOOL; n : INT; END_VAR
@@ -464,7 +465,7 @@ VAR tmp : INT; END_VAR
 tmp := n * 2;
 IF a THEN st := 1; ELSIF b THEN st := 2; ELSE st := 0; END_IF;
 CASE n OF 1: w := tmp; ELSE w := st; END_CASE;
-IF a THEN first := 5; END_IF;
+IF a THEN first := first + 5; END_IF;
 IF first > latch THEN latch := first; END_IF;
 END_FUNCTION_BLOCK
 
