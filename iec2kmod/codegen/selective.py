@@ -182,8 +182,8 @@ class SelectivePlan:
         self._prover = None
         for b in self.blocks.values():
             if b.layout:
-                b.idempotent, b.idem_note = self._idempotent(b)
-                b.written = [] if b.idempotent else self._written(b.pou)
+                b.written = self._written(b.pou)
+                self._settle(b)
 
     # ------------------------------------------------------------ pragmas
     def _read_pragmas(self):
@@ -336,30 +336,61 @@ class SelectivePlan:
                 out.append((f"h_{n}_prev", "iec_bool"))
         return out
 
-    def _idempotent(self, b):
-        """Rule 8: (proved idempotent, why not)."""
+    def _settle(self, b):
+        """Rule 8: idempotent (no written state, no confirm run), or the
+        part of the written state a full evaluation must compare."""
         pou = b.pou
-        if b.loops:
-            return False, "a loop (the loop budget of a skip)"
-        closure, _ = self._closure(pou)
-        for p in closure:
-            if p.node is None or getattr(p, "sfc", None) is not None:
-                return False, f"{p.name}: no body to encode"
-        exts = [v for _, v in b.exts if v.section == "VAR_EXTERNAL"]
-        for _, v in b.exts:
-            if self._ext_written(pou, v):
-                return False, f"writes {v.name}"
-        inouts = [v for v in pou.vars.values() if v.section == "VAR_IN_OUT"]
-        for v in inouts:
-            if pou.kind == "FUNCTION_BLOCK" and self.param_written(pou, v):
-                return False, f"writes through {v.name}"
-        if inouts and any(writes(pou.node.body or [], v, self.param_written)
-                          for v in pou.inputs):
-            return False, "an in-out beside a body that writes its inputs"
+        why = self._settle_refused(b)
+        if why:
+            b.idem_note = why
+            return
         if self._prover is None:
             from ..verify.idempotent import Prover
             self._prover = Prover(self.project)
-        return self._prover.idempotent(pou, exts, closure)
+        closure, _ = self._closure(pou)
+        exts = [v for _, v in b.exts if v.section == "VAR_EXTERNAL"]
+        groups = []
+        nested = any(p is not pou and p.kind != "FUNCTION" for p in closure)
+        if not nested:
+            # a nested user block reports (rule 4) instead of being compared:
+            # only a type without one has its comparison narrowed
+            names = {N.var(v.name): v.name for v in pou.vars.values()}
+            for member, _ in b.written:
+                if member in names:
+                    groups.append([f"$self.{names[member]}"])
+                elif member.startswith("h_") and member.endswith("_prev"):
+                    v = next(v for v in pou.inputs if f"h_{v.name.lower()}_prev" == member)
+                    groups.append([f"$self.${v.name}"])
+                else:
+                    groups.append([])     # the edge an input saw: set by every call
+        keep, note = self._prover.settle_set(pou, exts, closure, groups)
+        if keep == []:
+            b.idempotent = True
+            b.written = []
+            return
+        b.idem_note = note
+        if keep is not None and groups:
+            b.written = [b.written[i] for i in keep]
+
+    def _settle_refused(self, b):
+        pou = b.pou
+        if b.loops:
+            return "a loop (the loop budget of a skip)"
+        closure, _ = self._closure(pou)
+        for p in closure:
+            if p.node is None or getattr(p, "sfc", None) is not None:
+                return f"{p.name}: no body to encode"
+        for _, v in b.exts:
+            if self._ext_written(pou, v):
+                return f"writes {v.name}"
+        inouts = [v for v in pou.vars.values() if v.section == "VAR_IN_OUT"]
+        for v in inouts:
+            if pou.kind == "FUNCTION_BLOCK" and self.param_written(pou, v):
+                return f"writes through {v.name}"
+        if inouts and any(writes(pou.node.body or [], v, self.param_written)
+                          for v in pou.inputs):
+            return "an in-out beside a body that writes its inputs"
+        return None
 
     # ---------------------------------------------------------- decisions
     def block(self, pou):

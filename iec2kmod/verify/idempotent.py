@@ -103,32 +103,48 @@ class Prover:
         type uses, itself included (the caller has already checked that
         no loop, timer or SFC is among them and that nothing in them
         writes an external or an in-out)."""
+        keep, note = self.settle_set(pou, externals, closure, [])
+        return keep == [], note
+
+    def settle_set(self, pou, externals, closure, groups) -> tuple[list | None, str]:
+        """The smallest part of the written state whose comparison settles
+        a block (rule 8): *groups* is [[leaf path]] (a member of the
+        instance: the paths of its leaves, ``$self.<name>...``); the
+        answer is the indexes K of the groups to compare, such that for
+        every X and S
+
+            not fault(X, S) and S1 = S on the groups of K
+                ==>  not fault(X, S1) and f(X, S1) = S1
+
+        (found greedily: each group is left out if the proof still holds
+        without it), [] when the type is idempotent, None when not even
+        every group proves it (the caller keeps its syntactic rule)."""
         try:
             import z3
         except ImportError:
-            return False, "z3 is not installed"
+            return None, "z3 is not installed"
         m = self.machine()
         if m is None:
-            return False, f"no model: {self._failed}"
+            return None, f"no model: {self._failed}"
         inouts = [v for v in pou.vars.values() if v.section == "VAR_IN_OUT"]
         for v in externals + inouts:
             if _has(v.type, lambda t: isinstance(t, FBType)):
-                return False, f"{v.name} holds function block instances"
+                return None, f"{v.name} holds function block instances"
         for p in closure:
             for v in p.vars.values():
                 if v.section == "VAR_TEMP":
                     continue
                 if _has(v.type, _fp_or_string):
-                    return False, f"{p.name}.{v.name}: REAL, LREAL or STRING"
+                    return None, f"{p.name}.{v.name}: REAL, LREAL or STRING"
         try:
-            return self._prove(z3, m, pou, externals, inouts)
+            return self._prove(z3, m, pou, externals, inouts, groups)
         except _Refused as exc:
-            return False, str(exc)
+            return None, str(exc)
         except Exception as exc:               # encode.Refuse and the rest
             msg = getattr(exc, "message", None) or f"{type(exc).__name__}: {exc}"
-            return False, msg
+            return None, msg
 
-    def _prove(self, z3, m, pou, externals, inouts):
+    def _prove(self, z3, m, pou, externals, inouts, groups):
         from .encode import TRUE, Encoder, land, lnot, lor, smt_eq
         from .model import SymbolicMachine
         sym = SymbolicMachine.__new__(SymbolicMachine)
@@ -165,7 +181,7 @@ class Prover:
                 is_input = len(leaf.keys) >= 2 and leaf.keys[1] in inputs
                 roles[leaf.name] = "arg" if is_input else "state"
             if not sym.leaves:
-                return True, ""
+                return [], ""
             enc1 = Encoder(sym)
             enc1.run_body(pou, inst, TRUE)
             f1 = lor(*[c for c, *_ in enc1.faults])
@@ -182,24 +198,62 @@ class Prover:
                 now = leaf.c[leaf.k]
                 want = leaf.var if roles[leaf.name] == "arg" else post1[leaf.name]
                 if not (z3.is_expr(now) and z3.is_expr(want)):
-                    return False, f"{leaf.name} is not a term"
+                    return None, f"{leaf.name} is not a term"
                 if now.sort() != want.sort():
-                    return False, f"{leaf.name}: sorts differ"
+                    return None, f"{leaf.name}: sorts differ"
                 eqs.append(smt_eq(now, want))
-            claim = z3.Implies(lnot(f1), land(lnot(f2), *eqs))
+            # the premise a group stands for: its leaves unchanged by the
+            # first evaluation
+            unchanged = []
+            for paths in groups:
+                ps = [p.upper() for p in paths]
+                leaves = [leaf for leaf in sym.leaves if roles[leaf.name] == "state" and any(
+                    leaf.name.upper() == p or leaf.name.upper().startswith(
+                        (p + ".", p + "[")) for p in ps)]
+                unchanged.append(land(*[smt_eq(post1[leaf.name], leaf.var)
+                                        for leaf in leaves]) if leaves else TRUE)
             s = z3.Solver()
             s.set("timeout", TIMEOUT_MS)
-            s.add(z3.Not(claim))
-            r = s.check()
-            if r == z3.unsat:
-                return True, ""
-            if r == z3.sat:
-                model = s.model()
-                diff = [leaf.name for leaf in sym.leaves
-                        if z3.is_false(model.eval(smt_eq(leaf.c[leaf.k], leaf.var if roles[
-                            leaf.name] == "arg" else post1[leaf.name]), model_completion=True))]
-                what = ", ".join(diff[:3]) if diff else "a fault"
-                return False, f"a second evaluation changes {what}"
-            return False, "the proof timed out"
+            s.add(lnot(f1))
+            s.add(z3.Not(land(lnot(f2), *eqs)))
+
+            def proved(keep):
+                s.push()
+                for i in keep:
+                    s.add(unchanged[i])
+                r = s.check()
+                s.pop()
+                return r == z3.unsat, r
+
+            keep = list(range(len(groups)))
+            ok, r = proved(keep)
+            if not ok and not groups:
+                return None, ("the proof timed out" if r != z3.sat else
+                              self._what(z3, s, sym, roles, post1, smt_eq))
+            if not ok:
+                return None, ("the proof timed out" if r != z3.sat else
+                              "a second evaluation changes state the comparison misses")
+            ok, r = proved([])
+            if ok:
+                return [], ""
+            why = "the proof timed out" if r != z3.sat else self._what(z3, s, sym, roles,
+                                                                        post1, smt_eq)
+            for i in list(keep):
+                trial = [k for k in keep if k != i]
+                if proved(trial)[0]:
+                    keep = trial
+            return keep, why
         finally:
             m.directs = saved_directs
+
+    @staticmethod
+    def _what(z3, s, sym, roles, post1, smt_eq):
+        """What a counterexample's second evaluation changes."""
+        if s.check() != z3.sat:
+            return "no counterexample"
+        model = s.model()
+        diff = [leaf.name for leaf in sym.leaves
+                if z3.is_false(model.eval(smt_eq(leaf.c[leaf.k], leaf.var if roles[
+                    leaf.name] == "arg" else post1[leaf.name]), model_completion=True))]
+        what = ", ".join(diff[:3]) if diff else "a fault"
+        return f"a second evaluation changes {what}"

@@ -479,7 +479,10 @@ END_PROGRAM
     project = _project(tmp_path, text)
     plan = SelectivePlan(project, "all")
     dev = next(b for b in plan.blocks.values() if b.pou.name == "Dev")
-    assert [m for m, _ in dev.written] == ["v_latch", "v_first"], dev.written
+    assert [m for m, _ in plan._written(dev.pou)] == ["v_latch", "v_first"]
+    # rule 8 narrows it further: latch := first changes nothing a second
+    # evaluation reads, first's count does
+    assert [m for m, _ in dev.written] == ["v_first"], dev.written
     rows = [(0, "x", 1), (40, "fa", "TRUE"), (80, "fa", "FALSE"), (120, "fb", "TRUE"),
             (200, "x", 2), (260, "fb", "FALSE")]
     a, b = _both(tmp_path, text, rows, 400)
