@@ -463,6 +463,8 @@ class SelectivePlan:
                  "\tiec_u8 level;\t\t/* the next busy period: IEC_SEL_BUSY << level */"]
         if b.loops:
             lines.append("\tiec_u32 cost;\t\t/* loop budget used by the last evaluation */")
+        if b.idempotent:
+            lines.append("\tiec_u32 last;\t\t/* ctx->sel_cycle of the last evaluation */")
         if pou.kind == "PROGRAM":
             lines.append("\tiec_u8 plain;\t\t/* this instance is always evaluated */")
         if b.inputs:
@@ -524,9 +526,6 @@ class SelectivePlan:
         out.append("\tif (" + " &&\n\t    ".join(cond) + ") {")
         if b.loops:
             out.append(f"\t\tctx->loop_budget -= {s}.cost;")
-        if b.idempotent:
-            # evaluations in a row with changed arguments (rule 8)
-            out += [f"\t\t{s}.fast = 0;", f"\t\t{s}.level = 0;"]
         out += ["\t\tctx->sel_skipped++;", "\t\treturn 0;", "\t}",
                 "\treturn sel_changed ? 1 : 2;", "}", ""]
         if b.idempotent:
@@ -574,14 +573,16 @@ class SelectivePlan:
                f"\t{s}.epoch = ctx->sel_epoch;",
                f"\t{s}.tok = 0;"]
         out += self._copies(b, span)
-        out += ["\tif (why == 2) {",
-                f"\t\t{s}.fast = 0;",
+        out += ["\t/* evaluations on changed arguments in consecutive task cycles */",
+                f"\tif (why == 2 || {s}.last + 1 != (iec_u32)ctx->sel_cycle) {{",
+                f"\t\t{s}.fast = why == 1;",
                 f"\t\t{s}.level = 0;",
                 f"\t}} else if (++{s}.fast >= IEC_SEL_BUSY_AFTER) {{"]
         out += self._busy("\t\t")
         out += ["\t\t/* plain runs follow: not settled */",
                 "\t\tsel_settle = false;",
                 "\t}",
+                f"\t{s}.last = (iec_u32)ctx->sel_cycle;",
                 "\tsel_saved = ctx->sel_changed;",
                 f"\t{prefix}_body(self, ctx);",
                 "\tif (ctx->fault != IEC_FAULT_NONE)",

@@ -531,3 +531,161 @@ END_PROGRAM
     a, b = _both(tmp_path, text, rows, cycles * 10 - 5)
     assert b.values_at()["out"] == cycles
     assert _evaluated(b) >= 2 * cycles, b.selective
+
+
+IDEMPOTENT = """
+FUNCTION_BLOCK Guard
+VAR_INPUT start, stop, ok : BOOL; END_VAR
+VAR_OUTPUT run, alarm : BOOL; code : INT; END_VAR
+VAR seal : SR; END_VAR
+seal(S1 := start AND ok, R := stop OR NOT ok);
+run := seal.Q1;
+IF NOT ok THEN code := 2; ELSIF stop THEN code := 1; ELSE code := 0; END_IF;
+alarm := NOT ok AND start;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL a, b, c, run : BOOL; code : INT; END_VAR
+VAR g : Guard; END_VAR
+g(start := a, stop := b, ok := c);
+run := g.run;
+code := g.code;
+END_PROGRAM
+""" + CONFIG.format(globals="a, b, c, run : BOOL; code : INT;")
+IDEMPOTENT_ROWS = [(0, "c", "TRUE"), (100, "a", "TRUE"), (200, "a", "FALSE"),
+                   (300, "b", "TRUE"), (400, "c", "FALSE"), (500, "b", "FALSE")]
+
+
+def test_idempotent_block_settles_in_one_evaluation(tmp_path):
+    """Rule 8: Guard (an SR seal-in and combinational logic) is proved
+    idempotent, so an evaluation on new arguments settles it: no confirm
+    run the next cycle.  Main writes globals (not idempotent: its own
+    confirm run stays).  Per input change Guard is evaluated once; Main
+    once when what it writes stays as it was, else three times (its
+    arguments include the globals it wrote, so the next evaluation is a
+    fast one, rule 4, and the one after it settles).  Without rule 8:
+    24 evaluations."""
+    project = _project(tmp_path, IDEMPOTENT)
+    plan = SelectivePlan(project, "all")
+    guard = next(b for b in plan.blocks.values() if b.pou.name == "Guard")
+    main = next(b for b in plan.blocks.values() if b.pou.name == "Main")
+    assert guard.idempotent and guard.written == [], guard.idem_note
+    assert not main.idempotent and main.idem_note == "writes run", main.idem_note
+    assert "function_block Guard: selective, idempotent" in "\n".join(plan.report())
+    a, b = _both(tmp_path, IDEMPOTENT, IDEMPOTENT_ROWS, 700)
+    assert b.values_at(150 * MS)["run"] is True and b.values_at(350 * MS)["run"] is False
+    # the first cycle: Main, Guard, Main's confirm; then per change
+    # (a rises: run; a falls: nothing; b: run, code; c: code; b: nothing)
+    assert _evaluated(b) == 3 + 4 + 2 + 4 + 4 + 2, b.selective
+    assert _skipped(b) > 60, b.selective
+
+
+EDGE = """
+FUNCTION_BLOCK Pulse
+VAR_INPUT x, en : BOOL; END_VAR
+VAR_OUTPUT n : INT; lit : BOOL; END_VAR
+VAR t : R_TRIG; END_VAR
+t(CLK := x);
+IF t.Q AND en THEN n := n + 1; END_IF;
+lit := x AND en;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL a, e : BOOL; n : INT; END_VAR
+VAR p : Pulse; END_VAR
+p(x := a, en := e);
+n := p.n;
+END_PROGRAM
+""" + CONFIG.format(globals="a, e : BOOL; n : INT;")
+
+
+def test_edge_detector_inside_a_block_is_not_idempotent(tmp_path):
+    """An R_TRIG inside a block: the second evaluation on the same
+    arguments drops t.Q (a variable of the table), so the type is not
+    idempotent and its confirm run stays; the comparison is narrowed to
+    the R_TRIG (n and lit change nothing a second evaluation reads).
+    Taking it for idempotent would leave p.t.Q TRUE in the trace."""
+    project = _project(tmp_path, EDGE)
+    plan = SelectivePlan(project, "all")
+    pulse = next(b for b in plan.blocks.values() if b.pou.name == "Pulse")
+    assert not pulse.idempotent and "$self.t.Q" in pulse.idem_note, pulse.idem_note
+    assert [m for m, _ in pulse.written] == ["v_t"], pulse.written
+    rows = [(0, "e", "TRUE"), (100, "a", "TRUE"), (200, "a", "FALSE"), (250, "a", "TRUE"),
+            (400, "e", "FALSE"), (450, "a", "FALSE"), (500, "a", "TRUE")]
+    a, b = _both(tmp_path, EDGE, rows, 700)
+    falls = [t for t, i, v in b.changes if b.names[i] == "r.p.p.t.Q" and v is False]
+    assert 110 * MS in falls, falls
+    assert b.values_at()["n"] == 2
+    assert _skipped(b) > 50, b.selective
+
+
+FAULT_LATER = """
+FUNCTION_BLOCK Arm
+VAR_INPUT d : INT; END_VAR
+VAR_OUTPUT armed : BOOL; END_VAR
+VAR_TEMP t : INT; END_VAR
+IF armed THEN t := 100 / d; END_IF;
+armed := TRUE;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL d : INT; ok : BOOL; END_VAR
+VAR arm : Arm; END_VAR
+arm(d := d);
+ok := arm.armed;
+END_PROGRAM
+""" + CONFIG.format(globals="d : INT; ok : BOOL;")
+
+
+def test_second_evaluation_that_faults_is_not_idempotent(tmp_path):
+    """Arm's second evaluation leaves the state as the first left it, but
+    divides by d: idempotence needs the second evaluation to be free of
+    faults too.  Plain execution faults in the second cycle; so must the
+    selective one."""
+    project = _project(tmp_path, FAULT_LATER)
+    plan = SelectivePlan(project, "all")
+    arm = next(b for b in plan.blocks.values() if b.pou.name == "Arm")
+    assert not arm.idempotent and arm.idem_note == "a second evaluation changes a fault", \
+        arm.idem_note
+    a, b = _both(tmp_path, FAULT_LATER, [(0, "d", 0)], 100)
+    assert [f[2] for f in b.faults][:1] == ["division by zero"], b.faults
+
+
+def test_settle_rule_refusals(tmp_path):
+    """Rule 8 refuses what its model cannot stand for: a loop, REAL
+    state, writes to a global; those keep the confirm run."""
+    text = """
+FUNCTION_BLOCK Loopy
+VAR_INPUT n : INT; END_VAR
+VAR_OUTPUT s : INT; END_VAR
+VAR i : INT; END_VAR
+s := 0;
+FOR i := 1 TO n DO s := s + i; END_FOR;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Flt
+VAR_INPUT x : REAL; END_VAR
+VAR_OUTPUT y : REAL; END_VAR
+y := x * 2.0;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK Put
+VAR_INPUT x : INT; END_VAR
+VAR_EXTERNAL g : INT; END_VAR
+g := x;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL g : INT; r : REAL; END_VAR
+VAR l : Loopy; f : Flt; p : Put; END_VAR
+l(n := g);
+f(x := r);
+p(x := 3);
+END_PROGRAM
+""" + CONFIG.format(globals="g : INT; r : REAL;")
+    plan = SelectivePlan(_project(tmp_path, text), "all")
+    notes = {b.pou.name: b.idem_note for b in plan.blocks.values()}
+    assert notes["Loopy"].startswith("a loop"), notes
+    assert "REAL" in notes["Flt"], notes
+    assert notes["Put"] == "writes g", notes
+    assert not any(b.idempotent for b in plan.blocks.values())
