@@ -105,6 +105,38 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
 7. A call of an instance of a selective type that is not selective (the
    instance is marked off, or it is a VAR_TEMP, fresh at every call) runs
    the body as plain code and clears the instance's token.
+8. Settling without a confirm run (iec2kmod/verify/idempotent.py).  For
+   each selective type the compiler asks z3 about two evaluations on the
+   same arguments X (inputs, externals, in-out targets: a skip needs them
+   equal to the shadows), from any state S: S1 = f(X, S), S2 = f(X, S1).
+   The type is *idempotent* when an evaluation without fault leaves a
+   fixpoint: the second evaluation does not fault, S2 = S1 (every
+   variable of the instance, nested instances and hidden memories
+   included) and it leaves X as it found it.  An idempotent block settles
+   after any evaluation without fault that is not the first after an
+   epoch change and does not start a busy period: no written state, no
+   copy, no confirm run; the nested blocks are part of f, so neither
+   their reports nor their plain runs matter (its busy counting is by
+   consecutive task cycles).  Combinational logic and latches (SR, RS, a
+   seal-in) are idempotent; an edge detector (R_TRIG's Q falls on the
+   second evaluation), a counter, a state read before it is written in
+   the same body (one cycle's output feeding the next), or a second
+   evaluation that may fault are not.  A type without nested user blocks
+   that is not idempotent has its comparison narrowed instead: written
+   state members (rule 4) are left out greedily, one at a time, as long
+   as z3 proves "no fault and the remaining members unchanged by the
+   evaluation ==> the next evaluation faults not and changes nothing";
+   rule 4's full evaluation then compares only those.  A proof is accepted
+   only as unsat within TIMEOUT_MS; refused (the confirm run and rule 4's
+   whole written state stay): whatever the encoder cannot encode, a loop
+   at any depth (the budget charged on a skip is the last evaluation's),
+   REAL/LREAL or STRING state (one NaN in the SMT theory, many in the
+   machine), directly represented variables, writes to a VAR_EXTERNAL or
+   through a VAR_IN_OUT, an in-out beside a body that writes its own
+   inputs, and externals or in-outs holding FB instances (the model gives
+   every argument storage of its own, so overlapping arguments must not
+   matter).  ``BlockInfo.idempotent`` and ``idem_note`` (why not) show in
+   ``SelectivePlan.report``.
 
 Generated C: a struct ``<prefix>_sel`` member ``sel`` at the end of the
 instance struct, and ``<prefix>_run(self, ctx, fb)`` beside
@@ -445,7 +477,8 @@ class SelectivePlan:
         for key in sorted(self.blocks):
             b = self.blocks[key]
             what = ("selective, idempotent" if b.idempotent else
-                    f"selective (confirm run: {b.idem_note})") if b.layout else (f"always evaluated: {b.reason}" if b.reason
+                    f"selective (confirm run comparing {len(b.written)} members; not "
+                    f"idempotent: {b.idem_note})") if b.layout else (f"always evaluated: {b.reason}" if b.reason
                                                  else "always evaluated: not marked")
             out.append(f"{b.pou.kind.lower()} {b.pou.name}: {what}")
         return out
