@@ -386,10 +386,36 @@ class SelectivePlan:
         if not nested:
             # a nested user block reports (rule 4) instead of being compared:
             # only a type without one has its comparison narrowed
-            names = {N.var(v.name): v.name for v in pou.vars.values()}
+            names = {N.var(v.name): v for v in pou.vars.values()}
+            split = []
+            for member, t in b.written:
+                v = names.get(member)
+                std = v is not None and isinstance(v.type, FBType) and v.type.pou.standard \
+                    and v.type.pou.name.upper().startswith(_STD_SPLIT)
+                if not std:
+                    split.append((member, t))
+                    continue
+                # a standard FB instance: field by field, its hidden memory
+                # too; the memory is tried first, then the inputs, so that
+                # what stays is what changes least (R_TRIG: Q, only on a rise)
+                sp = v.type.pou
+                fields = [(f"{member}.{field}", "iec_bool")
+                          for _, field in _std_hidden(sp.name.upper())]
+                fields += [(f"{member}.{N.member(sp, f.name)}", f.type)
+                           for f in sp.vars.values() if f.section == "VAR_INPUT"]
+                fields += [(f"{member}.{N.member(sp, f.name)}", f.type)
+                           for f in sp.vars.values() if f.section != "VAR_INPUT"]
+                split += fields
+            b.written = split
             for member, _ in b.written:
-                if member in names:
-                    groups.append([f"$self.{names[member]}"])
+                head, _, field = member.partition(".")
+                if head in names and field:
+                    sp = names[head].type.pou
+                    hidden = dict((f, h) for h, f in _std_hidden(sp.name.upper()))
+                    leaf = hidden.get(field) or sp.vars[field.upper()].name
+                    groups.append([f"$self.{names[head].name}.{leaf}"])
+                elif member in names:
+                    groups.append([f"$self.{names[member].name}"])
                 elif member.startswith("h_") and member.endswith("_prev"):
                     v = next(v for v in pou.inputs if f"h_{v.name.lower()}_prev" == member)
                     groups.append([f"$self.${v.name}"])
@@ -508,7 +534,8 @@ class SelectivePlan:
             lines.append(f"\t{_pointer_decl(v, 'p_' + v.name.lower())};")
             lines.append(f"\t{N.declare(v.type, 'd_' + v.name.lower())};")
         for member, t in b.written:
-            decl = f"{t} w_{member}" if isinstance(t, str) else N.declare(t, f"w_{member}")
+            w = _wname(member)
+            decl = f"{t} {w}" if isinstance(t, str) else N.declare(t, w)
             lines.append(f"\t{decl};")
         lines.append("};")
         if b.inputs:
@@ -548,7 +575,8 @@ class SelectivePlan:
         after += [ne(f"self->{N.var(v.name)}", f"&{s}.d_{v.name.lower()}",
                      f"{s}.d_{v.name.lower()}") for v in b.inouts
                   if self.param_written(pou, v)]
-        after += [ne(f"&self->{m}", f"&{s}.w_{m}", f"{s}.w_{m}") for m, _ in b.written]
+        after += [ne(f"&self->{m}", f"&{s}.{_wname(m)}", f"{s}.{_wname(m)}")
+                  for m, _ in b.written]
         # the check: 0 skipped, 1 the arguments changed, 2 they did not
         out = ["static inline __attribute__((__always_inline__)) int",
                f"{prefix}_check({st} *self, struct iec_ctx *ctx)", "{",
@@ -648,7 +676,7 @@ class SelectivePlan:
         out += self._copies(b, span)
         out.append("\tif (sel_full) {")
         for m, t in b.written:
-            out.append("\t\t" + _copy(f"{s}.w_{m}", f"self->{m}", t))
+            out.append("\t\t" + _copy(f"{s}.{_wname(m)}", f"self->{m}", t))
         out += ["\t\tsel_saved = ctx->sel_changed;", "\t\tctx->sel_changed = false;",
                 "\t\tsel_plain = ctx->sel_plain;",
                 f"\t\t{s}.fast = 0;",
@@ -837,6 +865,30 @@ def token_of(texts) -> int:
 
 def token_define(texts) -> str:
     return f"#define IEC_SEL_TOKEN 0x{token_of(texts):08x}U"
+
+
+def _wname(member):
+    """The shadow of a written member (``v_x``, or a field ``v_t.q`` of a
+    standard FB instance)."""
+    return "w_" + member.replace(".", "_")
+
+
+# the standard FBs a narrowed comparison may keep field by field (rule 8)
+_STD_SPLIT = ("R_TRIG", "F_TRIG", "SR", "RS", "CTU", "CTD", "CTUD")
+
+
+def _std_hidden(name):
+    """[(leaf of the z3 model, C field)]: the hidden memory of a standard
+    FB (kmod_templates/runtime/iec_std_fb.h)."""
+    if name in ("R_TRIG", "F_TRIG"):
+        return [("$M", "prev")]        # F_TRIG: the model's M is NOT prev
+    if name.startswith("CTUD"):
+        return [("$CU", "cu_prev"), ("$CD", "cd_prev")]
+    if name.startswith("CTU"):
+        return [("$CU", "cu_prev")]
+    if name.startswith("CTD"):
+        return [("$CD", "cd_prev")]
+    return []
 
 
 def _disjunction(items, ind):

@@ -603,13 +603,14 @@ def test_edge_detector_inside_a_block_is_not_idempotent(tmp_path):
     """An R_TRIG inside a block: the second evaluation on the same
     arguments drops t.Q (a variable of the table), so the type is not
     idempotent and its confirm run stays; the comparison is narrowed to
-    the R_TRIG (n and lit change nothing a second evaluation reads).
+    the R_TRIG's memory (n, lit, t.CLK and t.Q unchanged or not, a second
+    evaluation changes nothing when the memory stayed).
     Taking it for idempotent would leave p.t.Q TRUE in the trace."""
     project = _project(tmp_path, EDGE)
     plan = SelectivePlan(project, "all")
     pulse = next(b for b in plan.blocks.values() if b.pou.name == "Pulse")
     assert not pulse.idempotent and "$self.t.Q" in pulse.idem_note, pulse.idem_note
-    assert [m for m, _ in pulse.written] == ["v_t"], pulse.written
+    assert [m for m, _ in pulse.written] == ["v_t.prev"], pulse.written
     rows = [(0, "e", "TRUE"), (100, "a", "TRUE"), (200, "a", "FALSE"), (250, "a", "TRUE"),
             (400, "e", "FALSE"), (450, "a", "FALSE"), (500, "a", "TRUE")]
     a, b = _both(tmp_path, EDGE, rows, 700)
