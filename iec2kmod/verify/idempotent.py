@@ -182,6 +182,7 @@ class Prover:
                 roles[leaf.name] = "arg" if is_input else "state"
             if not sym.leaves:
                 return [], ""
+            pre = {leaf.name: leaf.var for leaf in sym.leaves}
             enc1 = Encoder(sym)
             enc1.run_body(pou, inst, TRUE)
             f1 = lor(*[c for c, *_ in enc1.faults])
@@ -189,14 +190,14 @@ class Prover:
             # the second evaluation: the same arguments, the state left
             for leaf in sym.leaves:
                 if roles[leaf.name] == "arg":
-                    leaf.c[leaf.k] = leaf.var
+                    leaf.c[leaf.k] = pre[leaf.name]
             enc2 = Encoder(sym)
             enc2.run_body(pou, inst, TRUE)
             f2 = lor(*[c for c, *_ in enc2.faults])
             eqs = []
             for leaf in sym.leaves:
                 now = leaf.c[leaf.k]
-                want = leaf.var if roles[leaf.name] == "arg" else post1[leaf.name]
+                want = pre[leaf.name] if roles[leaf.name] == "arg" else post1[leaf.name]
                 if not (z3.is_expr(now) and z3.is_expr(want)):
                     return None, f"{leaf.name} is not a term"
                 if now.sort() != want.sort():
@@ -210,7 +211,7 @@ class Prover:
                 leaves = [leaf for leaf in sym.leaves if roles[leaf.name] == "state" and any(
                     leaf.name.upper() == p or leaf.name.upper().startswith(
                         (p + ".", p + "[")) for p in ps)]
-                unchanged.append(land(*[smt_eq(post1[leaf.name], leaf.var)
+                unchanged.append(land(*[smt_eq(post1[leaf.name], pre[leaf.name])
                                         for leaf in leaves]) if leaves else TRUE)
             s = z3.Solver()
             s.set("timeout", TIMEOUT_MS)
@@ -229,7 +230,7 @@ class Prover:
             ok, r = proved(keep)
             if not ok and not groups:
                 return None, ("the proof timed out" if r != z3.sat else
-                              self._what(z3, s, sym, roles, post1, smt_eq))
+                              self._what(z3, s, sym, roles, post1, smt_eq, pre))
             if not ok:
                 return None, ("the proof timed out" if r != z3.sat else
                               "a second evaluation changes state the comparison misses")
@@ -237,7 +238,7 @@ class Prover:
             if ok:
                 return [], ""
             why = "the proof timed out" if r != z3.sat else self._what(z3, s, sym, roles,
-                                                                        post1, smt_eq)
+                                                                        post1, smt_eq, pre)
             for i in list(keep):
                 trial = [k for k in keep if k != i]
                 if proved(trial)[0]:
@@ -247,13 +248,13 @@ class Prover:
             m.directs = saved_directs
 
     @staticmethod
-    def _what(z3, s, sym, roles, post1, smt_eq):
+    def _what(z3, s, sym, roles, post1, smt_eq, pre):
         """What a counterexample's second evaluation changes."""
         if s.check() != z3.sat:
             return "no counterexample"
         model = s.model()
         diff = [leaf.name for leaf in sym.leaves
-                if z3.is_false(model.eval(smt_eq(leaf.c[leaf.k], leaf.var if roles[
+                if z3.is_false(model.eval(smt_eq(leaf.c[leaf.k], pre[leaf.name] if roles[
                     leaf.name] == "arg" else post1[leaf.name]), model_completion=True))]
         what = ", ".join(diff[:3]) if diff else "a fault"
         return f"a second evaluation changes {what}"
