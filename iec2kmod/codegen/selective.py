@@ -127,7 +127,9 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
    as z3 proves "no fault and the remaining members unchanged by the
    evaluation ==> the next evaluation faults not and changes nothing";
    rule 4's full evaluation then compares only those.  A proof is accepted
-   only as unsat within TIMEOUT_MS; refused (the confirm run and rule 4's
+   only as unsat within z3's resource limit (RLIMIT: deterministic, unlike
+   a time limit, so the generated code does not depend on the machine;
+   at most MAX_CHECKS checks per type); refused (the confirm run and rule 4's
    whole written state stay): whatever the encoder cannot encode, a loop
    at any depth (the budget charged on a skip is the last evaluation's),
    REAL/LREAL or STRING state (one NaN in the SMT theory, many in the
@@ -502,10 +504,14 @@ class SelectivePlan:
         out = []
         for key in sorted(self.blocks):
             b = self.blocks[key]
-            what = ("selective, idempotent" if b.idempotent else
-                    f"selective (confirm run comparing {len(b.written)} members; not "
-                    f"idempotent: {b.idem_note})") if b.layout else (f"always evaluated: {b.reason}" if b.reason
-                                                 else "always evaluated: not marked")
+            if not b.layout:
+                what = f"always evaluated: {b.reason}" if b.reason else \
+                    "always evaluated: not marked"
+            elif b.idempotent:
+                what = "selective, idempotent"
+            else:
+                what = (f"selective (confirm run comparing {len(b.written)} members; "
+                        f"not idempotent: {b.idem_note})")
             out.append(f"{b.pou.kind.lower()} {b.pou.name}: {what}")
         return out
 
