@@ -101,7 +101,7 @@ def _project(seed):
             a, b = rnd.sample(["ga", "gb", "gc", "gx"], 2)
             n = rnd.choice(["gn", "gk"])
             decls.append(f"u{i}_{j} : F{i};")
-            arg = f", io := gio" if env["io"] else ""
+            arg = ", io := gio" if env["io"] else ""
             calls.append(f"    u{i}_{j}(a := {a}, b := {b}, n := {n}{arg});")
             calls.append(f"    o{len(calls)} := u{i}_{j}.x OR u{i}_{j}.y;")
     outs = [c.split(" := ")[0].strip() for c in calls if c.strip().startswith("o")]
