@@ -185,6 +185,7 @@ class BlockInfo:
     layout: bool = False                  # instances carry the selective state
     idempotent: bool = False              # rule 8: one evaluation settles
     idem_note: str = ""                   # why not idempotent
+    leaf: bool = False                    # no user FB instance inside
 
     @property
     def skippable(self):
@@ -217,6 +218,8 @@ class SelectivePlan:
         for b in self.blocks.values():
             if b.layout:
                 b.written = self._written(b.pou)
+                closure, _ = self._closure(b.pou)
+                b.leaf = all(p is b.pou or p.kind == "FUNCTION" for p in closure)
                 self._settle(b)
 
     # ------------------------------------------------------------ pragmas
@@ -384,8 +387,7 @@ class SelectivePlan:
         closure, _ = self._closure(pou)
         exts = [v for _, v in b.exts if v.section == "VAR_EXTERNAL"]
         groups = []
-        nested = any(p is not pou and p.kind != "FUNCTION" for p in closure)
-        if not nested:
+        if b.leaf:
             # a nested user block reports (rule 4) instead of being compared:
             # only a type without one has its comparison narrowed
             names = {N.var(v.name): v for v in pou.vars.values()}
@@ -631,7 +633,7 @@ class SelectivePlan:
         s = "self->sel"
         out = ["static __attribute__((__noinline__, __unused__)) void",
                f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why, bool fb)", "{",
-               "\tbool sel_settle, sel_saved;", "",
+               "\tbool sel_settle;" if b.leaf else "\tbool sel_settle, sel_saved;", "",
                "\tctx->sel_evaluated++;",
                "\t/* proved idempotent: an evaluation without fault settles, the",
                "\t * next one on the same arguments would change nothing",
@@ -649,16 +651,30 @@ class SelectivePlan:
         out += ["\t\t/* plain runs follow: not settled */",
                 "\t\tsel_settle = false;",
                 "\t}",
-                f"\t{s}.last = (iec_u32)ctx->sel_cycle;",
-                "\tsel_saved = ctx->sel_changed;",
-                f"\t{prefix}_body(self, ctx);",
+                f"\t{s}.last = (iec_u32)ctx->sel_cycle;"]
+        if not b.leaf:
+            out.append("\tsel_saved = ctx->sel_changed;")
+        out += [f"\t{prefix}_body(self, ctx);",
                 "\tif (ctx->fault != IEC_FAULT_NONE)",
                 "\t\treturn;",
                 "\tif (sel_settle)",
-                f"\t\t{s}.tok = IEC_SEL_TOKEN;",
-                f"\tctx->sel_changed = sel_saved || fb || {s}.tok != IEC_SEL_TOKEN;",
-                "}", ""]
+                f"\t\t{s}.tok = IEC_SEL_TOKEN;"]
+        out += self._report(b)
+        out += ["}", ""]
         return out
+
+    def _report(self, b):
+        """What an evaluation tells its caller (ctx->sel_changed): to one
+        that may read its state from before the call (fb), that it may
+        have changed; to one that does not, whether it would be evaluated
+        again.  A leaf type (no user block inside) runs no selective call,
+        so its body leaves ctx->sel_changed and ctx->sel_plain alone: no
+        save, no restore."""
+        s = "self->sel"
+        if b.leaf:
+            return [f"\tif (fb || {s}.tok != IEC_SEL_TOKEN)",
+                    "\t\tctx->sel_changed = true;"]
+        return [f"\tctx->sel_changed = sel_saved || fb || {s}.tok != IEC_SEL_TOKEN;"]
 
     def _confirm_eval(self, b, prefix, st, span, after):
         s = "self->sel"
@@ -666,8 +682,10 @@ class SelectivePlan:
         # the evaluation
         out += ["static __attribute__((__noinline__, __unused__)) void",
                 f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why, bool fb)", "{",
-                "\tbool sel_full, sel_settle, sel_saved = false;",
-                "\tiec_u64 sel_plain = 0;"]
+                "\tbool sel_full, sel_settle;" if b.leaf else
+                "\tbool sel_full, sel_settle, sel_saved = false;"]
+        if not b.leaf:
+            out.append("\tiec_u64 sel_plain = 0;")
         if b.loops:
             out.append("\tiec_u32 sel_budget;")
         out += ["",
@@ -683,9 +701,10 @@ class SelectivePlan:
         out.append("\tif (sel_full) {")
         for m, t in b.written:
             out.append("\t\t" + _copy(f"{s}.{_wname(m)}", f"self->{m}", t))
-        out += ["\t\tsel_saved = ctx->sel_changed;", "\t\tctx->sel_changed = false;",
-                "\t\tsel_plain = ctx->sel_plain;",
-                f"\t\t{s}.fast = 0;",
+        if not b.leaf:
+            out += ["\t\tsel_saved = ctx->sel_changed;", "\t\tctx->sel_changed = false;",
+                    "\t\tsel_plain = ctx->sel_plain;"]
+        out += [f"\t\t{s}.fast = 0;",
                 f"\t\t{s}.level = 0;",
                 f"\t}} else if (++{s}.fast >= IEC_SEL_BUSY_AFTER) {{"]
         out += self._busy("\t\t")
@@ -701,15 +720,13 @@ class SelectivePlan:
                 "\t\tctx->sel_changed = true;",
                 "\t\treturn;",
                 "\t}",
-                "\tif (!(" + _disjunction(["ctx->sel_changed", "ctx->sel_plain != sel_plain"] +
-                                          after, "\t      ") + ") &&",
+                "\tif (!(" + _disjunction(
+                    ([] if b.leaf else ["ctx->sel_changed", "ctx->sel_plain != sel_plain"]) +
+                    after, "\t      ") + ") &&",
                 "\t    sel_settle)",
-                f"\t\t{s}.tok = IEC_SEL_TOKEN;",
-                "\t/* to a caller that may read this state from before the call:",
-                "\t * every evaluation may have changed it; to one that does not:",
-                "\t * whether this block would be evaluated again */",
-                f"\tctx->sel_changed = sel_saved || fb || {s}.tok != IEC_SEL_TOKEN;",
-                "}", ""]
+                f"\t\t{s}.tok = IEC_SEL_TOKEN;"]
+        out += self._report(b)
+        out += ["}", ""]
         return out
 
     def _run_plain(self, b, prefix, st):
