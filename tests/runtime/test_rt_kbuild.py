@@ -6,11 +6,9 @@ a separate object built with -mhard-float -msse -msse2 between
 kernel_fpu_begin() and kernel_fpu_end().  Built with W=1; any warning
 (compiler or modpost, e.g. an undefined symbol such as a libm call) fails.
 The host cannot load the module; building it is the test."""
-import os
 import re
 import shutil
 import subprocess
-from pathlib import Path
 
 import pytest
 
@@ -18,10 +16,6 @@ from rt_helpers import RUNTIME
 
 pytestmark = pytest.mark.kbuild
 
-DEFAULT_KDIRS = [
-    "/usr/src/linux-headers-6.1.0-56-rt-amd64",
-    f"/lib/modules/{os.uname().release}/build",
-]
 
 INT_HEADERS = ["iec_platform.h", "iec_types.h", "iec_fault.h", "iec_int.h",
                "iec_time.h", "iec_conv.h", "iec_string.h", "iec_std_fb.h"]
@@ -32,12 +26,13 @@ FP_FLAGS = "-mhard-float -msse -msse2"
 
 
 def kdir():
-    env = os.environ.get("IEC2KMOD_KDIR")
-    for d in ([env] if env else []) + DEFAULT_KDIRS:
-        if d and (Path(d) / "Makefile").exists():
-            return d
-    pytest.fail("kernel headers not found: apt-get install "
-                "linux-headers-rt-amd64 (or set IEC2KMOD_KDIR)")
+    """The PREEMPT_RT kbuild directory the project itself finds (whatever
+    version apt installed), or the tier fails saying what to install."""
+    from iec2kmod import kbuild
+    try:
+        return kbuild.find_kdir()
+    except kbuild.KbuildError as exc:
+        pytest.fail(f"kernel headers not found: {exc}")
 
 
 DECL = re.compile(
