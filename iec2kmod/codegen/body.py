@@ -630,7 +630,8 @@ class BodyEmitter:
                 # call (selective.py, rule 4)
                 fb = "true" if self.sel.feedback(self.pou, inst) else "false"
                 # a skipped block cannot have faulted: the check is only
-                # after a run
+                # after a run (_run returns false when there is nothing to
+                # check)
                 lines += [f"if ({N.pou_prefix(pou)}_run(&{base}, ctx, {fb}))",
                           self.ind + self.fault_check(f.pos)]
                 sel_end = len(lines)

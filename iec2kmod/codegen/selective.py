@@ -93,8 +93,8 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
    evaluation consumes: the budget used by the last evaluation is charged
    when the block is skipped, and a block is evaluated (and faults exactly
    where plain execution faults) when the budget left is not larger than
-   that.  A fault leaves the token cleared: the block is evaluated next
-   time.
+   that.  A fault leaves the token unset (0, or IEC_SEL_PENDING: even,
+   never a module's odd IEC_SEL_TOKEN): the block is evaluated next time.
 6. Hot swap.  The selective state (token, epoch, budget used, copies)
    is part of the instance, so it stays in the resource module across a
    swap, and it is part of the interface hash (a plain and a selective
@@ -143,10 +143,22 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
 Generated C: a struct ``<prefix>_sel`` member ``sel`` at the end of the
 instance struct, and ``<prefix>_run(self, ctx, fb)`` beside
 ``<prefix>_body`` in the POU's file; selective calls call ``_run``, which
-returns false when it skipped the block (the caller checks for a fault
-only after a run).  The counters ``ctx->sel_evaluated`` (plus
-``ctx->sel_plain``, the plain runs of busy blocks) and
-``ctx->sel_skipped`` count blocks per task."""
+returns false when nothing can have faulted: it skipped the block, or
+(a leaf type) it evaluated it and checked for a fault itself; the caller
+checks for a fault only after true.  ``_run`` (inline) runs a busy block
+plainly and checks whether the others can be skipped; ``_eval`` (out of
+line) starts an evaluation.  For a leaf type ``_eval`` ends with the body,
+a tail call, and ``_run`` settles the block after it: ``_eval`` marks a
+full evaluation that may settle with the token IEC_SEL_PENDING, ``_run``
+turns it into IEC_SEL_TOKEN when the written state compares equal.  No
+state of the evaluation lives across a call, so the caller keeps its own
+values in the registers the small ``_eval`` and body leave alone (a
+block that keeps changing costs little more than its plain call).  A
+type with nested user blocks keeps the whole evaluation in ``_eval``
+(the saved ``ctx->sel_changed`` and ``ctx->sel_plain`` live across its
+body).  The counters ``ctx->sel_evaluated`` (plus ``ctx->sel_plain``,
+the plain runs of busy blocks) and ``ctx->sel_skipped`` count blocks per
+task."""
 
 from __future__ import annotations
 
@@ -601,7 +613,7 @@ class SelectivePlan:
             out += self._idempotent_eval(b, prefix, st, span)
         else:
             out += self._confirm_eval(b, prefix, st, span, after)
-        out += self._run_plain(b, prefix, st)
+        out += self._run_plain(b, prefix, st, after)
         return out
 
     def _copies(self, b, span):
@@ -632,6 +644,7 @@ class SelectivePlan:
         fault settles it by itself (no written state, no confirm run)."""
         s = "self->sel"
         out = ["static __attribute__((__noinline__, __unused__)) void",
+               f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why)" if b.leaf else
                f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why, bool fb)", "{",
                "\tbool sel_settle;" if b.leaf else "\tbool sel_settle, sel_saved;", "",
                "\tctx->sel_evaluated++;",
@@ -652,8 +665,14 @@ class SelectivePlan:
                 "\t\tsel_settle = false;",
                 "\t}",
                 f"\t{s}.last = (iec_u32)ctx->sel_cycle;"]
-        if not b.leaf:
-            out.append("\tsel_saved = ctx->sel_changed;")
+        if b.leaf:
+            # the settling is _run's (leaf types, run_function)
+            out += ["\tif (sel_settle)",
+                    f"\t\t{s}.tok = IEC_SEL_PENDING;",
+                    f"\t{prefix}_body(self, ctx);",
+                    "}", ""]
+            return out
+        out.append("\tsel_saved = ctx->sel_changed;")
         out += [f"\t{prefix}_body(self, ctx);",
                 "\tif (ctx->fault != IEC_FAULT_NONE)",
                 "\t\treturn;",
@@ -681,22 +700,29 @@ class SelectivePlan:
         out = []
         # the evaluation
         out += ["static __attribute__((__noinline__, __unused__)) void",
+                f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why)" if b.leaf else
                 f"{prefix}_eval({st} *self, struct iec_ctx *ctx, int why, bool fb)", "{",
-                "\tbool sel_full, sel_settle;" if b.leaf else
+                "\tbool sel_full;" if b.leaf else
                 "\tbool sel_full, sel_settle, sel_saved = false;"]
         if not b.leaf:
             out.append("\tiec_u64 sel_plain = 0;")
-        if b.loops:
+        if b.loops and not b.leaf:
             out.append("\tiec_u32 sel_budget;")
         out += ["",
                 "\tctx->sel_evaluated++;",
                 "\t/* a full evaluation checks whether it settles: after a skip, or",
                 "\t * again on unchanged arguments; arguments that keep changing get",
                 "\t * fast ones (selective.py, rule 4) */",
-                f"\tsel_full = why == 2 || {s}.tok == IEC_SEL_TOKEN;",
-                f"\tsel_settle = {s}.epoch == ctx->sel_epoch;",
-                f"\t{s}.epoch = ctx->sel_epoch;",
-                f"\t{s}.tok = 0;"]
+                f"\tsel_full = why == 2 || {s}.tok == IEC_SEL_TOKEN;"]
+        if b.leaf:
+            out += ["\t/* _run settles it after the body if its written state is unchanged */",
+                    f"\t{s}.tok = sel_full && {s}.epoch == ctx->sel_epoch ?",
+                    "\t\tIEC_SEL_PENDING : 0;",
+                    f"\t{s}.epoch = ctx->sel_epoch;"]
+        else:
+            out += [f"\tsel_settle = {s}.epoch == ctx->sel_epoch;",
+                    f"\t{s}.epoch = ctx->sel_epoch;",
+                    f"\t{s}.tok = 0;"]
         out += self._copies(b, span)
         out.append("\tif (sel_full) {")
         for m, t in b.written:
@@ -709,6 +735,15 @@ class SelectivePlan:
                 f"\t}} else if (++{s}.fast >= IEC_SEL_BUSY_AFTER) {{"]
         out += self._busy("\t\t")
         out += ["\t}"]
+        if b.leaf:
+            # the budget the body used and the settling are _run's; the
+            # body is the last call (a tail call: the registers this
+            # function uses are few, and the caller keeps its own in the
+            # others across the call)
+            if b.loops:
+                out.append(f"\t{s}.cost = ctx->loop_budget;")
+            out += [f"\t{prefix}_body(self, ctx);", "}", ""]
+            return out
         if b.loops:
             out.append("\tsel_budget = ctx->loop_budget;")
         out += [f"\t{prefix}_body(self, ctx);",
@@ -729,7 +764,7 @@ class SelectivePlan:
         out += ["}", ""]
         return out
 
-    def _run_plain(self, b, prefix, st):
+    def _run_plain(self, b, prefix, st, after):
         pou = b.pou
         s = "self->sel"
         out = []
@@ -742,7 +777,7 @@ class SelectivePlan:
                 "\tctx->sel_plain++;",
                 f"\t{prefix}_body(self, ctx);",
                 "}", ""]
-        out += ["/* false: skipped (nothing ran, nothing can have faulted) */",
+        out += ["/* false: nothing can have faulted (skipped, or evaluated and checked) */",
                 "static inline __attribute__((__always_inline__, __unused__)) bool",
                 f"{prefix}_run({st} *self, struct iec_ctx *ctx, bool fb)", "{", "\tint why;", ""]
         if pou.kind == "PROGRAM":
@@ -757,10 +792,32 @@ class SelectivePlan:
                 "\t}",
                 f"\twhy = {prefix}_check(self, ctx);",
                 "\tif (!why)",
-                "\t\treturn false;",
-                f"\t{prefix}_eval(self, ctx, why, fb);",
-                "\treturn true;",
-                "}"]
+                "\t\treturn false;"]
+        if not b.leaf:
+            out += [f"\t{prefix}_eval(self, ctx, why, fb);",
+                    "\treturn true;",
+                    "}"]
+            return out
+        # a leaf type: _eval starts the evaluation and runs the body, the
+        # settling is here, where the comparisons fold into the caller's
+        # code (no state of the evaluation lives across a call)
+        out += [f"\t{prefix}_eval(self, ctx, why);",
+                "\tif (ctx->fault != IEC_FAULT_NONE)",
+                "\t\treturn true;"]
+        if b.loops and not b.idempotent:
+            out.append(f"\t{s}.cost -= ctx->loop_budget;")
+        if b.idempotent or not after:
+            out += [f"\tif ({s}.tok == IEC_SEL_PENDING)",
+                    f"\t\t{s}.tok = IEC_SEL_TOKEN;"]
+        else:
+            out += [f"\tif ({s}.tok == IEC_SEL_PENDING) {{",
+                    "\t\tif (" + _disjunction(after, "\t\t    ") + ")",
+                    f"\t\t\t{s}.tok = 0;",
+                    "\t\telse",
+                    f"\t\t\t{s}.tok = IEC_SEL_TOKEN;",
+                    "\t}"]
+        out += self._report(b)
+        out += ["\treturn false;", "}"]
         return out
 
     def _ext_written(self, pou, ext_var) -> bool:

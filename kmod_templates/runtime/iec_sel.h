@@ -72,6 +72,15 @@ iec_sel_ne(const void *a, const void *b, iec_size_t n)
 #define IEC_SEL_BUSY		16
 #define IEC_SEL_BUSY_LEVELS	4
 
+/*
+ * The token of a leaf block between the start of an evaluation that may
+ * settle it and the end of its body: <prefix>_run() sets IEC_SEL_TOKEN if
+ * the body ended without fault and left its written state as it was.  Even,
+ * so never a module's IEC_SEL_TOKEN (odd): left by a fault, it is not
+ * settled, in this module or in the next one after a swap.
+ */
+#define IEC_SEL_PENDING		(~IEC_SEL_TOKEN)
+
 /* Bytes from the start of an instance to the end of its last input. */
 #define IEC_SEL_SPAN(type, last)					\
 	(__builtin_offsetof(type, last) + sizeof(((type *)0)->last))
