@@ -35,6 +35,7 @@ PROJECTS = [
     ("examples/pid_loop", "example"),
     ("examples/watchdog_event", "example"),
     ("examples/alarm_handler", "example"),
+    ("examples/batch_mixer", "example"),
     ("tests/verify/diff/press.il", "example (IL, tests)"),
     ("tests/verify/broken/star_delta_no_interlock", "broken"),
     ("tests/verify/broken/crossing_latched_green", "broken"),
@@ -87,7 +88,8 @@ def main(argv=None):
                 verdict = f"violated at cycle {r.cycle}"
             else:
                 verdict = f"{r.status} to {r.cycle} cycles"
-            print(f"  {r.name:<48} {verdict:<24} {r.seconds:7.2f} s")
+            free = f"  (free: {'; '.join(r.free)})" if r.free else ""
+            print(f"  {r.name:<48} {verdict:<24} {r.seconds:7.2f} s{free}")
         print(f"  {'all properties':<48} {'':<24} {wall:7.2f} s wall, {cpu:.2f} s CPU")
         total_wall += wall + wb
         total_cpu += cpu + cb

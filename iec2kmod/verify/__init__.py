@@ -75,9 +75,14 @@ What is refused, with an error naming the construct (never approximated):
 STRING/WSTRING values and the string functions -- lazily: they are not
 encoded, a non-string value computed from them (FIND, LEN, a comparison) is
 a stand-in, and a check whose cone of influence reads a stand-in (the
-property, or the runtime-error check through a guard) is refused naming the
-construct; checks that read none are decided exactly, the strings having no
-effect on them (the string functions cannot fault) --, FOR loops whose step is
+property, or the runtime-error check through a guard) is decided with every
+stand-in free (any value of its type, fresh at every evaluation in every
+cycle: an over-approximation, so "proved" and "holds up to N cycles" there
+hold for the program, and the report names what was free); when that does
+not prove it, the check is refused naming the construct (a violation there
+may be one the strings cannot produce); checks that read none are decided
+exactly, the strings having no effect on them (the string functions cannot
+fault) --, FOR loops whose step is
 not constant, IL backward jumps, EXPT and the
 transcendental functions (LN LOG EXP SIN COS TAN ASIN ACOS ATAN ATAN2),
 conversions between REAL and TIME, of enumerations, and BCD, and
@@ -89,7 +94,9 @@ from the command line or from {verify NAME: EXPR} pragmas in the sources
 model checking to --depth cycles and k-induction (proved for every depth),
 each property on its cone of influence, with the invariants Houdini proves
 among candidates (timers' locations, enumeration ranges, and the intervals
-of the bit-vector state found by ranges.py); with REAL, first on sound
+of the bit-vector state found by ranges.py; for a check that does not close
+without them, the per-step ranges of the state machines, ``state = S ->
+lo <= v <= hi``, ranges.partition_candidates); with REAL, first on sound
 over-approximations where floating-point operations are free inputs (a
 proof there is a proof; otherwise the exact encoding decides).
 A violation writes its input trace (CSV for `iec2kmod sim --inputs`) and a
@@ -107,7 +114,7 @@ from ..diagnostics import Diagnostics, SourceFile
 from .encode import TRUE, Encoder, Frame, Refuse, const_of, land
 from .engine import System, check
 from .model import SymbolicMachine
-from .ranges import range_candidates
+from .ranges import partition_candidates, range_candidates
 from .props import (Prop, PropChecker, config_scope, instance_of_path, parse_expr,
                     scan_pragmas)
 
@@ -245,6 +252,7 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     ts.stand_ins = list(enc.stand_ins)
     ts.invariants = ([(n, fix(t)) for n, t in sym.invariant_candidates(lambda lf: lf.var)]
                      + range_candidates(ts.state))
+    ts.extra = partition_candidates(ts.state)
     out = Outcome(props=[c[1] for c in checked if c[0].kind == "property"], system=ts,
                   sym=sym, state_terms={n: fix_all(t, cpairs) for n, t in state_terms.items()})
     out.leaves = len(state)

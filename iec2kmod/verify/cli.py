@@ -111,6 +111,8 @@ def run_verify(args) -> int:
             text = f"holds up to {r.cycle} cycles; cycle {r.cycle + 1} undecided (solver " \
                    "time limit, see --timeout)"
             worst = max(worst, EXIT_BOUNDED) if worst != EXIT_VIOLATED else worst
+        if r.free:
+            text += f"\n{'':{width + 4}}with any value of: " + "; ".join(r.free)
         print(f"  {r.name:<{width}}  {text}")
     if faulty and any(r.status != "violated" for r in out.results[1:]):
         print("note: a runtime error (or a loop longer than the unrolling) is reachable; the "

@@ -39,6 +39,7 @@ class Result:
     fault: tuple | None = None
     invariants: list = field(default_factory=list)
     abstract: bool = False    # proved on the floating-point abstraction
+    free: list = field(default_factory=list)   # constructs free in its verdict (stand-ins)
 
 
 @dataclass
@@ -267,17 +268,9 @@ def abstract_fp(ts: System, control_only=False):
     return System(state, inputs, faults, props, assume, invs)
 
 
-def refusal(ts: System, roots):
-    """Raises Refuse naming the construct when the cone of influence of the
-    roots reads a value the encoding does not represent (System.refused)."""
-    if not ts.refused:
-        return
-    sub = restrict(ts, roots)
-    used = free_consts([p for *_, p in sub.state] + list(roots) + [ts.assume])
-    names = sorted((str(t) for t in used.values() if str(t) in ts.refused),
-                   key=lambda n: int(n[len(REFUSED):]))
-    if names:
-        raise Refuse(*ts.refused[names[0]])
+# the first try of a check, before the stronger candidates are proved
+WEAK_DEPTH = 4
+WEAK_TIMEOUT_MS = 10000
 
 
 def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
@@ -287,50 +280,106 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
     candidate invariants are proved once, by Houdini on the whole system
     (on its floating-point abstraction when it has floating-point
     operations: a sound over-approximation, so what is inductive there holds
-    in every reachable state); each property uses those of its cone."""
+    in every reachable state); each property uses those of its cone.  A
+    check that k-induction does not close with them is decided again with
+    the stronger candidates of ts.extra (the state machines' per-step
+    ranges, ranges.partition_candidates), proved by Houdini once, only when
+    some check needs them: they are many, and most programs do not."""
     fault_roots = [c for c, *_ in ts.faults]
-    refusal(ts, fault_roots)
-    for _, term in ts.props:
-        refusal(ts, [term])
-    a = abstract_fp(ts)
-    h = a if a is not None else ts
-    # the stand-ins free in every cycle (an over-approximation)
-    h = System(h.state, h.inputs + [(None, c, TRUE) for c in ts.stand_ins], h.faults,
-               h.props, h.assume, h.invariants)
-    proved = {n for n, _ in houdini(h, timeout_ms)}
-    ts = System(ts.state, ts.inputs, ts.faults, ts.props, ts.assume,
-                [(n, t) for n, t in ts.invariants if n in proved and not _fp_ops([t])])
+    refused = ts.refused
+    extra = list(getattr(ts, "extra", []))
+    # the stand-ins (values computed from strings) free in every cycle and
+    # at every evaluation: each stand-in constant is one evaluation site of
+    # the one cycle the encoding unrolls, an input here, so fresh in every
+    # cycle -- an over-approximation of what the strings compute
+    full = System(ts.state, ts.inputs + [(None, c, TRUE) for c in ts.stand_ins], ts.faults,
+                  ts.props, ts.assume, ts.invariants)
+
+    def proved_system(cands):
+        free = System(full.state, full.inputs, full.faults, full.props, full.assume, cands)
+        a = abstract_fp(free)
+        proved = {n for n, _ in houdini(a if a is not None else free, timeout_ms)}
+        return System(full.state, full.inputs, full.faults, full.props, full.assume,
+                      [(n, t) for n, t in cands if n in proved and not _fp_ops([t])])
+
+    cur = {"ts": proved_system(full.invariants), "strong": not extra}
+
+    def decide(roots, name, term, no_fault):
+        while True:
+            sub = restrict(cur["ts"], roots)
+            sub.props = [(name, term)] if term is not None else []
+            if term is not None and not no_fault:
+                sub.faults = []     # not read: the property alone, on every run
+            # before the stronger invariants, only the cheap abstractions,
+            # and not far (induction without them gets slow as k grows)
+            if cur["strong"]:
+                r = _decide(sub, name, term, depth, timeout_ms, no_fault=no_fault)
+            else:
+                r = _decide(sub, name, term, min(depth, WEAK_DEPTH),
+                            min(timeout_ms, WEAK_TIMEOUT_MS), no_fault=no_fault, exact=False)
+            if r is None:
+                undecided = True
+            else:
+                undecided = r.status == "unknown" or r.status == "bounded" or \
+                    (r.status == "violated" and _stand_ins_read(sub, refused))
+            if not undecided or cur["strong"]:
+                _sound_or_refuse(r, sub, refused)
+                return r
+            cur["ts"] = proved_system(full.invariants + extra)
+            cur["strong"] = True
+
     t0 = time.perf_counter()
-    sub = restrict(ts, fault_roots)
-    sub.props = []
-    first = _decide(sub, "no runtime error", None, depth, timeout_ms, no_fault=False)
+    first = decide(fault_roots, "no runtime error", None, no_fault=False)
     first.seconds = time.perf_counter() - t0
     results = [first]
     invs = set()
-    for name, term in ts.props:
+    for name, term in full.props:
         t0 = time.perf_counter()
-        no_fault = first.status != "proved" and bool(ts.faults)
-        sub = restrict(ts, [term] + (fault_roots if no_fault else []))
-        sub.props = [(name, term)]
-        if not no_fault:
-            sub.faults = []     # not read: the property alone, on every run
-        r = _decide(sub, name, term, depth, timeout_ms, no_fault=no_fault)
+        no_fault = first.status != "proved" and bool(full.faults)
+        r = decide([term] + (fault_roots if no_fault else []), name, term, no_fault)
         r.seconds = time.perf_counter() - t0
         results.append(r)
         invs.update(n for n, _ in r.invariants)
     return results, sorted(invs)
 
 
-def _decide(ts, name, prop, depth, timeout_ms, no_fault):
+def _stand_ins_read(sub, refused):
+    return sorted((str(v) for leaf, v, _ in sub.inputs
+                   if leaf is None and str(v) in refused),
+                  key=lambda n: int(n[len(REFUSED):]))
+
+
+def _sound_or_refuse(r, sub, refused):
+    """A check whose cone of influence reads stand-ins was decided with
+    them free: 'proved' and 'holds up to N cycles' hold for the exact
+    system too (every run of it is a run there); a violation or an
+    undecided cycle may come from a value the strings cannot produce, so
+    the check is refused naming the construct (never reported as a
+    verdict).  r.free: the constructs, for the report."""
+    names = _stand_ins_read(sub, refused)
+    if not names:
+        return
+    if r.status in ("proved", "bounded") and r.fault is None:
+        r.free = sorted({refused[n][2].split("verify: ", 1)[-1]
+                         .replace(" cannot be encoded exactly", "") for n in names})
+        return
+    src, pos, msg = refused[names[0]]
+    raise Refuse(src, pos, f"{msg} (the check '{r.name}' reads it and is not proved with "
+                           "its value free)")
+
+
+def _decide(ts, name, prop, depth, timeout_ms, no_fault, exact=True):
     """check_one, first on over-approximations of ts when it has
     floating-point operations (abstract_fp: all of them free; then only
     those that only decide branches), each cut to its own cone of
     influence: a proof there is a proof; otherwise the exact system
-    decides.  ts.invariants are already proved."""
+    decides (not exact: None then -- the exact floating-point queries are
+    the slow ones).  ts.invariants are already proved."""
     for control_only in (False, True):
         a = abstract_fp(ts, control_only)
         if a is None:
             break
+        exact = exact or None
         ap = None
         if prop is not None:
             ap = dict(a.props).get(name)
@@ -344,6 +393,8 @@ def _decide(ts, name, prop, depth, timeout_ms, no_fault):
         if r.status == "proved":
             r.abstract = True
             return r
+    if exact is None:
+        return None
     return check_one(ts, name, prop, depth, timeout_ms, no_fault, proved_inv=ts.invariants)
 
 

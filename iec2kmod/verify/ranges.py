@@ -315,3 +315,96 @@ def range_candidates(state):
         if iv[1] < t[1]:
             out.append((f"{leaf.name} <= {iv[1]}", var <= z3.BitVecVal(iv[1], w)))
     return out
+
+
+def _constants(term, w, limit=20000):
+    """The signed values of the bit-vector numerals of width w in the term
+    (a DAG walk, at most `limit` nodes)."""
+    seen, out = set(), set()
+    todo = [term]
+    while todo and len(seen) < limit:
+        t = todo.pop()
+        i = t.get_id()
+        if i in seen:
+            continue
+        seen.add(i)
+        if z3.is_bv_value(t):
+            if t.size() == w:
+                out.add(_signed(t.as_long(), w))
+            continue
+        todo.extend(t.children())
+    return out
+
+
+def _assigned(term):
+    """The numerals a post term can take as a whole: the leaves of its
+    if-then-else tree (a state machine's post term assigns its steps)."""
+    out, seen, todo = set(), set(), [term]
+    while todo:
+        t = todo.pop()
+        if t.get_id() in seen:
+            continue
+        seen.add(t.get_id())
+        if z3.is_bv_value(t):
+            out.add(t.as_long())
+        elif z3.is_app_of(t, z3.Z3_OP_ITE):
+            todo.extend(t.children()[1:])
+    return out
+
+
+def _reads(term, limit=20000):
+    """{id} of the uninterpreted constants the term reads."""
+    seen, out = set(), set()
+    todo = [term]
+    while todo and len(seen) < limit:
+        t = todo.pop()
+        i = t.get_id()
+        if i in seen:
+            continue
+        seen.add(i)
+        if z3.is_const(t) and t.decl().kind() == z3.Z3_OP_UNINTERPRETED:
+            out.add(i)
+            continue
+        todo.extend(t.children())
+    return out
+
+
+def partition_candidates(state, max_values=16, max_consts=8):
+    """Candidate invariants of a state machine: ``E = e -> v >= c`` and
+    ``E = e -> v <= c`` for every enumeration E of the state (at most
+    max_values values), every other bit-vector state variable v, and the
+    constants c of v's own post term (what it is assigned, compared with,
+    stepped by).  They give k-induction what holds in one step of a
+    sequence and not in another, e.g. a step number that is 1..8 while a
+    recipe runs and anything while idle (examples/batch_mixer).  Only
+    candidates: Houdini keeps the inductive ones."""
+    from ..checks.types import EnumT, concrete
+    enums = []
+    for leaf, var, init, post in state:
+        t = concrete(leaf.type)
+        if isinstance(t, EnumT) and z3.is_bv_sort(var.sort()) and \
+                len(t.values) <= max_values and len(_assigned(post)) >= 2:
+            enums.append((leaf, var, sorted(t.values.values(), key=lambda nv: nv[1])))
+    if not enums:
+        return []
+    out = []
+    for leaf, var, init, post in state:
+        if not z3.is_bv_sort(var.sort()) or isinstance(concrete(leaf.type), EnumT):
+            continue
+        w = var.sort().size()
+        if w > 32:
+            continue
+        reads = _reads(post)
+        consts = sorted(_constants(post, w), key=lambda c: (abs(c), c))[:max_consts]
+        for eleaf, evar, values in enums:
+            if evar.get_id() not in reads:
+                continue        # v's update does not depend on the machine's step
+            ew = evar.sort().size()
+            for name, val in values:
+                cond = evar == z3.BitVecVal(val, ew)
+                for c in sorted(consts):
+                    out.append((f"{eleaf.name} = {name} -> {leaf.name} >= {c}",
+                                z3.Implies(cond, var >= z3.BitVecVal(c, w))))
+                    out.append((f"{eleaf.name} = {name} -> {leaf.name} <= {c}",
+                                z3.Implies(cond, var <= z3.BitVecVal(c, w))))
+    return out

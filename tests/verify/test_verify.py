@@ -322,12 +322,14 @@ STRINGS = """
 
 
 def test_strings_are_refused_only_where_a_check_reads_them(tmp_path, capsys):
-    """A STRING construct is refused when a check's cone of influence reads
-    a value computed from strings -- never approximated --, and a check that
-    does not read one is decided exactly: here the division's guard reads
-    FIND (the runtime-error check is refused naming FIND), a property on k
-    (LEN of a CONCAT) is refused naming LEN, and with the guard free of
-    strings a property on n is proved although CONCAT and LEN are there."""
+    """A check whose cone of influence reads a value computed from strings
+    is decided with that value free (any value, in every cycle); when that
+    does not prove it, it is refused naming the construct, never reported
+    as violated: here the division's guard reads FIND (with FIND free the
+    divisor may be 0: the runtime-error check is refused naming FIND), a
+    property on k (LEN of a CONCAT) is refused naming LEN, and with the
+    guard free of strings a property on n is proved although CONCAT and LEN
+    are there."""
     proj = project(tmp_path, STRINGS)
     rc, out, err = verify(capsys, proj, "--property", "R.s.n <= 10")
     assert rc == 1 and "p.st:9:4: error: verify: the string function FIND cannot be " \
@@ -342,6 +344,59 @@ def test_strings_are_refused_only_where_a_check_reads_them(tmp_path, capsys):
     rc, out, err = verify(capsys, proj, "--property", "R.s.msg = 'x'")
     assert rc == 1 and "<--property 1>:1:1: error: verify: a STRING comparison '=' " \
                        "cannot be encoded exactly" in err, err
+
+
+def test_checks_reading_strings_are_proved_with_them_free(tmp_path, capsys):
+    """Proved with a string-derived value free is proved (every run of the
+    program is a run with some value there): the guard q > 0 protects the
+    division by q := FIND(...) whatever FIND returns, and the report names
+    what was free."""
+    proj = project(tmp_path, STRINGS.replace("IF FIND(s, 'b') > 0 THEN q := 100 / d;",
+                                             "q := FIND(s, 'b'); IF q > 0 THEN q := 100 / q;"))
+    rc, out, err = verify(capsys, proj, "--property", "R.s.n <= 10")
+    assert rc == 0, out + err
+    assert re.search(r"no runtime error +proved", out), out
+    assert "with any value of: the string function FIND" in out, out
+    rc, out, err = verify(capsys, proj, "--property", "R.s.k < 100")
+    assert rc == 1 and "the string function LEN cannot be encoded exactly (the check " \
+                       "'property 1' reads it and is not proved with its value free)" in err, err
+
+
+SEQUENCE = """
+    TYPE Phase : (P_IDLE, P_RUN, P_NEXT); END_TYPE
+    PROGRAM Seq
+    VAR_INPUT go, done : BOOL; END_VAR
+    VAR_OUTPUT out : INT; END_VAR
+    VAR phase : Phase; n, waited : INT; tab : ARRAY[1..4] OF INT := [10, 20, 30, 40]; END_VAR
+    CASE phase OF
+    P_IDLE: n := n - 1; IF go THEN n := 1; phase := P_RUN; END_IF;
+    P_RUN:  waited := waited + 1;
+            IF done OR waited >= 1000 THEN out := tab[n]; waited := 0; phase := P_NEXT; END_IF;
+    P_NEXT: IF n >= 4 THEN phase := P_IDLE; ELSE n := n + 1; phase := P_RUN; END_IF;
+    END_CASE;
+    END_PROGRAM
+    CONFIGURATION C
+        RESOURCE R ON CPU0
+            TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+            PROGRAM s WITH t : Seq (go := %IX0.0, done := %IX0.1);
+        END_RESOURCE
+    END_CONFIGURATION
+"""
+
+
+def test_per_step_ranges_of_a_sequence_prove_its_indexes(tmp_path, capsys):
+    """tab[n] is read only in P_RUN, where n is 1..4; n is anything while
+    idle (it counts down there) and the sequence waits in P_RUN up to 1000
+    cycles (waited counts, in the cone of the index), so
+    k-induction needs `phase = P_RUN -> 1 <= n <= 4`: a candidate of the
+    state machine's per-step ranges (ranges.partition_candidates), proved
+    by Houdini; without it the check only holds up to the depth."""
+    proj = project(tmp_path, SEQUENCE)
+    rc, out, err = verify(capsys, proj, "--property",
+                          "R.s.phase <> P_RUN OR (R.s.n >= 1 AND R.s.n <= 4)")
+    assert rc == 0, out + err
+    assert re.search(r"no runtime error +proved", out), out
+    assert re.search(r"property 1 +proved", out), out
 
 
 def test_bad_properties_are_diagnosed(tmp_path, capsys):
