@@ -45,6 +45,12 @@ class BodyChecker(ILChecks):
 
     # ------------------------------------------------------------ entry
     def check(self):
+        scope = self.decl.pou_scope(self.pou)
+        with self.decl.constants_of(scope):
+            self._check()
+        self.decl.mark_used(scope, self.pou.vars)
+
+    def _check(self):
         node = self.pou.node
         if node.language == "SFC":
             from .sfc import SFCChecker

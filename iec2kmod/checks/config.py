@@ -97,6 +97,13 @@ class ConfigChecker:
 
     # ---------------------------------------------------------------
     def configuration(self, node) -> ConfigInfo:
+        scope = self.decl.config_scope(node)
+        with self.decl.constants_of(scope):
+            cfg = self._configuration(node)
+        self.decl.mark_used(scope, cfg.globals)
+        return cfg
+
+    def _configuration(self, node) -> ConfigInfo:
         src = node.src
         cfg = ConfigInfo(node.name, node, src)
         for block in node.blocks:
@@ -106,10 +113,6 @@ class ConfigChecker:
                 continue
             for v in self.decl.declare_block(block, cfg, src, cfg.globals, allow_located=True):
                 self.note_address(v, None, src)
-        self.decl.global_constants = {k: _const(self.decl, v) for k, v in cfg.globals.items()
-                                      if v.constant and v.init is not None}
-        self.decl.global_constants = {k: v for k, v in self.decl.global_constants.items()
-                                      if v is not None}
         res_names = {}
         for rnode in node.resources:
             r = self.resource(rnode, cfg)
@@ -132,6 +135,15 @@ class ConfigChecker:
         return cfg
 
     def resource(self, rnode, cfg) -> ResourceInfo:
+        scope = self.decl.scope_of([b for b in rnode.blocks if b.kind == "VAR_GLOBAL"],
+                                   cfg.src, outer=self.decl._const_scope)
+        with self.decl.constants_of(scope):
+            r = self._resource(rnode, cfg)
+        self.decl.mark_used(scope, r.globals)
+        self.decl._const_scope.used |= {k for k in scope.used if k not in r.globals}
+        return r
+
+    def _resource(self, rnode, cfg) -> ResourceInfo:
         src = cfg.src
         r = ResourceInfo(rnode.name or cfg.name, rnode.processor, rnode)
         for block in rnode.blocks:
@@ -169,9 +181,14 @@ class ConfigChecker:
                 except ConstError:
                     self.error(src, expr.pos, "INTERVAL must be a constant TIME, e.g. T#10ms")
                     continue
-                if not (isinstance(expr, ast.Lit) and expr.kind == "time") or v <= 0:
-                    self.error(src, expr.pos, "INTERVAL must be a positive TIME literal, e.g. "
-                                              "T#10ms")
+                named = r.globals.get(expr.name.upper()) or cfg.globals.get(
+                    expr.name.upper()) if isinstance(expr, ast.Ref) else None
+                is_time = (isinstance(expr, ast.Lit) and expr.kind == "time") or (
+                    named is not None and named.constant and
+                    getattr(named.type, "cat", None) == "time")
+                if not is_time or v <= 0:
+                    self.error(src, expr.pos, "INTERVAL must be a positive TIME literal or "
+                                              "TIME constant, e.g. T#10ms")
                     continue
                 if v < 50_000:
                     self.error(src, expr.pos, "INTERVAL below 50 us cannot be met by a kernel "
@@ -536,7 +553,7 @@ class ConfigChecker:
                     check_address_type(self.decl, src, d.pos, d.location, target.type)
                     self.note_direct(d.location, None, src, d.pos, f"VAR_CONFIG {d.path}")
             if d.init is not None and t is not ERROR:
-                self.decl.check_initializer(d.init, t, src)
+                d.init = self.decl.check_initializer(d.init, t, src)
                 chain = self.instance_chain(d.path, cfg)
                 if chain is None:
                     self.error(src, d.pos, f"'{d.path}' is a global: VAR_CONFIG gives initial "
@@ -620,13 +637,6 @@ def _same_type(a, b):
     STRING[4] external of a STRING[8] global would be a reference of the
     wrong size)."""
     return identical(a, b)
-
-
-def _const(decl, v):
-    try:
-        return decl.const_value(v.init, v.src) if isinstance(v.init, ast.Expr) else None
-    except ConstError:
-        return None
 
 
 def fb_slots(t, steps):

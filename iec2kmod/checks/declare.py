@@ -3,6 +3,8 @@ tables, constant expressions evaluated, duplicates reported."""
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 from .. import ast
 from . import stdlib
 from .symbols import POUInfo, Project, Var
@@ -25,6 +27,18 @@ class ConstError(Exception):
     pass
 
 
+class ConstScope:
+    """Names visible to a constant expression (Declarer.scope_of) and the
+    constants it used (so they count as used)."""
+
+    __slots__ = ("entries", "outer", "used")
+
+    def __init__(self, entries, outer):
+        self.entries = entries
+        self.outer = outer
+        self.used: set = set()
+
+
 class Declarer:
     def __init__(self, project: Project, diags):
         self.p = project
@@ -32,6 +46,12 @@ class Declarer:
         self.enum_values: dict[str, list] = {}  # upper value name -> [EnumT]
         self._pending_types: dict[str, ast.TypeDef] = {}
         self._resolving: set = set()
+        # named constants: the scope a constant expression is evaluated in
+        self._const_scope = ConstScope({}, None)
+        self._config_scope = ConstScope({}, None)
+        self._pou_scopes: dict[str, ConstScope] = {}
+        self._const_busy: set = set()
+        self._resource_constants: set = set()
 
     # ------------------------------------------------------------ errors
     def error(self, src, pos, msg):
@@ -86,14 +106,119 @@ class Declarer:
             except ZeroDivisionError:
                 raise ConstError("division by zero in a constant expression") from None
         if isinstance(expr, ast.Ref) and not expr.accessors:
-            hits = self.enum_values.get(expr.name.upper(), [])
+            key = expr.name.upper()
+            found = self._const_scope.entries.get(key)
+            if found is not None and found[0] != "var":
+                return self.named_constant(key, found, what)
+            hits = self.enum_values.get(key, [])
             if len(hits) == 1:
-                return hits[0].values[expr.name.upper()][1]
-            const = self.global_constants.get(expr.name.upper()) if hasattr(
-                self, "global_constants") else None
-            if const is not None:
-                return const
+                return hits[0].values[key][1]
+            if found is not None:
+                raise ConstError(f"{what} must be a constant expression: '{expr.name}' is a "
+                                 "variable (a named constant is declared VAR CONSTANT, or "
+                                 "VAR_EXTERNAL CONSTANT for the configuration's VAR_GLOBAL "
+                                 "CONSTANT, with an initial value)")
         raise ConstError(f"{what} must be a constant expression")
+
+    # ------------------------------------------------- named constants
+    # A constant expression may name a constant (ed.3 7.3.2, 6.4.4: array
+    # bounds, string lengths, subranges, CASE labels): a VAR CONSTANT of the
+    # same POU (or VAR_GLOBAL CONSTANT of the configuration or resource)
+    # with a constant initial value, in any order of declaration, or a
+    # VAR_EXTERNAL CONSTANT, whose value is the configuration's VAR_GLOBAL
+    # CONSTANT of that name: a POU type has one layout for all its
+    # instances, so a resource's global cannot give it.
+    def named_constant(self, key, found, what):
+        kind, init, src, name = found
+        scope = self._const_scope
+        if kind == "external":
+            scope.used.add(key)
+            g = self._config_scope.entries.get(key)
+            if g is None or g[0] != "const":
+                why = ("; a resource's constant of that name cannot give it (a POU type has "
+                       "one layout for all its instances)" if key in self._resource_constants
+                       else ", which this project does not declare")
+                raise ConstError(f"{what}: VAR_EXTERNAL CONSTANT '{name}' takes its value from "
+                                 f"the configuration's VAR_GLOBAL CONSTANT {name}{why}")
+            _, init, src, name = g
+            scope = self._config_scope
+        mark = (id(scope), key)
+        if mark in self._const_busy:
+            raise ConstError(f"constant '{name}' is defined in terms of itself")
+        self._const_busy.add(mark)
+        saved = self._const_scope
+        self._const_scope = scope
+        try:
+            value = self.const_value(init, src, what)
+        finally:
+            self._const_scope = saved
+            self._const_busy.discard(mark)
+        scope.used.add(key)
+        return value
+
+    @staticmethod
+    def scope_of(blocks, src, outer=None) -> "ConstScope":
+        """The names a list of VAR blocks declares, as a ConstScope over
+        *outer*'s: 'const' (a CONSTANT with an initial value), 'external'
+        (VAR_EXTERNAL CONSTANT) or 'var' (any other variable)."""
+        entries = dict(outer.entries) if outer is not None else {}
+        for block in blocks:
+            if block.kind in ("VAR_ACCESS", "VAR_CONFIG"):
+                continue
+            constant = "CONSTANT" in block.qualifiers
+            for decl in block.decls:
+                if constant and block.kind == "VAR_EXTERNAL":
+                    kind = "external"
+                elif constant and decl.init is not None and \
+                        block.kind in ("VAR", "VAR_GLOBAL") and not decl.location:
+                    kind = "const"
+                else:
+                    kind = "var"
+                for name, _ in decl.names:
+                    entries[name.upper()] = (kind, decl.init, src, name)
+        return ConstScope(entries, outer)
+
+    def pou_scope(self, pou) -> "ConstScope":
+        scope = self._pou_scopes.get(pou.key)
+        if scope is None:
+            scope = self.scope_of(pou.node.blocks, pou.node.src)
+            self._pou_scopes[pou.key] = scope
+        return scope
+
+    @contextmanager
+    def constants_of(self, scope):
+        """Constant expressions inside name *scope*'s constants."""
+        saved = self._const_scope
+        self._const_scope = scope
+        try:
+            yield scope
+        finally:
+            self._const_scope = saved
+
+    def collect_config_constants(self, units):
+        """The configuration's VAR_GLOBAL CONSTANTs, before the POUs are
+        declared: their VAR_EXTERNAL CONSTANTs may size arrays."""
+        configs = [c for u in units for c in u.configurations]
+        if configs:
+            self._config_node = configs[0]
+            self._config_scope = self.config_scope(configs[0])
+            self._resource_constants = {
+                key for r in configs[0].resources
+                for key, found in self.scope_of(r.blocks, configs[0].src).entries.items()
+                if found[0] == "const"}
+
+    def config_scope(self, node) -> "ConstScope":
+        """The constants a configuration's own declarations see."""
+        if node is getattr(self, "_config_node", None) and self._config_scope.entries:
+            return self._config_scope
+        return self.scope_of([b for b in node.blocks if b.kind == "VAR_GLOBAL"], node.src)
+
+    @staticmethod
+    def mark_used(scope, table):
+        for key in scope.used:
+            v = table.get(key)
+            if v is not None:
+                v.used = True
 
     def const_int(self, expr, src, what):
         try:
@@ -142,7 +267,7 @@ class Declarer:
         self._resolving.discard(key)
         self.p.types[key] = t
         if td.init is not None and t is not ERROR:
-            self.check_initializer(td.init, t, td.src)
+            td.init = self.check_initializer(td.init, t, td.src)
             self.p.types.setdefault("__init__", {})[key] = td.init
         elif t is not ERROR and self.named_init(td.spec) is not None:
             # TYPE b : a; END_TYPE -- b starts where a starts
@@ -278,7 +403,7 @@ class Declarer:
                     self.error(src, m.spec.pos, "a structure cannot contain a function block")
                     mt = ERROR
                 if m.init is not None and mt is not ERROR:
-                    self.check_initializer(m.init, mt, src)
+                    m.init = self.check_initializer(m.init, mt, src)
                 t.fields[mname.upper()] = (mname, mt, m.init if m.init is not None
                                            else self.named_init(m.spec))
             return t
@@ -286,54 +411,94 @@ class Declarer:
 
     # ---------------------------------------------------- initializers
     def check_initializer(self, init, t, src):
+        """Checks an initial value for type *t*; returns it, an expression
+        that names constants folded to the literal of its value (the code
+        generators and the interpreter initialise from literals)."""
         if isinstance(init, ast.ArrayInit):
             if not isinstance(t, ArrayT):
                 self.error(src, init.pos, f"an array initializer cannot initialize {t.name}")
-                return
+                return init
             n = 0
-            for count, value in init.items:
+            for i, (count, value) in enumerate(init.items):
                 k = count if count is not None else 1
                 if count is not None and count < 1:
                     self.error(src, init.pos, "repetition count must be at least 1")
                 n += k
                 if value is not None:
-                    self.check_initializer(value, t.elem, src)
+                    init.items[i] = (count, self.check_initializer(value, t.elem, src))
             if n > t.count:
                 self.error(src, init.pos, f"{n} initial values for an array of {t.count} elements")
-            return
+            return init
         if isinstance(init, ast.StructInit):
             if not isinstance(t, StructT):
                 if isinstance(t, FBType):
                     pou = t.pou
-                    for fname, fval, fpos in init.fields:
+                    for i, (fname, fval, fpos) in enumerate(init.fields):
                         v = pou.var(fname)
                         if v is None or v.section not in ("VAR_INPUT", "VAR_OUTPUT", "VAR"):
                             self.error(src, fpos, f"'{t.name}' has no member '{fname}'")
                         else:
-                            self.check_initializer(fval, v.type, src)
-                    return
+                            init.fields[i] = (fname, self.check_initializer(fval, v.type, src),
+                                              fpos)
+                    return init
                 self.error(src, init.pos, f"a structure initializer cannot initialize {t.name}")
-                return
-            for fname, fval, fpos in init.fields:
+                return init
+            for i, (fname, fval, fpos) in enumerate(init.fields):
                 f = t.fields.get(fname.upper())
                 if f is None:
                     self.error(src, fpos, f"structure '{t.name}' has no member '{fname}'")
                     continue
-                self.check_initializer(fval, f[1], src)
-            return
+                init.fields[i] = (fname, self.check_initializer(fval, f[1], src), fpos)
+            return init
         # an expression: a constant of an assignable type
         try:
             v = self.const_value(init, src, "initial value")
         except ConstError as exc:
             if isinstance(init, ast.Ref) and isinstance(t, EnumT) and t.has(init.name) \
                     and not init.accessors:
-                return
+                return init
             if isinstance(init, ast.Lit) and init.kind in ("string", "wstring"):
                 v = init.value
             else:
                 self.error(src, init.pos, str(exc))
-                return
+                return init
+        if self.names_constant(init):
+            folded = self.folded(v, init, t)
+            if folded is None:
+                self.error(src, init.pos, "initial value: a named constant of this kind "
+                                          f"cannot initialize {t.name}")
+                return init
+            init = folded
         self.check_const_fits(v, init, t, src)
+        return init
+
+    def names_constant(self, expr) -> bool:
+        """Whether a constant expression names a constant of the scope."""
+        if isinstance(expr, ast.Ref):
+            found = self._const_scope.entries.get(expr.name.upper())
+            return not expr.accessors and found is not None and found[0] != "var"
+        if isinstance(expr, ast.UnOp):
+            return self.names_constant(expr.operand)
+        if isinstance(expr, ast.BinOp):
+            return self.names_constant(expr.left) or self.names_constant(expr.right)
+        return False
+
+    @staticmethod
+    def folded(v, expr, t):
+        """The literal of value *v* of a constant expression for type *t*
+        (None for a value no literal kind carries: a string, an enum)."""
+        cat = getattr(getattr(t, "base", None), "cat", None)
+        if isinstance(v, bool):
+            return ast.Lit(expr.pos, "TRUE" if v else "FALSE", "bool", v)
+        if isinstance(v, int):
+            if cat in ("time", "date", "tod", "dt"):
+                return ast.Lit(expr.pos, str(v), cat, v)
+            if isinstance(t, EnumT):
+                return None
+            return ast.Lit(expr.pos, str(v), "int", v)
+        if isinstance(v, float):
+            return ast.Lit(expr.pos, repr(v), "real", v)
+        return None
 
     def check_const_fits(self, v, expr, t, src):
         if t is ERROR:
@@ -397,6 +562,7 @@ class Declarer:
 
     # ------------------------------------------------------------ POUs
     def declare_pous(self, units):
+        self.collect_config_constants(units)
         for unit in units:
             for node in unit.pous:
                 key = node.name.upper()
@@ -421,22 +587,25 @@ class Declarer:
         node = pou.node
         src = node.src
         if pou.kind == "FUNCTION":
-            pou.result = self.type_of_spec(node.result, src)
+            with self.constants_of(self.pou_scope(pou)):
+                pou.result = self.type_of_spec(node.result, src)
             if isinstance(pou.result, FBType):
                 self.error(src, node.result.pos, "a function cannot return a function block")
                 pou.result = ERROR
             pou.vars[pou.key] = Var(pou.name, pou.result, "RESULT", node.pos, src, owner=pou)
         allowed = SECTIONS_IN_POU[pou.kind]
         access = []
-        for block in node.blocks:
-            if block.kind not in allowed:
-                self.error(src, block.pos, f"{block.kind} is not allowed in a "
-                                           f"{pou.kind.lower().replace('_', ' ')}")
-                continue
-            if block.kind == "VAR_ACCESS":
-                access.append(block)
-                continue
-            self.declare_block(block, pou, src, pou.vars)
+        with self.constants_of(self.pou_scope(pou)) as scope:
+            for block in node.blocks:
+                if block.kind not in allowed:
+                    self.error(src, block.pos, f"{block.kind} is not allowed in a "
+                                               f"{pou.kind.lower().replace('_', ' ')}")
+                    continue
+                if block.kind == "VAR_ACCESS":
+                    access.append(block)
+                    continue
+                self.declare_block(block, pou, src, pou.vars)
+        self.mark_used(scope, pou.vars)
         for block in access:
             self.program_access(pou, block)
         self.declare_eno(pou)
@@ -574,7 +743,7 @@ class Declarer:
                 if block.kind in ("VAR_EXTERNAL", "VAR_IN_OUT"):
                     self.error(src, decl.init.pos, f"{block.kind} cannot have an initial value")
                 elif t is not ERROR:
-                    self.check_initializer(decl.init, t, src)
+                    decl.init = self.check_initializer(decl.init, t, src)
             for name, pos in decl.names:
                 key = name.upper()
                 if key in table:

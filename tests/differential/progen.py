@@ -118,6 +118,8 @@ class Pou:
     depth: int = 0           # FB nesting depth under it
     has_ext: bool = False    # it or an FB inside uses VAR_EXTERNAL
     home: str | None = None  # resource whose globals a program may use
+    consts: list = field(default_factory=list)  # named constants (VAR CONSTANT) of bounds
+    ext_consts: list = field(default_factory=list)  # VAR_EXTERNAL CONSTANTs of bounds
 
     def section(self, sec):
         return [v for v in self.vars if v.sec == sec]
@@ -236,6 +238,12 @@ class Gen:
         # project it gave before they were added
         self.fid_r = random.Random(f"fid{seed}")
         self.fid = True
+        # named constants in array bounds and CASE labels: a generator of
+        # their own, kept out of the variables the bodies draw from, so a
+        # seed's project is the one it gave before, with names for numbers
+        self.nc_r = random.Random(f"nc{seed}")
+        self.nc = True
+        self.cur_pou = None
         # strings=False (generate_unit): no STRING type, value or function,
         # for engines that have none (the verifier); True leaves every seed's
         # project as it was
@@ -248,6 +256,55 @@ class Gen:
 
     def fid_chance(self, p):
         return self.fid and self.fid_r.random() < p
+
+    def nc_chance(self, p):
+        return self.nc and self.nc_r.random() < p
+
+    def named_constant(self, pou, value):
+        """The name of a new VAR CONSTANT of *pou* worth *value* (a bound
+        or a CASE label), declared from another one at times."""
+        name = f"k{self.nc_r.randrange(1 << 30):x}_{len(pou.consts)}"
+        init = str(value)
+        if pou.consts and self.nc_r.random() < 0.4:
+            other = self.nc_r.choice(pou.consts)
+            init = f"{other.name} + ({value - int(other.value)})"
+            self.feat("named_const_from_const")
+        v = Var(name, INT, "const", ro=True, init=init)
+        v.value = value
+        pou.consts.append(v)
+        return name
+
+    def named_bounds(self, pou, t):
+        """An unnamed array type of *pou* with some bounds named by
+        constants (ed.3: a bound is a constant expression): a local VAR
+        CONSTANT, or an expression of a VAR_EXTERNAL CONSTANT of the POU
+        (the configuration's VAR_GLOBAL CONSTANT) worth the same bound."""
+        if t.kind != "array" or t.named or not self.nc_chance(0.3):
+            return t
+        # the configuration's integer constants; a PROGRAM or FUNCTION_BLOCK
+        # reaches one through a VAR_EXTERNAL CONSTANT of its own (declared
+        # apart from the variables its body draws from)
+        exts = [(g.name, int(g.init), g.ty) for g in self.cglobals
+                if getattr(g, "const", False) and g.ty.kind == "int"
+                and re.fullmatch(r"-?\d+", g.init or "")] if pou.kind != "FUNCTION" else []
+        dims = []
+        for lo, hi in t.dims:
+            a, b = str(lo), str(hi)
+            if exts and self.nc_r.random() < 0.5:
+                n, val, gt = self.nc_r.choice(exts)
+                b = n if val == hi else f"{n} + ({hi - val})"
+                if not any(v.name == n and v.sec == "ext" for v in pou.vars + pou.ext_consts):
+                    pou.ext_consts.append(Var(n, gt, "ext", ro=True))
+                self.feat("named_const_external_bound")
+            elif self.nc_r.random() < 0.6:
+                b = self.named_constant(pou, hi)
+                self.feat("named_const_bound")
+            if self.nc_r.random() < 0.3:
+                a = self.named_constant(pou, lo)
+            dims.append(f"{a}..{b}")
+        es = t.elem.name if t.elem.kind != "array" else t.elem.spec
+        spec = "ARRAY[" + ", ".join(dims) + f"] OF {es}"
+        return Ty("array", t.name, dims=t.dims, elem=t.elem, spec=spec, named=False)
 
     def chance(self, p):
         return self.r.random() < p
@@ -1038,9 +1095,15 @@ class Gen:
                     lab = f"{pt}..{pt + 2}"
                     used |= {pt, pt + 1, pt + 2}
                     self.feat("case_range")
+                    if self.cur_pou is not None and self.nc_chance(0.25):
+                        lab = f"{self.named_constant(self.cur_pou, pt)}..{pt + 2}"
+                        self.feat("named_const_case")
                 else:
                     lab = str(pt)
                     used.add(pt)
+                    if self.cur_pou is not None and self.nc_chance(0.25):
+                        lab = self.named_constant(self.cur_pou, pt)
+                        self.feat("named_const_case")
                 out.append(f"{ind}{lab}:")
                 out += self.stmts(scope, d + 1, self.r.randint(1, 2), ctx) or [ind + "    ;"]
         if self.chance(0.5):
@@ -1312,7 +1375,8 @@ class Gen:
     def locals_for(self, pou, n):
         for _ in range(n):
             t = self.pick_type(allow_struct=True, allow_array=True)
-            pou.vars.append(Var(self.uid("v"), t, "var", init=self.init_for(t)[4:] or None))
+            init = self.init_for(t)[4:] or None
+            pou.vars.append(Var(self.uid("v"), self.named_bounds(pou, t), "var", init=init))
         for name in ("i", "j"):
             pou.vars.append(Var(f"{name}{self.uid('')}", self.pick([INT, DINT]), "var"))
         if self.chance(0.5):
@@ -1456,6 +1520,7 @@ class Gen:
         scope = list(f.vars) + [Var(name, res, "result", wo=True)]
         self.for_ranges = []
         self.cur_name = name
+        self.cur_pou = f
         body = self.stmts(scope, 0, r.randint(2, int(6 * self.size) + 2), {"fn": True})
         if self.fid_chance(0.3):
             # ENO inside the body: the implicit output, TRUE when the body
@@ -1544,6 +1609,7 @@ class Gen:
             self.feat(f"fb_external_depth{fb.depth + 1}")
 
     def pou_body(self, pou):
+        self.cur_pou = pou
         scope = list(pou.vars)
         self.for_ranges = []
         # SFC is decided by a generator of its own, so that projects without
@@ -1592,7 +1658,8 @@ class Gen:
         lines = [head]
         order = ["in", "out", "inout", "ext", "var", "const", "temp", "pglobal"]
         for sec in order:
-            vs = [v for v in pou.vars if v.sec == sec]
+            vs = [v for v in pou.vars if v.sec == sec] + (
+                pou.consts if sec == "const" else pou.ext_consts if sec == "ext" else [])
             if not vs:
                 continue
             kw = self.SEC[sec]
@@ -1817,18 +1884,22 @@ class Gen:
 
 
 def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
-                  sfc: bool = True, fidelity: bool = True, strings: bool = True) -> Unit:
+                  sfc: bool = True, fidelity: bool = True, strings: bool = True,
+                  named_constants: bool = True) -> Unit:
     """``sfc=False``: no SFC bodies -- the same project the seed gave before
     the generator knew SFC (SFC is decided by a random generator of its own).
     ``fidelity=False``: none of the constructs of issue 10 (function forms,
     context-typed real literals, calls on array elements, ENO in functions),
     likewise decided by a generator of their own.  ``strings=False``: no
     STRING type, value or function (benchmarks/verify_fuzz.py: the verifier
-    refuses them); True gives every seed's project as before."""
+    refuses them); True gives every seed's project as before.
+    ``named_constants=False``: no VAR CONSTANT naming an array bound or a
+    CASE label (decided by a generator of its own as well)."""
     g = Gen(seed, k, size)
     g.sfc = sfc
     g.fid = fidelity
     g.strings = strings
+    g.nc = named_constants
     g._dims = {}
     g.for_ranges = []
     return g.unit(cycles)

@@ -42,6 +42,8 @@ MUST_REACH = {
     "sfc_q_SD", "sfc_q_DS", "sfc_q_SL",
     "fn_form_MOD", "fn_form_bitwise", "real_literal_context", "fb_array_call",
     "function_eno", "function_eno_out",
+    "named_const_bound", "named_const_case", "named_const_from_const",
+    "named_const_external_bound",
 }
 
 

@@ -232,3 +232,98 @@ def test_trunc_result_type_comes_from_the_context():
         "TRUNC gives an integer (ANY_INT), and REAL is not one: convert it explicitly "
         "(e.g. DINT_TO_REAL)",
         "argument 1 of TRUNC must be REAL or LREAL (ANY_REAL), not INT"]
+
+
+# ------------------------------- named constants in constant expressions (ed.3)
+
+def _checked(text):
+    from iec2kmod.checks import check_project
+    from iec2kmod.diagnostics import Diagnostics
+    from iec2kmod.parser import SourceFile, parse_source
+    diags = Diagnostics()
+    unit = parse_source(SourceFile("t.st", text), diags)
+    project = check_project([unit], diags)
+    return project, [f"{d.line}:{d.col}: {d.severity}: {d.message}" for d in diags.sorted()]
+
+
+def test_named_constants_size_arrays_strings_and_subranges():
+    project, diags = _checked("""PROGRAM P
+VAR a : ARRAY[1..N, 0..W] OF INT; s : STRING[W]; r : SINT (-N..N); x : INT := N + 1; END_VAR
+VAR CONSTANT W : INT := N * 2; N : INT := 3; T1 : TIME := T#1s; T2 : TIME := T1 * 2; END_VAR
+a[1, 0] := x; s := 'abc'; r := 0;
+END_PROGRAM""")
+    # no error, and constants used only in bounds are used (T2 is not)
+    assert diags == ["3:65: warning: unused variable 'T2'"]
+    v = project.pous["P"].vars
+    assert v["A"].type.dims == [(1, 3), (0, 6)]
+    assert v["S"].type.length == 6
+    assert (v["R"].type.low, v["R"].type.high) == (-3, 3)
+    # initial values that name constants reach the code generators as literals
+    assert isinstance(v["X"].init, ast.Lit) and v["X"].init.value == 4
+    assert isinstance(v["W"].init, ast.Lit) and v["W"].init.value == 6
+    assert v["T2"].init.kind == "time" and v["T2"].init.value == 2_000_000_000
+
+
+def test_named_constants_label_case_branches():
+    project, diags = _checked("""FUNCTION F : INT
+VAR_INPUT code : INT; END_VAR
+VAR CONSTANT IDLE : INT := 0; LO : INT := 10; HI : INT := LO + 9; END_VAR
+CASE code OF IDLE: F := 1; LO..HI: F := 2; END_CASE;
+END_FUNCTION""")
+    assert diags == []
+    case = project.pous["F"].node.body[0]
+    assert case.values == [[(0, 0)], [(10, 19)]]
+
+
+def test_configuration_constants_size_pou_types_through_var_external_constant():
+    project, diags = _checked("""FUNCTION_BLOCK B
+VAR_EXTERNAL CONSTANT DEPTH : INT; END_VAR
+VAR h : ARRAY[1..DEPTH] OF INT; END_VAR
+h[1] := 1;
+END_FUNCTION_BLOCK
+PROGRAM P VAR b : B; END_VAR b(); END_PROGRAM
+CONFIGURATION C
+VAR_GLOBAL CONSTANT DEPTH : INT := LEN_ + 1; LEN_ : INT := 4; CYCLE : TIME := T#20ms; END_VAR
+VAR_GLOBAL g : ARRAY[0..DEPTH] OF BOOL; END_VAR
+RESOURCE R ON CPU0
+    VAR_GLOBAL CONSTANT K : INT := DEPTH * 2; END_VAR
+    VAR_GLOBAL rg : ARRAY[1..K] OF INT; END_VAR
+    TASK t (INTERVAL := CYCLE, PRIORITY := 1);
+    PROGRAM p WITH t : P;
+END_RESOURCE
+END_CONFIGURATION""")
+    assert [d for d in diags if "error" in d] == []
+    assert project.pous["B"].vars["H"].type.dims == [(1, 5)]
+    cfg = project.configurations[0]
+    assert cfg.globals["G"].type.dims == [(0, 5)]
+    res = cfg.resources[0]
+    assert res.globals["RG"].type.dims == [(1, 10)]
+    assert res.tasks["T"].interval_ns == 20_000_000
+
+
+def test_named_constants_refused_with_the_reason():
+    diags = errors("""FUNCTION_BLOCK B
+VAR_EXTERNAL CONSTANT K : INT; END_VAR
+VAR h : ARRAY[1..K] OF INT; END_VAR
+h[1] := 1;
+END_FUNCTION_BLOCK
+PROGRAM P
+VAR n : INT; a : ARRAY[1..n] OF INT; b : B; END_VAR
+VAR CONSTANT X : INT := Y; Y : INT := X; R : REAL := 1.5; END_VAR
+VAR c : ARRAY[1..R] OF INT; END_VAR
+b(); a[1] := n; c[1] := X;
+END_PROGRAM
+CONFIGURATION C
+RESOURCE Res ON CPU0
+    VAR_GLOBAL CONSTANT K : INT := 3; END_VAR
+    TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+    PROGRAM p WITH t : P;
+END_RESOURCE
+END_CONFIGURATION""")
+    text = "\n".join(diags)
+    assert "3:18: error: array bound: VAR_EXTERNAL CONSTANT 'K' takes its value from the " \
+           "configuration's VAR_GLOBAL CONSTANT K; a resource's constant of that name cannot " \
+           "give it (a POU type has one layout for all its instances)" in text
+    assert "7:27: error: array bound must be a constant expression: 'n' is a variable" in text
+    assert "is defined in terms of itself" in text
+    assert "9:18: error: array bound must be an integer constant" in text
