@@ -247,6 +247,14 @@ class Exit(Node):
     __slots__ = ()
 
 
+class Continue(Node):
+    """CONTINUE (ed.3): the rest of the innermost loop's iteration is
+    skipped; a FOR loop steps its variable, a WHILE and a REPEAT test their
+    condition."""
+
+    __slots__ = ()
+
+
 class Return(Node):
     __slots__ = ()
 

@@ -817,6 +817,8 @@ def _stmt(s):
         return ast.Repeat(pos, body=_body(s.body), cond=s.cond)
     if c == "ExitStmt":
         return ast.Exit(pos)
+    if c == "ContinueStmt":
+        return ast.Continue(pos)
     if c == "ReturnStmt":
         return ast.Return(pos)
     if c == "EmptyStmt":

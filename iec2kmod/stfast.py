@@ -223,6 +223,12 @@ class StatementParser:
                 out.append(ast.Return(pos) if word == "RETURN" else ast.Exit(pos))
                 pos = q + 1
                 continue
+            if word == "CONTINUE":              # kw='CONTINUE' ';', not reserved
+                q = self._skip(pos + len(word))
+                if q < self.end and text[q] == ";":
+                    out.append(ast.Continue(pos))
+                    pos = q + 1
+                    continue
             m = self._var_path(text, pos)
             if not m:
                 raise Unsupported

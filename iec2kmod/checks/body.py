@@ -96,6 +96,9 @@ class BodyChecker(ILChecks):
         elif isinstance(s, ast.Exit):
             if self.loop_depth == 0:
                 self.error(s.pos, "EXIT outside of a loop")
+        elif isinstance(s, ast.Continue):
+            if self.loop_depth == 0:
+                self.error(s.pos, "CONTINUE outside of a loop")
         elif isinstance(s, (ast.Return, ast.Empty)):
             pass
         else:

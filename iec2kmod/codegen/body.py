@@ -39,6 +39,7 @@ class BodyEmitter:
         self._temp = 0
         self._label = 0
         self.exit_labels: list[str] = []
+        self.continue_labels: list[str] = []
         self.cr_vars: dict[str, str] = {}   # C name -> C type (scalars, on the stack)
         self.frame_vars: dict[str, str] = {}   # frame member -> declaration (string CRs)
         self.ind = ind
@@ -214,6 +215,10 @@ class BodyEmitter:
             label, on_exit = self.exit_labels[-1]
             self.used_labels.add(label)
             return list(on_exit) + [f"goto {label};"]
+        if isinstance(s, ast.Continue):
+            label = self.continue_labels[-1]
+            self.used_labels.add(label)
+            return [f"goto {label};"]
         if isinstance(s, ast.Return):
             return [self.return_stmt()]
         if isinstance(s, ast.Empty):
@@ -284,15 +289,22 @@ class BodyEmitter:
 
     def loop(self, pos, head, body_stmts, tail=(), tick=True, on_exit=()):
         """for (;;) { head; tick; body; tail }: EXIT jumps past it after the
-        on_exit statements."""
+        on_exit statements, CONTINUE to the tail (the FOR step, the REPEAT
+        test)."""
         exit_label = self.new_label("exit")
+        cont_label = "next" + exit_label[len("exit"):]
         self.exit_labels.append((exit_label, on_exit))
+        self.continue_labels.append(cont_label)
         inner = self.block(body_stmts)
         self.exit_labels.pop()
+        self.continue_labels.pop()
         lines = ["for (;;) {"] + self.indent(list(head))
         if tick:
             lines.append(self.ind + self.loop_tick(pos))
-        lines += inner + self.indent(list(tail)) + ["}"]
+        lines += inner
+        if cont_label in self.used_labels:
+            lines.append(f"{cont_label}:;")
+        lines += self.indent(list(tail)) + ["}"]
         if exit_label in self.used_labels:
             lines.append(f"{exit_label}:;")
         return lines

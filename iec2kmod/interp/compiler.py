@@ -1,7 +1,7 @@
 """From the checked AST to Python closures.
 
 Each expression becomes a function ``f(env) -> value`` and each statement a
-function ``s(env) -> None | EXIT | RETURN``, ``env`` being the Instance of
+function ``s(env) -> None | EXIT | RETURN | CONTINUE``, ``env`` being the Instance of
 the running POU.  This is still an interpreter of the AST -- one closure per
 node, built once, run every cycle -- only without re-dispatching on node
 types at every evaluation.
@@ -28,6 +28,7 @@ from .values import base_of, f32_safe, wrap, wrap64
 
 EXIT = 1
 RETURN = 2
+CONTINUE = 3        # the rest of the loop's iteration is skipped (ed.3)
 REF_SECTIONS = ("VAR_EXTERNAL", "VAR_IN_OUT")
 ARITH = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD"}
 TIME_FAMILIES = {"ADD_TIME", "SUB_TIME", "MUL_TIME", "DIV_TIME", "ADD_TOD_TIME", "ADD_DT_TIME",
@@ -833,6 +834,8 @@ class PouCompiler:
             return self.repeat(s)
         if isinstance(s, ast.Exit):
             return lambda env: EXIT
+        if isinstance(s, ast.Continue):
+            return lambda env: CONTINUE
         if isinstance(s, ast.Return):
             return lambda env: RETURN
         if isinstance(s, ast.Empty):
@@ -907,7 +910,7 @@ class PouCompiler:
                 if rt.budget < 0:
                     raise Fault(LOOP)
                 r = body(env)
-                if r is not None:
+                if r is not None and r != CONTINUE:
                     if r == EXIT:
                         break
                     return r
@@ -929,7 +932,7 @@ class PouCompiler:
                 if rt.budget < 0:
                     raise Fault(LOOP)
                 r = body(env)
-                if r is not None:
+                if r is not None and r != CONTINUE:
                     if r == EXIT:
                         break
                     return r
@@ -947,7 +950,7 @@ class PouCompiler:
                 if rt.budget < 0:
                     raise Fault(LOOP)
                 r = body(env)
-                if r is not None:
+                if r is not None and r != CONTINUE:
                     if r == EXIT:
                         break
                     return r

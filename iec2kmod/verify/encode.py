@@ -321,15 +321,17 @@ class Place:
 
 
 class Frame:
-    """The running POU: its instance and the accumulated EXIT/RETURN."""
+    """The running POU: its instance and the accumulated EXIT/RETURN, and
+    CONTINUE within the current iteration of the innermost loop."""
 
-    __slots__ = ("inst", "pou", "ret", "brk")
+    __slots__ = ("inst", "pou", "ret", "brk", "cnt")
 
     def __init__(self, inst, pou):
         self.inst = inst
         self.pou = pou
         self.ret = FALSE
         self.brk = FALSE
+        self.cnt = FALSE
 
 
 class Encoder:
@@ -1217,7 +1219,7 @@ class Encoder:
 
     def block(self, stmts, frame, g):
         for s in stmts:
-            gs = land(g, lnot(frame.ret), lnot(frame.brk))
+            gs = land(g, lnot(frame.ret), lnot(frame.brk), lnot(frame.cnt))
             if z3.is_false(gs):
                 return
             self.stmt(s, frame, gs)
@@ -1250,6 +1252,8 @@ class Encoder:
             self.repeat(s, frame, g)
         elif isinstance(s, ast.Exit):
             frame.brk = lor(frame.brk, g)
+        elif isinstance(s, ast.Continue):
+            frame.cnt = lor(frame.cnt, g)
         elif isinstance(s, ast.Return):
             frame.ret = lor(frame.ret, g)
         elif isinstance(s, ast.Empty):
@@ -1345,12 +1349,20 @@ class Encoder:
                 break
             if n > 0:
                 cell.put(gi, bv_lit(i, w))
-            self.block(s.body, frame, gi)
+            self.iteration(s.body, frame, gi)
         if final is not None and seq:
             cell.put(land(g, lnot(frame.brk), lnot(frame.ret)), bv_lit(final, w))
         frame.brk = saved
 
     # --------------------------------------------- loops, unrolled a bounded number of times
+    def iteration(self, body, frame, g):
+        """One iteration of a loop's body: a CONTINUE in it skips the rest of
+        the body, then ends with the iteration (the step or the test runs)."""
+        saved = frame.cnt
+        frame.cnt = FALSE
+        self.block(body, frame, g)
+        frame.cnt = saved
+
     def unroll_exceeded(self, g, cond, frame, pos):
         """The loop may run more iterations than the encoding unrolls: not a
         runtime error, an undecided case (reported as such, never assumed)."""
@@ -1374,7 +1386,7 @@ class Encoder:
             run = land(gi, c)
             if z3.is_false(run) or z3.is_false(z3.simplify(run)):
                 break
-            self.block(s.body, frame, run)
+            self.iteration(s.body, frame, run)
             live = run
         else:
             gi = land(live, lnot(frame.brk), lnot(frame.ret))
@@ -1390,7 +1402,7 @@ class Encoder:
             gi = land(live, lnot(frame.brk), lnot(frame.ret))
             if z3.is_false(gi) or z3.is_false(z3.simplify(gi)):
                 break
-            self.block(s.body, frame, gi)
+            self.iteration(s.body, frame, gi)
             gi = land(gi, lnot(frame.brk), lnot(frame.ret))
             c = self.expr_as(s.cond, BOOL, frame, gi)
             live = land(gi, lnot(c))
@@ -1433,7 +1445,7 @@ class Encoder:
             if z3.is_false(run) or z3.is_false(z3.simplify(run)):
                 live = FALSE
                 break
-            self.block(s.body, frame, run)
+            self.iteration(s.body, frame, run)
             gi = land(run, lnot(frame.brk), lnot(frame.ret))
             nxt = ext(cell.get()) + bv_lit(st, ww)
             inside = z3.And(nxt >= bv_lit(lo_t, ww), nxt <= bv_lit(hi_t, ww)) if sg else \

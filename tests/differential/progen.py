@@ -243,6 +243,10 @@ class Gen:
         # seed's project is the one it gave before, with names for numbers
         self.nc_r = random.Random(f"nc{seed}")
         self.nc = True
+        # CONTINUE (ed.3) in loops: likewise a generator of its own; its
+        # condition reads only the loop's variable
+        self.ct_r = random.Random(f"ct{seed}")
+        self.cont = True
         self.cur_pou = None
         # strings=False (generate_unit): no STRING type, value or function,
         # for engines that have none (the verifier); True leaves every seed's
@@ -259,6 +263,17 @@ class Gen:
 
     def nc_chance(self, p):
         return self.nc and self.nc_r.random() < p
+
+    def continue_if(self, var, ind):
+        """`IF <a test of the loop's variable> THEN CONTINUE; END_IF;`"""
+        k = self.ct_r.randint(-2, 8)
+        cond = self.ct_r.choice([f"{var} = {k}", f"{var} MOD 2 = 0", f"{var} > {k}",
+                                 f"{var} < {k}"])
+        if self.ct_r.random() < 0.3:
+            self.feat("continue_case")
+            return [f"{ind}CASE {var} OF", f"{ind}    {abs(k)}, {abs(k) + 2}: CONTINUE;",
+                    f"{ind}END_CASE;"]
+        return [f"{ind}IF {cond} THEN", f"{ind}    CONTINUE;", f"{ind}END_IF;"]
 
     def named_constant(self, pou, value):
         """The name of a new VAR CONSTANT of *pou* worth *value* (a bound
@@ -1153,6 +1168,11 @@ class Gen:
         if ranged:
             self.for_ranges.remove(rng)
         v.reserved = False
+        if self.cont and self.ct_r.random() < 0.2:
+            # at the start or after the first statement of the body
+            at = 0 if not body or self.ct_r.random() < 0.5 else len(body)
+            body = body[:at] + self.continue_if(v.name, ind + "    ") + body[at:]
+            self.feat("continue_for")
         return [f"{ind}FOR {v.name} := {a} TO {b}{st} DO"] + (body or [ind + "    ;"]) + \
             [f"{ind}END_FOR;"]
 
@@ -1165,14 +1185,19 @@ class Gen:
         n = self.r.randint(0, 8)
         body = self.stmts(scope, d + 1, self.r.randint(1, 3), dict(ctx, loop=True))
         v.reserved = False
+        step = [f"{ind}    {v.name} := {v.name} + 1;"]
+        head, tail = [], step
+        if self.cont and self.ct_r.random() < 0.2:
+            # the counter first, so that CONTINUE cannot skip it
+            head, tail = step + self.continue_if(v.name, ind + "    "), []
+            self.feat("continue_while")
         if self.chance(0.5):
             self.feat("while")
-            return [f"{ind}{v.name} := 0;", f"{ind}WHILE {v.name} < {n} DO"] + body + \
-                [f"{ind}    {v.name} := {v.name} + 1;", f"{ind}END_WHILE;"]
+            return [f"{ind}{v.name} := 0;", f"{ind}WHILE {v.name} < {n} DO"] + head + body + \
+                tail + [f"{ind}END_WHILE;"]
         self.feat("repeat")
-        return [f"{ind}{v.name} := 0;", f"{ind}REPEAT"] + body + \
-            [f"{ind}    {v.name} := {v.name} + 1;", f"{ind}UNTIL {v.name} >= {n}",
-             f"{ind}END_REPEAT;"]
+        return [f"{ind}{v.name} := 0;", f"{ind}REPEAT"] + head + body + tail + \
+            [f"{ind}UNTIL {v.name} >= {n}", f"{ind}END_REPEAT;"]
 
     def fb_call(self, scope, d):
         ind = "    " * (d + 1)
@@ -1885,7 +1910,7 @@ class Gen:
 
 def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
                   sfc: bool = True, fidelity: bool = True, strings: bool = True,
-                  named_constants: bool = True) -> Unit:
+                  named_constants: bool = True, continue_stmt: bool = True) -> Unit:
     """``sfc=False``: no SFC bodies -- the same project the seed gave before
     the generator knew SFC (SFC is decided by a random generator of its own).
     ``fidelity=False``: none of the constructs of issue 10 (function forms,
@@ -1894,12 +1919,14 @@ def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
     STRING type, value or function (benchmarks/verify_fuzz.py: the verifier
     refuses them); True gives every seed's project as before.
     ``named_constants=False``: no VAR CONSTANT naming an array bound or a
-    CASE label (decided by a generator of its own as well)."""
+    CASE label (decided by a generator of its own as well).
+    ``continue_stmt=False``: no CONTINUE (ed.3) in loops (likewise)."""
     g = Gen(seed, k, size)
     g.sfc = sfc
     g.fid = fidelity
     g.strings = strings
     g.nc = named_constants
+    g.cont = continue_stmt
     g._dims = {}
     g.for_ranges = []
     return g.unit(cycles)

@@ -43,7 +43,7 @@ MUST_REACH = {
     "fn_form_MOD", "fn_form_bitwise", "real_literal_context", "fb_array_call",
     "function_eno", "function_eno_out",
     "named_const_bound", "named_const_case", "named_const_from_const",
-    "named_const_external_bound",
+    "named_const_external_bound", "continue_for", "continue_while", "continue_case",
 }
 
 

@@ -491,3 +491,9 @@ def test_sfc_body_is_refused(tmp_path, capsys):
     assert "p.st:2:1: error: verify: an SFC body (steps, transitions, actions) cannot be " \
            "encoded exactly" in err, err
     assert "Traceback" not in err
+
+
+def test_differential_continue():
+    """CONTINUE (ed.3): the encoding skips the rest of the iteration and
+    runs the step or the test, as the interpreter does."""
+    _check([HERE / "diff" / "continue.st"], 30, [1, 2, 3])
