@@ -602,7 +602,7 @@ def _parse_source(src: SourceFile, diags: Diagnostics, reference: bool):
         what = _describe_expected(err)
         token = re.match(r"\w+|\S", src.text[offset:])
         what += f", found '{token.group(0)}'" if token else ", found end of file"
-        diags.error(src, offset, what)
+        diags.error(src, offset, what + _unsupported_hint(src.text, offset))
         return None
     except TextXSemanticError as err:
         diags.error(src, None, str(err.message), line=err.line or 1, col=err.col or 1)
@@ -621,6 +621,40 @@ def _parse_source(src: SourceFile, diags: Diagnostics, reference: bool):
         diags.error(src, _deepest_nesting(src.text),
                     "nested too deeply for the parser (simplify this expression or statement)")
         return None
+
+
+# ed.3 syntax outside the language iec2kmod compiles: a syntax error on a
+# line that uses it says so (the grammar does not know the words)
+_ED3_WORDS = re.compile(
+    r"\b(CLASS|END_CLASS|METHOD|END_METHOD|INTERFACE|END_INTERFACE|NAMESPACE|"
+    r"END_NAMESPACE|EXTENDS|IMPLEMENTS|PROPERTY|END_PROPERTY|REF_TO)\b|"
+    r"\b(THIS|SUPER|\w+)\s*\^|\b(REF)\s*\(|ARRAY\s*\[\s*(\*)", re.I)
+
+
+def _unsupported_hint(text: str, offset: int) -> str:
+    """A note for a syntax error on a line (or after the line) that uses
+    IEC 61131-3 ed.3 object orientation or references, or at a '*)' out of
+    any comment (a nested comment)."""
+    if text.startswith("*)", offset):
+        return " (a '*)' outside a comment: nested comments are not supported)"
+    start = text.rfind("\n", 0, max(text.rfind("\n", 0, offset), 0)) + 1
+    end = text.find("\n", offset)
+    line = text[start:end if end >= 0 else len(text)]
+    line = re.sub(r"\(\*.*?\*\)|//.*|'[^']*'|\"[^\"]*\"", " ", line)
+    m = _ED3_WORDS.search(line)
+    if not m:
+        return ""
+    if m.group(1):
+        word = m.group(1).upper()
+        what = f"{word}, IEC 61131-3 ed.3 " + ("references" if word == "REF_TO" else
+                                              "object orientation")
+    elif m.group(2):
+        what = "'^', an ed.3 dereference"
+    elif m.group(3):
+        what = "REF(), an ed.3 reference"
+    else:
+        what = "ARRAY[*], an ed.3 array of variable length"
+    return f" (this line uses {what}, which iec2kmod does not support)"
 
 
 def _parse_with_fast_statements(src: SourceFile, diags: Diagnostics):

@@ -299,6 +299,10 @@ class Declarer:
             if key in self.p.pous:
                 self.error(src, pos, f"'{name}' is a {self.p.pous[key].kind.lower().replace('_', ' ')}"
                                      ", not a type")
+            elif key in ("CHAR", "WCHAR"):
+                self.error(src, pos, f"unknown type '{name}' (CHAR and WCHAR are ed.3 types that "
+                                     "iec2kmod does not support: use BYTE/WORD, or STRING[1] "
+                                     "and WSTRING[1])")
             else:
                 self.error(src, pos, f"unknown type '{name}'")
         return None

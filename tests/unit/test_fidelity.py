@@ -327,3 +327,35 @@ END_CONFIGURATION""")
     assert "7:27: error: array bound must be a constant expression: 'n' is a variable" in text
     assert "is defined in terms of itself" in text
     assert "9:18: error: array bound must be an integer constant" in text
+
+
+# ------------------------------------ ed.3 syntax outside the language: said so
+
+@pytest.mark.parametrize("text, hint", [
+    ("INTERFACE I\nEND_INTERFACE\n", "this line uses INTERFACE, IEC 61131-3 ed.3 object "
+                                     "orientation, which iec2kmod does not support"),
+    ("FUNCTION_BLOCK F\nVAR x : INT; END_VAR\nMETHOD PUBLIC inc : INT\nx := x + 1;\n"
+     "END_METHOD\nEND_FUNCTION_BLOCK\n", "this line uses METHOD"),
+    ("FUNCTION_BLOCK B EXTENDS A\nVAR x : INT; END_VAR\nx := 1;\nEND_FUNCTION_BLOCK\n",
+     "this line uses EXTENDS"),
+    ("PROGRAM P\nVAR r : REF_TO INT; END_VAR\nEND_PROGRAM\n", "this line uses REF_TO, "
+                                                          "IEC 61131-3 ed.3 references"),
+    ("PROGRAM P\nVAR x : INT; END_VAR\nTHIS^.x := 1;\nEND_PROGRAM\n",
+     "this line uses '^', an ed.3 dereference"),
+    ("FUNCTION S : INT\nVAR_IN_OUT a : ARRAY[*] OF INT; END_VAR\nS := 0;\nEND_FUNCTION\n",
+     "this line uses ARRAY[*], an ed.3 array of variable length"),
+    ("PROGRAM P\nVAR x : INT; END_VAR (* a (* nested *) comment *)\nx := 1;\nEND_PROGRAM\n",
+     "a '*)' outside a comment: nested comments are not supported"),
+    ("PROGRAM P\nVAR c : CHAR; END_VAR\nEND_PROGRAM\n",
+     "unknown type 'CHAR' (CHAR and WCHAR are ed.3 types that iec2kmod does not support"),
+])
+def test_ed3_syntax_is_named_in_the_error(text, hint):
+    errs = errors(text)
+    assert errs and hint in errs[0], errs
+
+
+def test_no_ed3_hint_on_ordinary_syntax_errors():
+    # names that are ed.3 keywords elsewhere stay plain ed.2 variables
+    errs = errors("PROGRAM P\nVAR final, ref, this : INT; END_VAR\nfinal := ref + ;\n"
+                  "END_PROGRAM\n")
+    assert errs and "ed.3" not in errs[0] and "not support" not in errs[0], errs
