@@ -34,7 +34,7 @@ import tempfile
 import time
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import kbuild
+from . import buildcache, kbuild
 
 IMAGE_REPO = "iec2kmod-build"
 SUITE = "bookworm"
@@ -51,6 +51,7 @@ class ContainerResult:
     duration: float
     image: str
     command: str
+    cached: bool = False     # restored from the build cache (iec2kmod/buildcache.py)
 
     @property
     def ok(self) -> bool:
@@ -304,8 +305,26 @@ def build_modules(moddir: str, *, warnings: bool = True, extra_args: Sequence[st
     if warnings:
         args.append("W=1")
     args += list(extra_args) + ["modules"]
-    return run_in_container(moddir, " ".join(shlex.quote(a) for a in args), image=image,
-                            timeout=timeout)
+    command = " ".join(shlex.quote(a) for a in args)
+    if image is None:
+        image = image_tag()
+    ckey = before = None
+    if buildcache.cache_dir():
+        try:   # the image's id, not its tag: what the build runs is the key
+            image_id = docker_client().images.get(image).id
+        except Exception as e:
+            raise ContainerError(f"container image {image} is missing: run scripts/setup.sh "
+                                 f"(or python -m iec2kmod.container ensure): {e}") from None
+        ckey = buildcache.key(moddir, ["container", image_id],
+                              [a for a in args if a != f"M={moddir}" and not a.startswith("-j")])
+        hit = buildcache.restore(ckey, moddir)
+        if hit is not None:
+            return ContainerResult(hit[0], hit[1], 0.0, image, command, cached=True)
+        before = buildcache.snapshot(moddir)
+    res = run_in_container(moddir, command, image=image, timeout=timeout)
+    if ckey and res.ok:
+        buildcache.store(ckey, moddir, before, res.output)
+    return res
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -13,13 +13,16 @@ that callers need no ``modinfo`` binary.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import glob
 import os
 import re
 import struct
 import subprocess
 import time
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
+
+from . import buildcache
 
 HEADERS_PACKAGE = "linux-headers-rt-amd64"
 
@@ -102,6 +105,7 @@ class BuildResult:
     returncode: int
     output: str          # stdout and stderr, interleaved
     duration: float
+    cached: bool = False     # restored from the build cache (iec2kmod/buildcache.py)
 
     @property
     def ok(self) -> bool:
@@ -135,14 +139,40 @@ def _make(kdir: str, moddir: str, targets: Sequence[str], extra: Sequence[str],
     cmd.extend(extra)
     cmd.extend(targets)
     t0 = time.monotonic()
+    ckey = before = None
+    if list(targets) == ["modules"] and buildcache.cache_dir():
+        ckey = buildcache.key(moddir, _toolchain_id(kdir, "C=1" in extra), [*extra, *targets])
+        hit = buildcache.restore(ckey, moddir)
+        if hit is not None:
+            return BuildResult(cmd, hit[0], hit[1], time.monotonic() - t0, cached=True)
+        before = buildcache.snapshot(moddir)
     try:
         p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                            stdin=subprocess.DEVNULL, timeout=timeout)
     except subprocess.TimeoutExpired as e:
         out = (e.stdout or b"").decode("utf-8", "replace")
         raise KbuildError(f"kbuild timed out after {timeout:.0f} s: {' '.join(cmd)}\n{out}")
-    return BuildResult(cmd, p.returncode, p.stdout.decode("utf-8", "replace"),
-                       time.monotonic() - t0)
+    res = BuildResult(cmd, p.returncode, p.stdout.decode("utf-8", "replace"),
+                      time.monotonic() - t0)
+    if ckey and res.ok:
+        buildcache.store(ckey, moddir, before, res.output)
+    return res
+
+
+@functools.lru_cache(maxsize=None)
+def _toolchain_id(kdir: str, sparse: bool) -> Tuple[str, ...]:
+    """What a module build reads besides its tree (the build cache's key):
+    the headers (release, configuration, exported symbols), the compiler,
+    make, and sparse when it runs."""
+    kdir = os.path.realpath(kdir)
+    parts = [kdir, _release_of(kdir) or "-"]
+    for f in (".config", "Module.symvers", "include/generated/autoconf.h", ".kernelvariables"):
+        parts.append(f + "=" + buildcache.file_digest(os.path.join(kdir, f)))
+    for tool in ["gcc-12", "gcc", "make", "ld"] + (["sparse"] if sparse else []):
+        exe = _which(tool)
+        if exe:
+            parts.append(f"{tool}={buildcache.file_digest(os.path.realpath(exe))}")
+    return tuple(parts)
 
 
 def _which(prog: str) -> Optional[str]:
