@@ -446,7 +446,7 @@ class Fuzzer:
             cmd = CMD_VAR_UNFORCE
         elif x < 0.72:
             cmd = CMD_STATUS
-        elif x < 0.74:
+        elif x < 0.725:
             cmd = CMD_VAR_LIST
         elif x < 0.77:
             cmd = CMD_RES_START
@@ -541,15 +541,14 @@ class Fuzzer:
         if x < 0.03 and attrs:
             # cut inside a top-level attribute (never at a boundary: that
             # would be a shorter, valid message)
-            bounds, off = [], 4
-            while off < len(body):
+            spans, off = [], 4
+            while off + 4 <= len(body):
                 n = struct.unpack_from("<H", body, off)[0]
-                bounds.append(off)
+                if n > 4:
+                    spans.append((off + 1, min(off + n, len(body)) - 1))
                 off += max(4, (n + 3) & ~3)
-            cut = r.randint(5, len(body) - 1)
-            while cut in bounds:
-                cut -= 1
-            body = body[:cut]
+            lo, hi = r.choice(spans) if spans else (5, 5)
+            body = body[:r.randint(lo, max(lo, hi))]
             why = why or "framing: message cut inside an attribute"
         elif x < 0.05:
             body = body[:r.randint(0, 3)]
@@ -571,13 +570,15 @@ class Fuzzer:
         if r.random() < 0.01:
             nl_len = total + r.randint(1, 400)            # beyond the data: dropped
             rflags |= F_NO_REPLY
-            why = None
+            why = "(dropped) nlmsg_len beyond the data"
         hdr = struct.pack("<IHHII", nl_len, 0, flags, 0, 0)
         msg = hdr + body
         if r.random() < 0.005:
             msg = msg[:r.randint(0, 15)]                  # not even a header: dropped
             rflags |= F_NO_REPLY
-            why = None
+            why = "(dropped) shorter than a netlink header"
+        if rflags & F_NO_REPLY:
+            rflags &= ~F_DUMP
         if why and not why.startswith("(") and not rflags & F_NO_REPLY:
             rflags |= F_MUST_REFUSE
         reason = why or "(valid)"
@@ -672,12 +673,16 @@ def parse(buf):
             replied.add(seq)
         off += (n + 3) & ~3
 
+rbuf = bytearray(1 << 20)
+rview = memoryview(rbuf)
+
 def drain(block_for=None, until=None):
     global enobufs
     deadline = time.monotonic() + (block_for or 0)
     while True:
         try:
-            buf = s.recv(1 << 20, socket.MSG_DONTWAIT)
+            n = s.recv_into(rbuf, 0, socket.MSG_DONTWAIT)
+            buf = rview[:n]
         except BlockingIOError:
             if until is not None and not until() and time.monotonic() < deadline:
                 select.select([s], [], [], 0.05)
@@ -691,6 +696,8 @@ def drain(block_for=None, until=None):
         parse(buf)
 
 pending_dump = set()
+cost = {}
+slow = []
 meta = []
 off = 0
 t0 = time.monotonic()
@@ -706,6 +713,8 @@ while off < len(data):
         struct.pack_into("<H", msg, 4, fam)
         struct.pack_into("<I", msg, 8, seq)
     meta.append((seq, fl, why))
+    cmd = msg[16] if len(msg) > 16 else -1
+    ts = time.monotonic()
     try:
         s.send(msg)
     except OSError as e:
@@ -717,10 +726,16 @@ while off < len(data):
         pending_dump.discard(seq)
     elif sent % batch == 0:
         drain()
+    dt = time.monotonic() - ts
+    cost[cmd] = cost.get(cmd, 0.0) + dt
+    if dt > 0.05:
+        slow.append((round(dt, 3), sent - 1, why))
 drain(block_for=2, until=lambda: all(m[0] in err for m in meta[-50:] if not m[1] & 4))
 elapsed = time.monotonic() - t0
 out = {"sent": sent, "seconds": elapsed, "enobufs": enobufs, "replies": len(replied),
-       "outcomes": {}, "violations": [], "unanswered": 0}
+       "outcomes": {}, "violations": [], "unanswered": 0,
+       "slow": sorted(slow, reverse=True)[:10],
+       "cost": {str(k): round(v, 2) for k, v in sorted(cost.items(), key=lambda kv: -kv[1])}}
 for q, fl, why in meta:
     e = err.get(q)
     if e is None and not fl & 4:
@@ -731,6 +746,35 @@ for q, fl, why in meta:
         out["violations"].append([q - 101, why])
 print("SENT " + json.dumps(out))
 '''
+
+
+def describe(path: Path, index: int) -> str:
+    """Message *index* of a message file, decoded (attributes as a tree)."""
+    data = Path(path).read_bytes()
+    off = 0
+    for i in range(index + 1):
+        n, fl, why = REC.unpack_from(data, off)
+        off += REC.size
+        msg = data[off:off + n]
+        off += n
+
+    def attrs(b: bytes, depth: int) -> List[str]:
+        out, o = [], 0
+        while o + 4 <= len(b):
+            ln, t = struct.unpack_from("<HH", b, o)
+            p = b[o + 4:o + max(ln, 4)]
+            line = f"{'  ' * depth}type {t & 0x3FFF}{' N' if t & NLA_F_NESTED else ''} len {ln}"
+            out.append(line + f" {p[:40]!r}")
+            if t & NLA_F_NESTED:
+                out += attrs(p, depth + 1)
+            o += max(4, (ln + 3) & ~3)
+        if o < len(b):
+            out.append(f"{'  ' * depth}{len(b) - o} trailing bytes")
+        return out
+    head = struct.unpack_from("<IHHII", msg) if len(msg) >= 16 else msg
+    gen = msg[16:20]
+    return "\n".join([f"nlmsghdr {head} flags {fl} reason {why} genl {gen!r}"] +
+                     attrs(msg[20:], 1))
 
 
 def probe(guest) -> dict:
@@ -759,7 +803,7 @@ class FuzzResult:
                  f"must not be; {self.unanswered} unanswered; ENOBUFS {self.enobufs}"]
         agg: Dict[str, Dict[str, int]] = {}
         for k, n in self.outcomes.items():
-            why, res = k.split(":", 1)
+            why, res = k.rsplit("|", 1)
             agg.setdefault(why, {})[res] = agg.setdefault(why, {}).get(res, 0) + n
         for why in sorted(agg, key=lambda w: -sum(agg[w].values())):
             lines.append(f"  {sum(agg[why].values()):6}  {why}: " +
@@ -780,11 +824,15 @@ def run(guest, workdir: Path, manifest: dict, seed: int, count: int,
     r = guest.pyrun(GUEST_SENDER, argv=[str(f), str(batch)], timeout=timeout)
     assert r.exit_code == 0 and "SENT " in r.output, r.output[-3000:]
     sent = json.loads(r.output.split("SENT ", 1)[1])
-    f.unlink()
+    if not sent["violations"]:
+        f.unlink()          # else kept: describe(f, index) decodes a message
+    print(f"seconds per command number (send + reply): "
+          f"{dict(list(sent['cost'].items())[:12])}; slowest messages: "
+          f"{[(t, i, fz.reasons[w]) for t, i, w in sent['slow']]}")
     outcomes = {}
     for k, n in sent["outcomes"].items():
         why, res = k.split(":", 1)
-        key = f"{fz.reasons[int(why)]}:{res}"
+        key = f"{fz.reasons[int(why)]}|{res}"
         outcomes[key] = outcomes.get(key, 0) + n
     must = sum(n for w, n in by_reason.items() if w != "(valid)")
     res = FuzzResult(seed=seed, count=count, seconds=sent["seconds"], sent=sent["sent"],
