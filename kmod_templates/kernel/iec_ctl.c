@@ -2,7 +2,9 @@
 /*
  * iec_ctl.c - the configuration's control plane.
  *
- * sysfs, for people and shell scripts (root-only, 0400 / 0200):
+ * sysfs, for people and shell scripts (0400 / 0200, and, checked on every
+ * read and write, CAP_NET_ADMIN as for every netlink command: the one
+ * privilege of the control plane):
  *   /sys/kernel/iec2kmod/<configuration>/status    resources, tasks, slots
  *   /sys/kernel/iec2kmod/<configuration>/control   "start <resource>|all",
  *                                                   "start <resource>.<task>"
@@ -19,6 +21,9 @@
  *                                                   them: a fixed number of
  *                                                   cycles)
  *                                                   "clear <slot>|all"
+ *   The control file takes exactly one command: one line of known words
+ *   separated by single spaces, at most one trailing newline, nothing
+ *   after it (no NUL, no second line).
  *
  * Generic netlink family "iec2kmod" (iec_nl.h), for plc-manager: status,
  * variable list/read/write/force/unforce, resource (or task) start, resource
@@ -28,6 +33,7 @@
  * (iec_ctl_mutex); they may sleep, but never while holding a raw lock.
  * The variable commands and the force lists are in iec_vars.c.
  */
+#include <linux/capability.h>
 #include <linux/kobject.h>
 #include <linux/module.h>
 #include <linux/mutex.h>
@@ -355,6 +361,9 @@ static int iec_nl_res(struct genl_info *info, bool start)
 	const char *name = NULL;
 	int err;
 
+	err = iec_nla_strict_string(info->attrs[IEC_A_NAME], info->extack);
+	if (err)
+		return err;
 	if (info->attrs[IEC_A_NAME])
 		name = nla_data(info->attrs[IEC_A_NAME]);
 	mutex_lock(&iec_ctl_mutex);
@@ -585,6 +594,9 @@ static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
 	int len = 0;
 	u32 i;
 
+	/* the file mode is not enough: a root without capabilities is refused */
+	if (!capable(CAP_NET_ADMIN))
+		return -EPERM;
 	iec_emit(buf, &len, "configuration %s source %s interface %s\n",
 		 iec_cfg->name, iec_cfg->source_hash, iec_cfg->iface_hash);
 	mutex_lock(&iec_resources_lock);
@@ -630,26 +642,63 @@ static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
 	return len;
 }
 
+/*
+ * Splits the one line of a control write into at most @max words (single
+ * spaces between them); -EINVAL for anything else: a NUL, a second line,
+ * a control character, an empty word, too many words.
+ */
+static int iec_control_words(char *line, size_t count, char **words, int max)
+{
+	int n = 0;
+	char *p;
+
+	if (count && line[count - 1] == '\n')
+		count--;
+	line[count] = '\0';
+	/* printable ASCII only (names are IEC identifiers) */
+	for (p = line; p < line + count; p++)
+		if ((u8)*p < 0x20 || (u8)*p > 0x7e)
+			return -EINVAL;
+	while ((p = strsep(&line, " "))) {
+		if (!*p || n == max)
+			return -EINVAL;
+		words[n++] = p;
+	}
+	return n;
+}
+
 static ssize_t control_store(struct kobject *kobj, struct kobj_attribute *attr,
 			     const char *buf, size_t count)
 {
-	char cmd[16], arg[64];
+	char line[96], *w[3];
 	int ret, n;
 	u32 slot, run_ms = 0;
 
-	n = sscanf(buf, "%15s %63s %u", cmd, arg, &run_ms);
-	if (n < 2 || (n == 3) != !strcmp(cmd, "run") || (n == 3 && !run_ms))
+	/* the file mode is not enough: a root without capabilities is refused */
+	if (!capable(CAP_NET_ADMIN))
+		return -EPERM;
+	if (count >= sizeof(line))
 		return -EINVAL;
+	memcpy(line, buf, count);
+	n = iec_control_words(line, count, w, ARRAY_SIZE(w));
+	if (n < 2)
+		return -EINVAL;
+	if (!strcmp(w[0], "run")) {
+		if (n != 3 || kstrtou32(w[2], 10, &run_ms) || !run_ms)
+			return -EINVAL;
+	} else if (n != 2) {
+		return -EINVAL;
+	}
 	mutex_lock(&iec_ctl_mutex);
-	if (!strcmp(cmd, "start") || !strcmp(cmd, "stop")) {
-		ret = iec_control_resource(arg, cmd[2] == 'a', 0);
-	} else if (!strcmp(cmd, "run")) {
-		ret = iec_control_resource(arg, true, run_ms);
-	} else if (!strcmp(cmd, "clear")) {
-		if (!strcmp(arg, "all")) {
+	if (!strcmp(w[0], "start") || !strcmp(w[0], "stop")) {
+		ret = iec_control_resource(w[1], w[0][2] == 'a', 0);
+	} else if (!strcmp(w[0], "run")) {
+		ret = iec_control_resource(w[1], true, run_ms);
+	} else if (!strcmp(w[0], "clear")) {
+		if (!strcmp(w[1], "all")) {
 			ret = iec_gft_clear(-1);
 		} else {
-			ret = kstrtou32(arg, 10, &slot);
+			ret = kstrtou32(w[1], 10, &slot);
 			if (!ret)
 				ret = iec_gft_clear(slot);
 		}

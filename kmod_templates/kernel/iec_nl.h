@@ -27,7 +27,16 @@
  * VALUE is the C object's bytes in host order (kind and size say how to
  * read them); for STRING/WSTRING it is the length (u16) and the
  * characters with their terminating NUL.  Requests naming several
- * variables are checked completely before anything is written.
+ * variables are checked completely before anything is written; a request
+ * naming a variable twice is refused (EINVAL).  The kernel checks every
+ * value itself (size, BOOL 0/1, a string against its declared length,
+ * subrange bounds: ERANGE, enumeration values: ERANGE); read-only
+ * variables (CONSTANT, FB outputs, SFC steps) refuse VAR_SET and
+ * VAR_FORCE (EACCES).  String attributes (PATH, TABLE, NAME) end exactly
+ * at their NUL.  Each variable is written whole; the globals of one
+ * VAR_SET reach the tasks in image-lock holds of at most 512 bytes
+ * (IEC_IMAGE_HOLD_BYTES in iec_vars.c), so a task may see some of them
+ * before the others.
  */
 #ifndef IEC_NL_H
 #define IEC_NL_H
