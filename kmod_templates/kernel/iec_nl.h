@@ -7,7 +7,9 @@
  *
  * One attribute space for the whole family: every nest (a resource, a
  * task, a slot, a variable) uses the same numbers.  Every command needs
- * CAP_NET_ADMIN (GENL_ADMIN_PERM) and is validated strictly against its
+ * CAP_NET_ADMIN (GENL_ADMIN_PERM; STATUS, VAR_GET and VAR_LIST check it in
+ * their handlers, which also admit the read-only group monitor_gid if the
+ * configuration module was loaded with one) and is validated strictly against its
  * own policy: an attribute a command does not take is refused.
  *
  *   IEC_CMD_STATUS [SLOTS_ONLY] -> CONFIG attributes, RESOURCE nests (with TASK

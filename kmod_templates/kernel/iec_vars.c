@@ -611,8 +611,10 @@ int iec_nl_var_get(struct sk_buff *skb, struct genl_info *info)
 	size_t size = 0;
 	void *hdr;
 	u32 n = 0, i;
-	int err;
+	int err = iec_nl_may_read(skb);
 
+	if (err)
+		return err;
 	mutex_lock(&iec_ctl_mutex);
 	mutex_lock(&iec_resources_lock);
 	err = iec_nl_vars(info, iec_nl_sel_policy, &refs, &n);

@@ -32,7 +32,8 @@ CMD = _enum(_TEXT, "iec_nl_cmd")
 A = _enum(_TEXT, "iec_nl_attr")
 
 NLM_F_REQUEST, NLM_F_ACK = 1, 4
-NLMSG_ERROR = 2
+NLMSG_ERROR, NLMSG_DONE = 2, 3
+NLM_F_DUMP = 0x300
 GENL_ID_CTRL, CTRL_CMD_GETFAMILY = 0x10, 3
 CTRL_ATTR_FAMILY_ID, CTRL_ATTR_FAMILY_NAME = 1, 2
 NLA_F_NESTED = 0x8000
@@ -90,11 +91,13 @@ class Genl:
         assert err == 0, f"family {family}: errno {err}"
         self.family = struct.unpack("=H", dict(replies[0])[CTRL_ATTR_FAMILY_ID][:2])[0]
 
-    def request(self, ftype: int, cmd: int, payload: bytes = b""):
+    def request(self, ftype: int, cmd: int, payload: bytes = b"", dump: bool = False):
+        """(0 or the errno, the replies' attribute lists); a dump ends
+        with NLMSG_DONE (its error), a request with its ack."""
         self.seq += 1
         body = struct.pack("=BBH", cmd, 1, 0) + payload
-        self.s.send(struct.pack("=IHHII", 16 + len(body), ftype, NLM_F_REQUEST | NLM_F_ACK,
-                                self.seq, 0) + body)
+        flags = NLM_F_REQUEST | (NLM_F_DUMP if dump else NLM_F_ACK)
+        self.s.send(struct.pack("=IHHII", 16 + len(body), ftype, flags, self.seq, 0) + body)
         replies = []
         while True:
             data = self.s.recv(1 << 21)
@@ -102,13 +105,13 @@ class Genl:
             while off + 16 <= len(data):
                 ln, typ, _flags, seq, _pid = struct.unpack_from("=IHHII", data, off)
                 if seq == self.seq:
-                    if typ == NLMSG_ERROR:
+                    if typ in (NLMSG_ERROR, NLMSG_DONE):
                         return -struct.unpack_from("=i", data, off + 16)[0], replies
                     replies.append(parse(data[off + 20:off + ln]))
                 off += (ln + 3) & ~3
 
-    def cmd(self, cmd: str, *attrs: bytes):
-        return self.request(self.family, CMD[cmd], b"".join(attrs))
+    def cmd(self, cmd: str, *attrs: bytes, dump: bool = False):
+        return self.request(self.family, CMD[cmd], b"".join(attrs), dump=dump)
 
     def get(self, *paths: str) -> dict:
         """VAR_GET: {path: VALUE bytes}; raises on an error."""
@@ -142,10 +145,21 @@ def drop_capabilities():
     assert re.search(r"^CapEff:\s+0+$", status, re.M), status
 
 
+def become(uid: int, groups: list):
+    """setgroups/setgid/setuid: an ordinary user (no capability left)."""
+    import os
+    os.setgroups(groups)
+    os.setgid(groups[0] if groups else uid)
+    os.setuid(uid)
+
+
 def sysfs_write(path: str, data: bytes) -> int:
     """One write(2) of exactly these bytes; 0 or the errno."""
     import os
-    fd = os.open(path, os.O_WRONLY)
+    try:
+        fd = os.open(path, os.O_WRONLY)
+    except OSError as e:
+        return e.errno
     try:
         os.write(fd, data)
         return 0

@@ -236,3 +236,72 @@ def test_every_event_of_one_request_wakes_its_task(guest, plc):
     """)
     assert out["set"] == 0, out
     assert out["woken"] == sorted(f"plc.on{i}.hits" for i in range(N_EVENTS)), out
+
+
+# the read-only monitor role ---------------------------------------------------
+
+MONITOR_GID = 4242
+
+
+def test_monitor_group_reads_and_nothing_else(guest, built):
+    """monitor_gid=GID at load: that group's members read (status file,
+    STATUS, VAR_GET, VAR_LIST) without any capability; every write and
+    control is refused (EPERM); another user reads nothing."""
+    tree, manifest = built
+    order = manifest["load_order"]
+    for k, name in enumerate(order):
+        arg = f" monitor_gid={MONITOR_GID}" if k == 0 else ""
+        r = guest.run(f"insmod {tree / name / (name + '.ko')}{arg}")
+        assert r.exit_code == 0, r.output
+    ctl, st = f"{sysfs(manifest)}/control", f"{sysfs(manifest)}/status"
+    try:
+        assert guest.run(f"echo start all > {ctl}").exit_code == 0
+        body = f"""
+            def reads():
+                r = {{}}
+                try:
+                    r["status file"] = "configuration trust" in open({st!r}).read()
+                except OSError as e:
+                    r["status file"] = e.errno
+                nl = Genl()
+                r["STATUS"] = nl.cmd("IEC_CMD_STATUS")[0]
+                r["VAR_GET"] = nl.cmd("IEC_CMD_VAR_GET", var("ticks"))[0]
+                err, replies = nl.cmd("IEC_CMD_VAR_LIST", dump=True)
+                r["VAR_LIST"] = err or len(replies)
+                r["VAR_SET"] = nl.cmd("IEC_CMD_VAR_SET", var("spare", b"\\1\\0"))[0]
+                r["VAR_FORCE"] = nl.cmd("IEC_CMD_VAR_FORCE", var("spare", b"\\1\\0"))[0]
+                r["RES_STOP"] = nl.cmd("IEC_CMD_RES_STOP")[0]
+                r["SLOT_CLEAR"] = nl.cmd("IEC_CMD_SLOT_CLEAR")[0]
+                r["control"] = sysfs_write({ctl!r}, b"stop all\\n")
+                return r
+            if os.fork() == 0:
+                become(65534, [65534])
+                print("OTHER " + json.dumps(reads()), flush=True)
+                os._exit(0)
+            os.wait()
+            become(65534, [{MONITOR_GID}])
+            out.update(reads())
+        """
+        code = ("import errno, json, os, struct, sys, time\n"
+                f"sys.path.insert(0, {str(HERE)!r})\n"
+                "from rawnl import *\n"
+                "out = {}\n" + textwrap.dedent(body) +
+                "\nprint('RESULT ' + json.dumps(out))\n")
+        r = guest.pyrun(code, timeout=120)
+        assert r.exit_code == 0, r.output
+        lines = {ln.split(" ", 1)[0]: json.loads(ln.split(" ", 1)[1])
+                 for ln in r.output.splitlines() if ln.startswith(("RESULT ", "OTHER "))}
+        mon, other = lines["RESULT"], lines["OTHER"]
+        # the control file is 0200 root: a user is refused by its mode already
+        denied = {"control": errno.EACCES,
+                  **{k: errno.EPERM for k in ("VAR_SET", "VAR_FORCE", "RES_STOP", "SLOT_CLEAR")}}
+        assert mon.pop("status file") is True, mon
+        assert (mon.pop("STATUS"), mon.pop("VAR_GET")) == (0, 0), mon
+        assert mon.pop("VAR_LIST") > 20, mon
+        assert mon == denied, mon
+        assert other == {"status file": errno.EPERM, "STATUS": errno.EPERM,
+                         "VAR_GET": errno.EPERM, "VAR_LIST": errno.EPERM, **denied}, other
+        states = {n: t["state"] for n, t in status(guest, manifest)["tasks"].items()}
+        assert set(states.values()) == {"running"}, states
+    finally:
+        unload(guest, manifest)
