@@ -263,6 +263,13 @@ struct iec_resource {
 	/* runtime, owned by the configuration module */
 	struct list_head node;
 	struct kobject *kobj;
+	/*
+	 * Commands that wait for a cycle boundary of its tasks holding no
+	 * mutex (iec_vars.c): taken under iec_resources_lock while the
+	 * resource is registered; unregistering waits for it to drop to 0
+	 * (at most one command's boundary wait, IEC_BOUNDARY_WAIT_MS).
+	 */
+	atomic_t users;
 };
 
 /* The configuration, described by the generated configuration module. */

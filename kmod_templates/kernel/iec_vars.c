@@ -15,8 +15,10 @@
  *    task: under the task's var_lock with in_cycle false (the task sets it
  *    under the same lock at both ends of a cycle).  While a cycle runs,
  *    the command waits for its end (iec_ack_wq) holding no lock and no
- *    mutex: the resource module is pinned instead (try_module_get), so
- *    other commands, a stop and the tasks never wait for it; the task
+ *    mutex: it counts itself in the resource's users instead, which
+ *    unregistering waits for (one request waits at most
+ *    IEC_BOUNDARY_WAIT_MS in all), so other commands and the tasks never
+ *    wait for it; the task
  *    never waits longer than one memcpy of one variable;
  *  - the kernel checks every value it stores (iec_value_check()): its
  *    size, a BOOL's 0/1, a string's length against its declared capacity,
@@ -167,7 +169,7 @@ struct iec_var_ref {
 	struct iec_task *task;		/* NULL: a global */
 	u32 index;
 	const struct nlattr *value;	/* VALUE of a write or force */
-	bool pinned;			/* holds a reference on res->owner */
+	bool pinned;			/* counted in res->users */
 	u16 raised;			/* 1 + event: the write raised a SINGLE variable */
 	void *out;			/* VAR_GET: where the value goes */
 };
@@ -414,18 +416,19 @@ static const struct iec_force *iec_force_find(const struct iec_force *f,
  * boundary (no cycle running).  With @unless_forced, a write: refused with
  * -EBUSY if that variable is forced (checked under var_lock, under which
  * the task's force list changes).  Waits for the end of the cycle on
- * iec_ack_wq, -EBUSY if the task stays inside one cycle for
- * IEC_BOUNDARY_WAIT_MS.  The caller holds no mutex and no lock: it pinned
- * the resource module (iec_refs_pin()).  The task waits for at most the
- * memcpy of this one variable (at most IEC_NL_VALUE_MAX bytes).
+ * iec_ack_wq until @deadline (jiffies; one for the whole request,
+ * IEC_BOUNDARY_WAIT_MS after its start), then -EBUSY.  The caller holds no
+ * mutex and no lock: it counted itself in the resource's users
+ * (iec_refs_pin()).  The task waits for at most the memcpy of this one
+ * variable (at most IEC_NL_VALUE_MAX bytes).
  */
 #define IEC_BOUNDARY_WAIT_MS	1000
 
 static int iec_task_boundary_copy(struct iec_task *t, void *dst,
 				  const void *src, u32 len,
-				  const struct iec_var_desc *unless_forced)
+				  const struct iec_var_desc *unless_forced,
+				  unsigned long deadline)
 {
-	unsigned long deadline = jiffies + msecs_to_jiffies(IEC_BOUNDARY_WAIT_MS);
 	long left;
 
 	might_sleep();
@@ -456,13 +459,14 @@ static int iec_task_boundary_copy(struct iec_task *t, void *dst,
 }
 
 /*
- * Pins the resource module of every instance variable in @refs, so that
- * their descriptors and tasks stay valid once the caller dropped
- * iec_resources_lock and iec_ctl_mutex (which it holds here): the waits
- * for a cycle boundary happen without them.  -ENOENT if a resource module
- * is being removed.
+ * Counts the request in the users of the resource of every instance
+ * variable in @refs, so that their descriptors and tasks stay valid once
+ * the caller dropped iec_resources_lock and iec_ctl_mutex (which it holds
+ * here: the resources in @refs are registered): the waits for a cycle
+ * boundary happen without them, and unregistering the resource waits for
+ * the request instead (iec2kmod_unregister_resource()).
  */
-static int iec_refs_pin(struct iec_var_ref *refs, u32 n)
+static void iec_refs_pin(struct iec_var_ref *refs, u32 n)
 {
 	u32 i;
 
@@ -470,11 +474,9 @@ static int iec_refs_pin(struct iec_var_ref *refs, u32 n)
 	for (i = 0; i < n; i++) {
 		if (!refs[i].task)
 			continue;
-		if (!try_module_get(refs[i].res->owner))
-			return -ENOENT;
+		atomic_inc(&refs[i].res->users);
 		refs[i].pinned = true;
 	}
-	return 0;
 }
 
 static void iec_refs_free(struct iec_var_ref *refs, u32 n)
@@ -484,8 +486,8 @@ static void iec_refs_free(struct iec_var_ref *refs, u32 n)
 	if (!refs)
 		return;
 	for (i = 0; i < n; i++)
-		if (refs[i].pinned)
-			module_put(refs[i].res->owner);
+		if (refs[i].pinned && atomic_dec_and_test(&refs[i].res->users))
+			wake_up_all(&iec_ack_wq);
 	kfree(refs);
 }
 
@@ -608,6 +610,7 @@ int iec_nl_var_get(struct sk_buff *skb, struct genl_info *info)
 {
 	struct iec_var_ref *refs;
 	struct sk_buff *msg = NULL;
+	unsigned long deadline;
 	size_t size = 0;
 	void *hdr;
 	u32 n = 0, i;
@@ -625,9 +628,7 @@ int iec_nl_var_get(struct sk_buff *skb, struct genl_info *info)
 		err = -EINVAL;
 		goto out_locked;
 	}
-	err = iec_refs_pin(refs, n);
-	if (err)
-		goto out_locked;
+	iec_refs_pin(refs, n);
 	for (i = 0; i < n; i++)
 		size += iec_var_msg_size(&refs[i], true);
 	err = -ENOMEM;
@@ -662,12 +663,14 @@ int iec_nl_var_get(struct sk_buff *skb, struct genl_info *info)
 	mutex_unlock(&iec_resources_lock);
 	mutex_unlock(&iec_ctl_mutex);
 	/* instance variables: at a boundary of their task, no mutex held */
+	deadline = jiffies + msecs_to_jiffies(IEC_BOUNDARY_WAIT_MS);
 	for (i = 0; i < n; i++) {
 		if (!refs[i].task)
 			continue;
 		err = iec_task_boundary_copy(refs[i].task, refs[i].out,
 					     refs[i].desc->addr,
-					     iec_value_len(refs[i].desc), NULL);
+					     iec_value_len(refs[i].desc), NULL,
+					     deadline);
 		if (err) {
 			NL_SET_ERR_MSG(info->extack, "the task stays inside a cycle");
 			goto out;
@@ -756,6 +759,7 @@ full:
 int iec_nl_var_set(struct sk_buff *skb, struct genl_info *info)
 {
 	struct iec_var_ref *refs;
+	unsigned long deadline;
 	u32 n = 0, i;
 	int err;
 
@@ -785,9 +789,7 @@ int iec_nl_var_set(struct sk_buff *skb, struct genl_info *info)
 			goto out_locked;
 		}
 	}
-	err = iec_refs_pin(refs, n);
-	if (err)
-		goto out_locked;
+	iec_refs_pin(refs, n);
 	/* the globals, in holds bounded by IEC_IMAGE_HOLD_BYTES */
 	i = 0;
 	while (i < n) {
@@ -825,6 +827,7 @@ int iec_nl_var_set(struct sk_buff *skb, struct genl_info *info)
 	 * instance variables, each between two cycles of its task, with no
 	 * mutex held (a force that came meanwhile wins: -EBUSY)
 	 */
+	deadline = jiffies + msecs_to_jiffies(IEC_BOUNDARY_WAIT_MS);
 	for (i = 0; i < n && !err; i++) {
 		struct iec_task *t = refs[i].task;
 
@@ -832,7 +835,8 @@ int iec_nl_var_set(struct sk_buff *skb, struct genl_info *info)
 			continue;
 		err = iec_task_boundary_copy(t, refs[i].desc->addr,
 					     nla_data(refs[i].value),
-					     nla_len(refs[i].value), refs[i].desc);
+					     nla_len(refs[i].value), refs[i].desc,
+					     deadline);
 	}
 	if (err)
 		NL_SET_ERR_MSG(info->extack,
