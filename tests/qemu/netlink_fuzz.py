@@ -47,17 +47,22 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Tuple
 
-# iec_nl.h (manager/netlink.py mirrors it; so does this)
+# the protocol's numbers, from plc-manager's mirror of iec_nl.h (a unit test
+# compares that with the header)
+from plc_manager.netlink import ATTRIBUTES, CMD, MAX_VARS, VALUE_MAX  # noqa: E402
+
+_A = {name: i for i, (name, _t) in enumerate(ATTRIBUTES)}
 CMD_STATUS, CMD_VAR_GET, CMD_VAR_LIST, CMD_VAR_SET, CMD_VAR_FORCE, CMD_VAR_UNFORCE, \
-    CMD_RES_START, CMD_RES_STOP, CMD_SLOT_CLEAR, CMD_SLOT_PUBLISH, CMD_SLOT_UNSTAGE = range(1, 12)
-N_CMDS = 12
-A_NAME, A_SLOT_INDEX = 3, 11
-A_VAR, A_PATH, A_TABLE, A_INDEX = 34, 35, 36, 37
-A_VALUE, A_ALL, A_SLOTS_ONLY = 44, 45, 55
-A_MAX = 56
+    CMD_RES_START, CMD_RES_STOP, CMD_SLOT_CLEAR, CMD_SLOT_PUBLISH, CMD_SLOT_UNSTAGE = (
+        CMD[f"IEC_CMD_{n}"] for n in ("STATUS", "VAR_GET", "VAR_LIST", "VAR_SET", "VAR_FORCE",
+                                      "VAR_UNFORCE", "RES_START", "RES_STOP", "SLOT_CLEAR",
+                                      "SLOT_PUBLISH", "SLOT_UNSTAGE"))
+N_CMDS = len(CMD)
+A_NAME, A_SLOT_INDEX = _A["IEC_A_NAME"], _A["IEC_A_SLOT_INDEX"]
+A_VAR, A_PATH, A_TABLE, A_INDEX = (_A[f"IEC_A_{n}"] for n in ("VAR", "PATH", "TABLE", "INDEX"))
+A_VALUE, A_ALL, A_SLOTS_ONLY = _A["IEC_A_VALUE"], _A["IEC_A_ALL"], _A["IEC_A_SLOTS_ONLY"]
+A_MAX = len(ATTRIBUTES) - 1
 NAME_MAX, PATH_MAX, TABLE_MAX = 63, 511, 63      # policy .len (without the NUL)
-VALUE_MAX = 65000
-MAX_VARS = 256
 
 NLA_F_NESTED = 1 << 15
 NLM_F_REQUEST, NLM_F_MULTI, NLM_F_ACK, NLM_F_ECHO = 1, 2, 4, 8
@@ -333,8 +338,8 @@ class Fuzzer:
                 "selector: an attribute the nest does not take"
         return nla(A_PATH, b"\0"), "selector: empty PATH"
 
-    def _var_nest(self, with_value: bool, bad: bool,
-                  big_ok: bool) -> Tuple[bytes, Optional[str]]:
+    def _var_nest(self, with_value: bool, bad: bool, big_ok: bool,
+                  used: set) -> Tuple[bytes, Optional[str]]:
         """One VAR nest; *bad*: one thing in it the kernel must refuse."""
         r = self.rnd
         what = None
@@ -345,12 +350,11 @@ class Fuzzer:
             else:
                 opts += ["extra_value"]
             what = r.choice(opts)
-        if with_value and what != "readonly":
-            v = r.choice(self.writable)
-        elif what == "readonly":
-            v = r.choice(self.readonly)
-        else:
-            v = r.choice(self.vars)
+        pool = (self.writable if with_value and what != "readonly" else
+                self.readonly if what == "readonly" else self.vars)
+        fresh = [w for w in pool if w.path not in used]
+        v = r.choice(fresh or pool)
+        used.add(v.path)
         sel, why = self._selector(v, what == "selector")
         body = sel
         if with_value and what != "missing":
@@ -389,14 +393,18 @@ class Fuzzer:
         else:
             return b"", "no variable named"
         bad_at = r.randrange(n) if r.random() < 0.4 else -1
-        parts, why = [], None
+        parts, why, used = [], None, set()
         for i in range(n):
-            b, w = self._var_nest(with_value, i == bad_at, n == 1)
+            b, w = self._var_nest(with_value, i == bad_at, n == 1, used)
             parts.append(b)
             if w and (why is None or (why.startswith("(") and not w.startswith("("))):
                 why = w
         if n > MAX_VARS and (why is None or why.startswith("(")):
             why = "more than 256 variables"
+        if len(used) < n and why is None:
+            # more variables than the configuration has: some twice (the
+            # kernel refuses or merges duplicates)
+            why = "(any) a variable named twice"
         return b"".join(parts), why
 
     # -------------------------------------------------------------- commands
@@ -533,8 +541,12 @@ class Fuzzer:
             rflags |= F_DUMP
         elif r.random() < 0.05:
             flags |= r.choice([NLM_F_ECHO, NLM_F_MULTI, 0x800, 0x1000, NLM_F_ROOT])
+            why = why or "(any) unusual nlmsg flags"
         version = 1 if r.random() < 0.9 else r.randint(0, 255)
-        reserved = 0 if r.random() < 0.95 else r.randint(1, 0xFFFF)
+        reserved = 0
+        if r.random() < 0.05:
+            reserved = r.randint(1, 0xFFFF)
+            why = why or "(any) genlmsghdr reserved field set"
         genl = struct.pack("<BBH", cmd & 0xFF, version, reserved)
         body = genl + attrs
         x = r.random()
@@ -742,6 +754,9 @@ for q, fl, why in meta:
         out["unanswered"] += 1
     key = "%d:%s" % (why, "none" if e is None else errno.errorcode.get(e, str(e)) if e else "ok")
     out["outcomes"][key] = out["outcomes"].get(key, 0) + 1
+    smp = out.setdefault("samples", {}).setdefault(key, [])
+    if len(smp) < 3:
+        smp.append(q - 101)
     if fl & 1 and e == 0:
         out["violations"].append([q - 101, why])
 print("SENT " + json.dumps(out))
@@ -795,6 +810,8 @@ class FuzzResult:
     enobufs: int
     by_reason: Dict[str, int]
     must_refuse: int
+    samples: Dict[str, List[int]] = field(default_factory=dict)   # reason|outcome -> indices
+    file: Optional[Path] = None          # the message file, kept if a message was accepted
 
     def summary(self) -> str:
         lines = [f"netlink fuzz: seed {self.seed}, {self.sent} messages in {self.seconds:.1f} s "
@@ -834,11 +851,15 @@ def run(guest, workdir: Path, manifest: dict, seed: int, count: int,
         why, res = k.split(":", 1)
         key = f"{fz.reasons[int(why)]}|{res}"
         outcomes[key] = outcomes.get(key, 0) + n
-    must = sum(n for w, n in by_reason.items() if w != "(valid)")
+    must = sum(n for w, n in by_reason.items() if not w.startswith("("))
+    samples = {}
+    for k, idx in sent.get("samples", {}).items():
+        why, res_ = k.split(":", 1)
+        samples[f"{fz.reasons[int(why)]}|{res_}"] = idx
     res = FuzzResult(seed=seed, count=count, seconds=sent["seconds"], sent=sent["sent"],
                      violations=[(i, fz.reasons[w]) for i, w in sent["violations"]],
                      outcomes=outcomes, unanswered=sent["unanswered"], enobufs=sent["enobufs"],
-                     by_reason=by_reason, must_refuse=must)
+                     by_reason=by_reason, must_refuse=must, samples=samples, file=f)
     return res, before
 
 

@@ -57,6 +57,7 @@ def test_netlink_fuzz_leaves_the_plc_running_and_every_value_typed(guest, guest_
     t_build = time.monotonic() - t0
     rc, out = pm(guest, "load", tree)
     assert rc == 0, out
+    t_load = time.monotonic() - t0 - t_build
     try:
         t1 = time.monotonic()
         res, before = nf.run(guest, Path(guest_workdir), manifest, SEED, COUNT)
@@ -69,13 +70,17 @@ def test_netlink_fuzz_leaves_the_plc_running_and_every_value_typed(guest, guest_
             problems.append(f"... {len(res.violations) - 40} more")
         if res.unanswered:
             problems.append(f"{res.unanswered} messages got no answer")
+        t2 = time.monotonic()
         problems += nf.check_after(guest, manifest, before)
         guest.check_kernel_log()
+        t_check = time.monotonic() - t2
     finally:
+        t3 = time.monotonic()
         rc, out = pm(guest, "stop")
     assert rc == 0, f"plc-manager stop: {out}"
     left = loaded_modules(guest)
-    print(f"build {t_build:.0f} s, fuzz (probe, generate, send) {t_fuzz:.0f} s, "
+    print(f"build {t_build:.0f} s, load {t_load:.0f} s, fuzz (probe, generate, send) "
+          f"{t_fuzz:.0f} s, checks {t_check:.0f} s, stop {time.monotonic() - t3:.0f} s, "
           f"total {time.monotonic() - t0:.0f} s")
     assert not problems, f"seed {SEED}, {COUNT} messages:\n" + "\n".join(problems)
     assert left == [], f"modules left after plc-manager stop: {left}"
