@@ -25,7 +25,6 @@ own: ``python3 benchmarks/netlink_fuzz.py --messages N --seed S``.
 from __future__ import annotations
 
 import compileall
-import json
 import os
 import shutil
 import time
