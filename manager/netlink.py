@@ -281,8 +281,10 @@ def _status_from(msg) -> Status:
 
 _ERRNO_TEXT = {
     errno.EPERM: "permission denied: the iec2kmod netlink commands need CAP_NET_ADMIN "
-                 "(run plc-manager as root)",
+                 "(run plc-manager as root; status and read also admit the group given "
+                 "to the configuration module as monitor_gid)",
     errno.EACCES: "the variable is read-only",
+    errno.ERANGE: "the value is out of the variable's range",
     errno.EBUSY: "busy",
 }
 

@@ -272,6 +272,7 @@ def _generate_tree(project, out: Path, selective=None) -> dict:
     for g in cfg_globals:
         init += ie.lines(f"iec2kmod_image.{g.c_name}", g.var.type, g.var.init, f)
     cfg_vars = []
+    cfg_enums: dict = {}
     res_vars: dict[str, list] = {r.name: [] for r in cfg.resources}
     by_c = _globals_by_c(plan)
     res_of = {}
@@ -289,7 +290,8 @@ def _generate_tree(project, out: Path, selective=None) -> dict:
             if g is not None and id(g.var) in single_events and e.c_lvalue == g.c_name:
                 event = single_events[id(g.var)] + 1
             cfg_vars.append({"path": N.c_string(e.path.encode()), "member": e.c_lvalue,
-                             "kind": e.kind, "writable": int(e.writable), "event": event})
+                             "kind": e.kind, "writable": int(e.writable), "event": event,
+                             "checks": _desc_checks(e, cfg_enums)})
         else:
             res_vars[res_of[e.owner]].append((e, e.c_lvalue, 0))
     iface_hash = _sha(*[f"{s['name']}={s['hash']}" for s in slots],
@@ -300,6 +302,7 @@ def _generate_tree(project, out: Path, selective=None) -> dict:
         config=cfg.name, config_lower=cfg.name.lower(), version=__version__,
         source_hash=source_hash, iface_hash=iface_hash, header=gen.header_name,
         image_header="iec_image.h", slots=slots, vars=cfg_vars, nevents=len(single_events),
+        enum_sets=_enum_sets(cfg_enums),
         init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init)
     runtime = ["iec_config_rt.c", "iec_ctl.c", "iec_vars.c"] + _runtime_used([main, image_h], False)
     _write_module(out, config_mod, {"main.c": main},
@@ -456,15 +459,17 @@ def _resource_source(env, project, plan, r, gen, cfg, slot_of, single_events, va
     # the manager writes it between two cycles of that task
     task_no = {t["name"].upper(): n + 1 for n, t in enumerate(tasks)}
     task_of = {ip.path: task_no.get((ip.task or "").upper(), 0) for ip in instances}
+    enums: dict = {}
     vars_out = [{"path": N.c_string(e.path.encode()), "lvalue": lv, "kind": e.kind,
-                 "writable": int(e.writable), "event": ev, "task": task_of.get(e.owner, 0)}
+                 "writable": int(e.writable), "event": ev, "task": task_of.get(e.owner, 0),
+                 "checks": _desc_checks(e, enums)}
                 for e, lv, ev in vars_]
     return env.get_template("resource_main.c.j2").render(
         resource=r.name, resource_lower=r.name.lower(), config=cfg.name, version=__version__,
         header=gen.header_name, image_header="iec_image.h",
         res_globals=[N.declare(g.var.type, g.c_name) for g in res_globals],
         instances=[f"{N.pou_struct(ip.pou)} {ip.c_name}" for ip in instances], tasks=tasks,
-        vars=vars_out, cpu=_cpu_of(r.processor), init_decls=f.decls,
+        vars=vars_out, enum_sets=_enum_sets(enums), cpu=_cpu_of(r.processor), init_decls=f.decls,
         needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init,
         source_hash=source_hash, iface_hash=iface_hash,
         unbound_check=unbound_pointer_check(instances))
@@ -615,6 +620,40 @@ def _manifest_text(manifest) -> str:
             text = json.dumps(value, indent=2).replace("\n", "\n  ")
         parts.append(f"  {json.dumps(key)}: {text}")
     return "{\n" + ",\n".join(parts) + "\n}\n"
+
+
+def _c_s64(v: int) -> str:
+    return "(-9223372036854775807LL - 1)" if v == -2 ** 63 else f"{v}LL"
+
+
+def _desc_checks(e, enums: dict) -> str:
+    """The designated initializers of what the kernel checks in a value
+    written to or forced into the variable of table entry *e* (struct
+    iec_var_desc in iec_kmod.h): a STRING's declared capacity, a subrange's
+    bounds, an enumeration's values (one static array per value set, named
+    in *enums*)."""
+    from ..checks.types import SubrangeT
+    t = concrete(e.type)
+    if isinstance(t, SubrangeT):
+        if e.kind == "u":
+            return f", .check = IEC_VCHK_RANGE, .range.u = {{ {t.low}ULL, {t.high}ULL }}"
+        return (f", .check = IEC_VCHK_RANGE, .range.s = {{ {_c_s64(t.low)}, "
+                f"{_c_s64(t.high)} }}")
+    if isinstance(t, EnumT):
+        bits = N.enum_base(t).bits
+        # as the C object holds them, read sign-extended by the kernel
+        values = tuple(sorted({v - 2 ** bits if v >= 2 ** (bits - 1) else v
+                               for _, v in t.values.values()}))
+        name = enums.setdefault(values, f"iec_enum_set{len(enums)}")
+        return f", .check = IEC_VCHK_ENUM, .enum_values = {name}, .nenum = {len(values)}"
+    if isinstance(t, StringT):
+        return f", .cap = {t.length}"
+    return ""
+
+
+def _enum_sets(enums: dict) -> list:
+    return [{"name": name, "set": ", ".join(map(_c_s64, values))}
+            for values, name in enums.items()]
 
 
 def _value_info(t):

@@ -476,6 +476,8 @@ void iec2kmod_unregister_resource(struct iec_resource *res)
 	mutex_lock(&iec_resources_lock);
 	list_del_rcu(&res->node);
 	mutex_unlock(&iec_resources_lock);
+	/* a command still waiting for one of its tasks' cycle boundaries */
+	wait_event(iec_ack_wq, !atomic_read(&res->users));
 	synchronize_rcu();	/* iec2kmod_event() walks the list under RCU */
 }
 EXPORT_SYMBOL_GPL(iec2kmod_unregister_resource);

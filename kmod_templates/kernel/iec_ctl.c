@@ -2,7 +2,15 @@
 /*
  * iec_ctl.c - the configuration's control plane.
  *
- * sysfs, for people and shell scripts (root-only, 0400 / 0200):
+ * The privilege model: every netlink command, every control write and
+ * every status read needs CAP_NET_ADMIN (in the initial user namespace),
+ * checked by the kernel on the operation, not only by a file mode.  One
+ * read-only role beside it, off unless the module is loaded with
+ * monitor_gid=GID: members of that group may read (IEC_CMD_STATUS,
+ * IEC_CMD_VAR_GET, IEC_CMD_VAR_LIST, the status file) and nothing else.
+ *
+ * sysfs, for people and shell scripts (status 0444, control 0200; the
+ * checks above on every read and write):
  *   /sys/kernel/iec2kmod/<configuration>/status    resources, tasks, slots
  *   /sys/kernel/iec2kmod/<configuration>/control   "start <resource>|all",
  *                                                   "start <resource>.<task>"
@@ -19,15 +27,21 @@
  *                                                   them: a fixed number of
  *                                                   cycles)
  *                                                   "clear <slot>|all"
+ *   The control file takes exactly one command: one line of known words
+ *   separated by single spaces, at most one trailing newline, nothing
+ *   after it (no NUL, no second line).
  *
  * Generic netlink family "iec2kmod" (iec_nl.h), for plc-manager: status,
  * variable list/read/write/force/unforce, resource (or task) start, resource
  * stop, slot clear.
- * Every command needs CAP_NET_ADMIN in the initial namespace and is checked
- * strictly against its own policy.  Commands run one at a time
+ * Every command needs CAP_NET_ADMIN in the initial namespace (the read
+ * commands: or monitor_gid, above) and is checked strictly against its own
+ * policy.  Commands run one at a time
  * (iec_ctl_mutex); they may sleep, but never while holding a raw lock.
  * The variable commands and the force lists are in iec_vars.c.
  */
+#include <linux/capability.h>
+#include <linux/cred.h>
 #include <linux/kobject.h>
 #include <linux/module.h>
 #include <linux/mutex.h>
@@ -47,6 +61,38 @@ static const char *const iec_state_names[] = { "stopped", "running", "fault" };
 
 /* serialises netlink commands, sysfs control and the force lists */
 DEFINE_MUTEX(iec_ctl_mutex);
+
+/* 0444: fixed at load (a writable parameter would be a second way in) */
+static int monitor_gid = -1;
+module_param(monitor_gid, int, 0444);
+MODULE_PARM_DESC(monitor_gid,
+		 "group that may read status and variables without CAP_NET_ADMIN (default -1: none)");
+
+/* The caller is in the read-only monitor group (monitor_gid). */
+static bool iec_monitor(void)
+{
+	kgid_t gid;
+
+	if (monitor_gid < 0)
+		return false;
+	gid = make_kgid(&init_user_ns, monitor_gid);
+	return gid_valid(gid) && in_group_p(gid);
+}
+
+/*
+ * The read commands (STATUS, VAR_GET, VAR_LIST): CAP_NET_ADMIN as for
+ * GENL_ADMIN_PERM (of the sender and of the socket's opener), or the
+ * monitor group.
+ */
+int iec_nl_may_read(const struct sk_buff *skb)
+{
+	return netlink_capable(skb, CAP_NET_ADMIN) || iec_monitor() ? 0 : -EPERM;
+}
+
+static int iec_nl_var_list_start(struct netlink_callback *cb)
+{
+	return iec_nl_may_read(cb->skb);
+}
 
 /* ------------------------------------------------------------------ */
 /* generic netlink                                                    */
@@ -222,8 +268,11 @@ static int iec_nl_status(struct sk_buff *skb, struct genl_info *info)
 	struct sk_buff *msg;
 	void *hdr;
 	u32 i;
-	int err = -EMSGSIZE;
+	int err = iec_nl_may_read(skb);
 
+	if (err)
+		return err;
+	err = -EMSGSIZE;
 	mutex_lock(&iec_ctl_mutex);
 	mutex_lock(&iec_resources_lock);
 	msg = genlmsg_new(iec_status_size(), GFP_KERNEL);
@@ -355,6 +404,9 @@ static int iec_nl_res(struct genl_info *info, bool start)
 	const char *name = NULL;
 	int err;
 
+	err = iec_nla_strict_string(info->attrs[IEC_A_NAME], info->extack);
+	if (err)
+		return err;
 	if (info->attrs[IEC_A_NAME])
 		name = nla_data(info->attrs[IEC_A_NAME]);
 	mutex_lock(&iec_ctl_mutex);
@@ -470,23 +522,22 @@ static const struct nla_policy iec_nl_slot_policy[IEC_A_MAX + 1] = {
 };
 
 static const struct genl_ops iec_nl_ops[] = {
+	/* the read commands check iec_nl_may_read() themselves */
 	{
 		.cmd = IEC_CMD_STATUS,
-		.flags = GENL_ADMIN_PERM,
 		.doit = iec_nl_status,
 		.policy = iec_nl_status_policy,
 		.maxattr = IEC_A_MAX,
 	},
 	{
 		.cmd = IEC_CMD_VAR_GET,
-		.flags = GENL_ADMIN_PERM,
 		.doit = iec_nl_var_get,
 		.policy = iec_nl_get_policy,
 		.maxattr = IEC_A_MAX,
 	},
 	{
 		.cmd = IEC_CMD_VAR_LIST,
-		.flags = GENL_ADMIN_PERM,
+		.start = iec_nl_var_list_start,
 		.dumpit = iec_nl_var_list,
 		.policy = iec_nl_none_policy,
 		.maxattr = IEC_A_MAX,
@@ -585,6 +636,9 @@ static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
 	int len = 0;
 	u32 i;
 
+	/* the file mode is not enough: a root without capabilities is refused */
+	if (!capable(CAP_NET_ADMIN) && !iec_monitor())
+		return -EPERM;
 	iec_emit(buf, &len, "configuration %s source %s interface %s\n",
 		 iec_cfg->name, iec_cfg->source_hash, iec_cfg->iface_hash);
 	mutex_lock(&iec_resources_lock);
@@ -630,26 +684,63 @@ static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
 	return len;
 }
 
+/*
+ * Splits the one line of a control write into at most @max words (single
+ * spaces between them); -EINVAL for anything else: a NUL, a second line,
+ * a control character, an empty word, too many words.
+ */
+static int iec_control_words(char *line, size_t count, char **words, int max)
+{
+	int n = 0;
+	char *p;
+
+	if (count && line[count - 1] == '\n')
+		count--;
+	line[count] = '\0';
+	/* printable ASCII only (names are IEC identifiers) */
+	for (p = line; p < line + count; p++)
+		if ((u8)*p < 0x20 || (u8)*p > 0x7e)
+			return -EINVAL;
+	while ((p = strsep(&line, " "))) {
+		if (!*p || n == max)
+			return -EINVAL;
+		words[n++] = p;
+	}
+	return n;
+}
+
 static ssize_t control_store(struct kobject *kobj, struct kobj_attribute *attr,
 			     const char *buf, size_t count)
 {
-	char cmd[16], arg[64];
+	char line[96], *w[3];
 	int ret, n;
 	u32 slot, run_ms = 0;
 
-	n = sscanf(buf, "%15s %63s %u", cmd, arg, &run_ms);
-	if (n < 2 || (n == 3) != !strcmp(cmd, "run") || (n == 3 && !run_ms))
+	/* the file mode is not enough: a root without capabilities is refused */
+	if (!capable(CAP_NET_ADMIN))
+		return -EPERM;
+	if (count >= sizeof(line))
 		return -EINVAL;
+	memcpy(line, buf, count);
+	n = iec_control_words(line, count, w, ARRAY_SIZE(w));
+	if (n < 2)
+		return -EINVAL;
+	if (!strcmp(w[0], "run")) {
+		if (n != 3 || kstrtou32(w[2], 10, &run_ms) || !run_ms)
+			return -EINVAL;
+	} else if (n != 2) {
+		return -EINVAL;
+	}
 	mutex_lock(&iec_ctl_mutex);
-	if (!strcmp(cmd, "start") || !strcmp(cmd, "stop")) {
-		ret = iec_control_resource(arg, cmd[2] == 'a', 0);
-	} else if (!strcmp(cmd, "run")) {
-		ret = iec_control_resource(arg, true, run_ms);
-	} else if (!strcmp(cmd, "clear")) {
-		if (!strcmp(arg, "all")) {
+	if (!strcmp(w[0], "start") || !strcmp(w[0], "stop")) {
+		ret = iec_control_resource(w[1], w[0][2] == 'a', 0);
+	} else if (!strcmp(w[0], "run")) {
+		ret = iec_control_resource(w[1], true, run_ms);
+	} else if (!strcmp(w[0], "clear")) {
+		if (!strcmp(w[1], "all")) {
 			ret = iec_gft_clear(-1);
 		} else {
-			ret = kstrtou32(arg, 10, &slot);
+			ret = kstrtou32(w[1], 10, &slot);
 			if (!ret)
 				ret = iec_gft_clear(slot);
 		}
@@ -660,7 +751,7 @@ static ssize_t control_store(struct kobject *kobj, struct kobj_attribute *attr,
 	return ret ? ret : count;
 }
 
-static struct kobj_attribute status_attr = __ATTR(status, 0400, status_show, NULL);
+static struct kobj_attribute status_attr = __ATTR(status, 0444, status_show, NULL);
 static struct kobj_attribute control_attr = __ATTR(control, 0200, NULL, control_store);
 
 static struct attribute *iec_attrs[] = {

@@ -27,6 +27,10 @@ int iec_nl_var_set(struct sk_buff *skb, struct genl_info *info);
 int iec_nl_var_force(struct sk_buff *skb, struct genl_info *info);
 int iec_nl_var_unforce(struct sk_buff *skb, struct genl_info *info);
 
+/* 0 if the sender of @skb may read (CAP_NET_ADMIN or monitor_gid), else -EPERM */
+int iec_nl_may_read(const struct sk_buff *skb);
+/* -EINVAL unless the string attribute @a (or NULL) ends exactly at its NUL */
+int iec_nla_strict_string(const struct nlattr *a, struct netlink_ext_ack *extack);
 /* the number of forced variables (the caller holds iec_ctl_mutex) */
 u32 iec_forced_count(void);
 /* frees the forced configuration globals, when no resource is left */

@@ -42,17 +42,39 @@
 #define IEC_POU_NAME_LEN	64
 #define IEC_START_DELAY_MS	50	/* start command to the first release */
 
-/* One variable the manager can read and write by its IEC path. */
+/* What the kernel checks in a value written or forced (iec_var_desc.check) */
+enum iec_value_check {
+	IEC_VCHK_NONE = 0,
+	IEC_VCHK_RANGE,		/* a subrange: range.s (kind i) or range.u (kind u) */
+	IEC_VCHK_ENUM,		/* an enumeration: one of enum_values[] */
+};
+
+/*
+ * One variable the manager can read and write by its IEC path.  Generated
+ * from the checked project (iec2kmod/kmod, the vars[] tables of
+ * config_main.c.j2 and resource_main.c.j2): the kernel refuses by itself
+ * what does not fit the declaration (iec_vars.c, iec_value_check()).
+ */
 struct iec_var_desc {
 	const char *path;
 	void *addr;
 	u32 size;		/* bytes of the C object */
 	char kind;		/* b i u f t e s w (see codegen/plan.py) */
+	/* 0: read-only (CONSTANT, an FB output, an SFC step): no write, no force */
 	u8 writable;
 	u16 single_event;	/* 1 + event number if it is a SINGLE variable */
 	/* 1 + index in its resource's tasks[] of the task that runs the
 	 * program instance owning it; 0: a global (image lock) */
 	u16 task;
+	u8 check;		/* enum iec_value_check */
+	u32 cap;		/* kind s/w: the declared capacity n of STRING[n] */
+	union {
+		struct { s64 lo, hi; } s;
+		struct { u64 lo, hi; } u;
+	} range;		/* IEC_VCHK_RANGE, bounds included */
+	/* IEC_VCHK_ENUM: the values, as the C object holds them sign-extended */
+	const s64 *enum_values;
+	u32 nenum;
 };
 
 /* A program type's body, published into its GFT slot. */
@@ -241,6 +263,13 @@ struct iec_resource {
 	/* runtime, owned by the configuration module */
 	struct list_head node;
 	struct kobject *kobj;
+	/*
+	 * Commands that wait for a cycle boundary of its tasks holding no
+	 * mutex (iec_vars.c): taken under iec_resources_lock while the
+	 * resource is registered; unregistering waits for it to drop to 0
+	 * (at most one command's boundary wait, IEC_BOUNDARY_WAIT_MS).
+	 */
+	atomic_t users;
 };
 
 /* The configuration, described by the generated configuration module. */

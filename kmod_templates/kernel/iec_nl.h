@@ -7,7 +7,9 @@
  *
  * One attribute space for the whole family: every nest (a resource, a
  * task, a slot, a variable) uses the same numbers.  Every command needs
- * CAP_NET_ADMIN (GENL_ADMIN_PERM) and is validated strictly against its
+ * CAP_NET_ADMIN (GENL_ADMIN_PERM; STATUS, VAR_GET and VAR_LIST check it in
+ * their handlers, which also admit the read-only group monitor_gid if the
+ * configuration module was loaded with one) and is validated strictly against its
  * own policy: an attribute a command does not take is refused.
  *
  *   IEC_CMD_STATUS [SLOTS_ONLY] -> CONFIG attributes, RESOURCE nests (with TASK
@@ -27,7 +29,16 @@
  * VALUE is the C object's bytes in host order (kind and size say how to
  * read them); for STRING/WSTRING it is the length (u16) and the
  * characters with their terminating NUL.  Requests naming several
- * variables are checked completely before anything is written.
+ * variables are checked completely before anything is written; a request
+ * naming a variable twice is refused (EINVAL).  The kernel checks every
+ * value itself (size, BOOL 0/1, a string against its declared length,
+ * subrange bounds: ERANGE, enumeration values: ERANGE); read-only
+ * variables (CONSTANT, FB outputs, SFC steps) refuse VAR_SET and
+ * VAR_FORCE (EACCES).  String attributes (PATH, TABLE, NAME) end exactly
+ * at their NUL.  Each variable is written whole; the globals of one
+ * VAR_SET reach the tasks in image-lock holds of at most 512 bytes
+ * (IEC_IMAGE_HOLD_BYTES in iec_vars.c), so a task may see some of them
+ * before the others.
  */
 #ifndef IEC_NL_H
 #define IEC_NL_H

@@ -14,8 +14,17 @@
  *    instance; the manager touches them only between two cycles of that
  *    task: under the task's var_lock with in_cycle false (the task sets it
  *    under the same lock at both ends of a cycle).  While a cycle runs,
- *    the command sleeps and tries again; the task never waits longer than
- *    one memcpy of one variable;
+ *    the command waits for its end (iec_ack_wq) holding no lock and no
+ *    mutex: it counts itself in the resource's users instead, which
+ *    unregistering waits for (one request waits at most
+ *    IEC_BOUNDARY_WAIT_MS in all), so other commands and the tasks never
+ *    wait for it; the task
+ *    never waits longer than one memcpy of one variable;
+ *  - the kernel checks every value it stores (iec_value_check()): its
+ *    size, a BOOL's 0/1, a string's length against its declared capacity,
+ *    a subrange's bounds, an enumeration's value set; read-only variables
+ *    (CONSTANT, FB outputs, SFC steps) refuse writes and forces.  A request
+ *    naming a variable twice is refused;
  *  - forced variables keep their forced value at cycle boundaries: forced
  *    globals are written back after every copy-out (under the image lock,
  *    so no task ever copies in an unforced value); forced instance
@@ -160,7 +169,23 @@ struct iec_var_ref {
 	struct iec_task *task;		/* NULL: a global */
 	u32 index;
 	const struct nlattr *value;	/* VALUE of a write or force */
+	bool pinned;			/* counted in res->users */
+	u16 raised;			/* 1 + event: the write raised a SINGLE variable */
+	void *out;			/* VAR_GET: where the value goes */
 };
+
+/*
+ * A string attribute must end exactly at its NUL: "plc.ticks\0garbage" is
+ * refused (the policy's NLA_NUL_STRING only asks for a NUL somewhere).
+ */
+int iec_nla_strict_string(const struct nlattr *a, struct netlink_ext_ack *extack)
+{
+	if (a && strnlen(nla_data(a), nla_len(a)) + 1 != nla_len(a)) {
+		NL_SET_ERR_MSG_ATTR(extack, a, "bytes after the string's NUL");
+		return -EINVAL;
+	}
+	return 0;
+}
 
 static void iec_var_ref_set(struct iec_var_ref *ref, struct iec_resource *res,
 			    const struct iec_var_desc *vars, u32 i)
@@ -232,6 +257,10 @@ static int iec_var_select(const struct nlattr *nest,
 	err = nla_parse_nested(tb, IEC_A_MAX, nest, policy, extack);
 	if (err)
 		return err;
+	err = iec_nla_strict_string(tb[IEC_A_PATH], extack) ?:
+	      iec_nla_strict_string(tb[IEC_A_TABLE], extack);
+	if (err)
+		return err;
 	if (tb[IEC_A_TABLE] && tb[IEC_A_INDEX]) {
 		const char *table = nla_data(tb[IEC_A_TABLE]);
 		u32 i = nla_get_u32(tb[IEC_A_INDEX]);
@@ -273,13 +302,37 @@ static int iec_var_select(const struct nlattr *nest,
 	return 0;
 }
 
-/* Size check of a VALUE for a variable (types and ranges: plc-manager). */
+/* The integer in @p (@size bytes, host order), sign-extended or not. */
+static s64 iec_int_value(const u8 *p, u32 size, bool sign)
+{
+	switch (size) {
+	case 1:
+		return sign ? (s64)(s8)p[0] : (s64)p[0];
+	case 2:
+		return sign ? (s64)(s16)get_unaligned((const u16 *)p) :
+			      (s64)get_unaligned((const u16 *)p);
+	case 4:
+		return sign ? (s64)(s32)get_unaligned((const u32 *)p) :
+			      (s64)get_unaligned((const u32 *)p);
+	default:
+		return (s64)get_unaligned((const u64 *)p);
+	}
+}
+
+/*
+ * The kernel's own check of a VALUE written or forced into a variable,
+ * from its descriptor (generated from the checked project): the size, a
+ * BOOL's 0/1, a STRING[n]'s length against n (not against the C object,
+ * which may have padding) with the characters free of NUL, a subrange's
+ * bounds, an enumeration's value set.  plc-manager checks the same first.
+ */
 static int iec_value_check(const struct iec_var_ref *ref,
 			   struct netlink_ext_ack *extack)
 {
 	const struct iec_var_desc *d = ref->desc;
 	const u8 *p;
-	u32 len;
+	u32 len, i;
+	s64 v;
 
 	if (!ref->value) {
 		NL_SET_ERR_MSG(extack, "a value is missing");
@@ -296,8 +349,21 @@ static int iec_value_check(const struct iec_var_ref *ref,
 		n = get_unaligned((const u16 *)p);
 		if (len != 2 + (n + 1) * cs || len > d->size)
 			goto bad_size;
-		if (p[len - 1] || p[len - cs])
-			goto bad_size;	/* the terminating NUL */
+		if (n > d->cap) {
+			NL_SET_ERR_MSG_ATTR(extack, ref->value,
+					    "the string is longer than its declared length");
+			return -EMSGSIZE;
+		}
+		for (i = 0; i <= n; i++) {
+			bool nul = cs == 1 ? !p[2 + i] :
+				   !get_unaligned((const u16 *)(p + 2 + 2 * i));
+
+			if (nul != (i == n)) {
+				NL_SET_ERR_MSG_ATTR(extack, ref->value,
+						    "a string ends at its length, with one NUL");
+				return -EINVAL;
+			}
+		}
 		return 0;
 	}
 	if (len != d->size)
@@ -306,29 +372,73 @@ static int iec_value_check(const struct iec_var_ref *ref,
 		NL_SET_ERR_MSG_ATTR(extack, ref->value, "a BOOL is 0 or 1");
 		return -EINVAL;
 	}
+	if (d->check == IEC_VCHK_RANGE && d->kind == 'u') {
+		u64 u = (u64)iec_int_value(p, len, false);
+
+		if (u < d->range.u.lo || u > d->range.u.hi)
+			goto bad_range;
+	} else if (d->check == IEC_VCHK_RANGE) {
+		v = iec_int_value(p, len, true);
+		if (v < d->range.s.lo || v > d->range.s.hi)
+			goto bad_range;
+	} else if (d->check == IEC_VCHK_ENUM) {
+		v = iec_int_value(p, len, true);
+		for (i = 0; i < d->nenum; i++)
+			if (d->enum_values[i] == v)
+				return 0;
+		NL_SET_ERR_MSG_ATTR(extack, ref->value,
+				    "not a value of the enumeration");
+		return -ERANGE;
+	}
 	return 0;
 
+bad_range:
+	NL_SET_ERR_MSG_ATTR(extack, ref->value, "out of the subrange");
+	return -ERANGE;
 bad_size:
 	NL_SET_ERR_MSG_ATTR(extack, ref->value,
 			    "value size does not fit the variable");
 	return -EMSGSIZE;
 }
 
+/* The force of @desc in the list @f, or NULL. */
+static const struct iec_force *iec_force_find(const struct iec_force *f,
+					      const struct iec_var_desc *desc)
+{
+	for (; f; f = f->next)
+		if (f->desc == desc)
+			return f;
+	return NULL;
+}
+
 /*
  * Copies @len bytes from @src to @dst under @t's var_lock at a cycle
- * boundary (no cycle running).  Sleeps between tries; -EBUSY if the task
- * stays inside one cycle for about a second.
+ * boundary (no cycle running).  With @unless_forced, a write: refused with
+ * -EBUSY if that variable is forced (checked under var_lock, under which
+ * the task's force list changes).  Waits for the end of the cycle on
+ * iec_ack_wq until @deadline (jiffies; one for the whole request,
+ * IEC_BOUNDARY_WAIT_MS after its start), then -EBUSY.  The caller holds no
+ * mutex and no lock: it counted itself in the resource's users
+ * (iec_refs_pin()).  The task waits for at most the memcpy of this one
+ * variable (at most IEC_NL_VALUE_MAX bytes).
  */
-#define IEC_BOUNDARY_TRIES	1000
+#define IEC_BOUNDARY_WAIT_MS	1000
 
 static int iec_task_boundary_copy(struct iec_task *t, void *dst,
-				  const void *src, u32 len)
+				  const void *src, u32 len,
+				  const struct iec_var_desc *unless_forced,
+				  unsigned long deadline)
 {
-	int i;
+	long left;
 
-	for (i = 0;; i++) {
+	might_sleep();
+	for (;;) {
 		raw_spin_lock(&t->var_lock);
 		if (!t->in_cycle) {
+			if (unless_forced && iec_force_find(t->forces, unless_forced)) {
+				raw_spin_unlock(&t->var_lock);
+				return -EBUSY;
+			}
 			memcpy(dst, src, len);
 			/* selective blocks of the task see a write they do not compare */
 			t->ctx.sel_epoch++;
@@ -336,31 +446,54 @@ static int iec_task_boundary_copy(struct iec_task *t, void *dst,
 			return 0;
 		}
 		raw_spin_unlock(&t->var_lock);
-		if (i == IEC_BOUNDARY_TRIES)
+		left = (long)(deadline - jiffies);
+		if (left <= 0)
 			return -EBUSY;
-		if (fatal_signal_pending(current))
+		/* iec2kmod_cycle_end() wakes iec_ack_wq after clearing in_cycle */
+		left = wait_event_interruptible_timeout(iec_ack_wq,
+							!READ_ONCE(t->in_cycle),
+							left);
+		if (left < 0)
 			return -EINTR;
-		if (i < 100)
-			usleep_range(20, 50);
-		else
-			usleep_range(1000, 1200);
 	}
+}
+
+/*
+ * Counts the request in the users of the resource of every instance
+ * variable in @refs, so that their descriptors and tasks stay valid once
+ * the caller dropped iec_resources_lock and iec_ctl_mutex (which it holds
+ * here: the resources in @refs are registered): the waits for a cycle
+ * boundary happen without them, and unregistering the resource waits for
+ * the request instead (iec2kmod_unregister_resource()).
+ */
+static void iec_refs_pin(struct iec_var_ref *refs, u32 n)
+{
+	u32 i;
+
+	lockdep_assert_held(&iec_resources_lock);
+	for (i = 0; i < n; i++) {
+		if (!refs[i].task)
+			continue;
+		atomic_inc(&refs[i].res->users);
+		refs[i].pinned = true;
+	}
+}
+
+static void iec_refs_free(struct iec_var_ref *refs, u32 n)
+{
+	u32 i;
+
+	if (!refs)
+		return;
+	for (i = 0; i < n; i++)
+		if (refs[i].pinned && atomic_dec_and_test(&refs[i].res->users))
+			wake_up_all(&iec_ack_wq);
+	kfree(refs);
 }
 
 static u32 iec_value_len(const struct iec_var_desc *d)
 {
 	return min_t(u32, d->size, IEC_NL_VALUE_MAX);
-}
-
-static int iec_var_read(const struct iec_var_ref *ref, void *buf, u32 len)
-{
-	if (ref->task)
-		return iec_task_boundary_copy(ref->task, buf, ref->desc->addr,
-					      len);
-	iec2kmod_image_lock();
-	memcpy(buf, ref->desc->addr, len);
-	iec2kmod_image_unlock();
-	return 0;
 }
 
 static bool iec_rises(const struct iec_var_desc *d, const void *value)
@@ -371,14 +504,9 @@ static bool iec_rises(const struct iec_var_desc *d, const void *value)
 
 static bool iec_var_forced(const struct iec_var_ref *ref)
 {
-	const struct iec_force *f;
-
 	lockdep_assert_held(&iec_ctl_mutex);
-	f = ref->task ? ref->task->forces : iec_global_forces;
-	for (; f; f = f->next)
-		if (f->desc == ref->desc)
-			return true;
-	return false;
+	return iec_force_find(ref->task ? ref->task->forces : iec_global_forces,
+			      ref->desc);
 }
 
 u32 iec_forced_count(void)
@@ -437,7 +565,7 @@ static int iec_nl_vars(struct genl_info *info, const struct nla_policy *policy,
 		       struct iec_var_ref **refs, u32 *n)
 {
 	const struct nlattr *a;
-	u32 count = 0, i = 0;
+	u32 count = 0, i = 0, k;
 	int rem, err;
 
 	nla_for_each_attr(a, genlmsg_data(info->genlhdr),
@@ -459,12 +587,20 @@ static int iec_nl_vars(struct genl_info *info, const struct nla_policy *policy,
 			  genlmsg_len(info->genlhdr), rem) {
 		if (nla_type(a) != IEC_A_VAR)
 			continue;
-		err = iec_var_select(a, policy, &(*refs)[i++], info->extack);
+		err = iec_var_select(a, policy, &(*refs)[i], info->extack);
+		for (k = 0; !err && k < i; k++) {
+			if ((*refs)[k].desc == (*refs)[i].desc) {
+				NL_SET_ERR_MSG_ATTR(info->extack, a,
+						    "a variable is named twice in one request");
+				err = -EINVAL;
+			}
+		}
 		if (err) {
 			kfree(*refs);
 			*refs = NULL;
 			return err;
 		}
+		i++;
 	}
 	*n = count;
 	return 0;
@@ -474,58 +610,81 @@ int iec_nl_var_get(struct sk_buff *skb, struct genl_info *info)
 {
 	struct iec_var_ref *refs;
 	struct sk_buff *msg = NULL;
+	unsigned long deadline;
 	size_t size = 0;
 	void *hdr;
-	u32 n, i;
-	int err;
+	u32 n = 0, i;
+	int err = iec_nl_may_read(skb);
 
+	if (err)
+		return err;
 	mutex_lock(&iec_ctl_mutex);
 	mutex_lock(&iec_resources_lock);
 	err = iec_nl_vars(info, iec_nl_sel_policy, &refs, &n);
 	if (err)
-		goto out;
+		goto out_locked;
 	if (!n) {
 		NL_SET_ERR_MSG(info->extack, "no variable named");
 		err = -EINVAL;
-		goto out;
+		goto out_locked;
 	}
+	iec_refs_pin(refs, n);
 	for (i = 0; i < n; i++)
 		size += iec_var_msg_size(&refs[i], true);
 	err = -ENOMEM;
 	msg = genlmsg_new(size, GFP_KERNEL);
 	if (!msg)
-		goto out;
+		goto out_locked;
 	err = -EMSGSIZE;
 	hdr = genlmsg_put_reply(msg, info, &iec_nl_family, 0, IEC_CMD_VAR_GET);
 	if (!hdr)
-		goto out;
+		goto out_locked;
 	for (i = 0; i < n; i++) {
-		u32 len = iec_value_len(refs[i].desc);
+		const struct iec_var_desc *d = refs[i].desc;
+		u32 len = iec_value_len(d);
 		struct nlattr *nest, *val;
 
-		err = -EMSGSIZE;
 		nest = nla_nest_start(msg, IEC_A_VAR);
 		if (!nest || iec_put_var(msg, &refs[i]))
-			goto out;
+			goto out_locked;
 		val = nla_reserve(msg, IEC_A_VALUE, len);
 		if (!val)
-			goto out;
-		err = iec_var_read(&refs[i], nla_data(val), len);
-		if (err)
-			goto out;
+			goto out_locked;
+		refs[i].out = nla_data(val);
+		/* a global: whole, under the image lock (one variable a hold) */
+		if (!refs[i].task) {
+			iec2kmod_image_lock();
+			memcpy(refs[i].out, d->addr, len);
+			iec2kmod_image_unlock();
+		}
 		nla_nest_end(msg, nest);
 	}
 	genlmsg_end(msg, hdr);
 	mutex_unlock(&iec_resources_lock);
 	mutex_unlock(&iec_ctl_mutex);
-	kfree(refs);
+	/* instance variables: at a boundary of their task, no mutex held */
+	deadline = jiffies + msecs_to_jiffies(IEC_BOUNDARY_WAIT_MS);
+	for (i = 0; i < n; i++) {
+		if (!refs[i].task)
+			continue;
+		err = iec_task_boundary_copy(refs[i].task, refs[i].out,
+					     refs[i].desc->addr,
+					     iec_value_len(refs[i].desc), NULL,
+					     deadline);
+		if (err) {
+			NL_SET_ERR_MSG(info->extack, "the task stays inside a cycle");
+			goto out;
+		}
+	}
+	iec_refs_free(refs, n);
 	return genlmsg_reply(msg, info);
 
-out:
+out_locked:
 	mutex_unlock(&iec_resources_lock);
 	mutex_unlock(&iec_ctl_mutex);
+out:
 	nlmsg_free(msg);
-	kfree(refs);
+	iec_refs_free(refs, n);
 	return err;
 }
 
@@ -578,56 +737,97 @@ full:
 	return skb->len;
 }
 
+/*
+ * The bound of an image-lock hold of a command: a hold copies whole
+ * variables, and takes the next one only while the hold stays within
+ * IEC_IMAGE_HOLD_BYTES; a variable larger than that is copied alone.  So a
+ * command holds the image lock (a raw spinlock: the tasks' copy-in and
+ * copy-out wait for it) for at most max(IEC_IMAGE_HOLD_BYTES, one
+ * variable) bytes of memcpy, one variable being at most IEC_NL_VALUE_MAX
+ * (65000) bytes, a STRING[65000]: every elementary variable is at most 8
+ * bytes, so a write of 256 elementary variables takes at most
+ * 256 * 8 / 512 = 4 holds of at most 512 bytes each.  Each variable is
+ * written whole (a task sees its old or its new value); a request's
+ * globals may reach the tasks in several holds.
+ * The other holds of the control plane: a read copies one variable a
+ * hold; a force or unforce links or unlinks one force (and writes one
+ * variable); the tasks' copy-out writes at most IEC_NL_MAX_FORCES forced
+ * globals (iec2kmod_force_globals()).
+ */
+#define IEC_IMAGE_HOLD_BYTES	512
+
 int iec_nl_var_set(struct sk_buff *skb, struct genl_info *info)
 {
 	struct iec_var_ref *refs;
-	u32 events[16];
-	u32 n, i, nevents = 0;
+	unsigned long deadline;
+	u32 n = 0, i;
 	int err;
 
 	mutex_lock(&iec_ctl_mutex);
 	mutex_lock(&iec_resources_lock);
 	err = iec_nl_vars(info, iec_nl_val_policy, &refs, &n);
 	if (err)
-		goto out;
+		goto out_locked;
 	err = -EINVAL;
 	if (!n) {
 		NL_SET_ERR_MSG(info->extack, "no variable named");
-		goto out;
+		goto out_locked;
 	}
 	/* everything is checked before anything is written */
 	for (i = 0; i < n; i++) {
 		err = iec_value_check(&refs[i], info->extack);
 		if (err)
-			goto out;
+			goto out_locked;
 		if (!refs[i].desc->writable) {
 			NL_SET_ERR_MSG(info->extack, "the variable is read-only");
 			err = -EACCES;
-			goto out;
+			goto out_locked;
 		}
 		if (iec_var_forced(&refs[i])) {
 			NL_SET_ERR_MSG(info->extack, "the variable is forced");
 			err = -EBUSY;
-			goto out;
+			goto out_locked;
 		}
 	}
-	/* the globals together: a task sees all of them or none */
-	iec2kmod_image_lock();
-	for (i = 0; i < n; i++) {
-		const struct iec_var_desc *d = refs[i].desc;
-		const void *v = nla_data(refs[i].value);
+	iec_refs_pin(refs, n);
+	/* the globals, in holds bounded by IEC_IMAGE_HOLD_BYTES */
+	i = 0;
+	while (i < n) {
+		u32 held = 0;
 
-		if (refs[i].task)
+		if (refs[i].task) {
+			i++;
 			continue;
-		if (iec_rises(d, v) && nevents < ARRAY_SIZE(events))
-			events[nevents++] = d->single_event - 1;
-		memcpy(d->addr, v, nla_len(refs[i].value));
+		}
+		iec2kmod_image_lock();
+		for (; i < n; i++) {
+			const struct iec_var_desc *d = refs[i].desc;
+			const void *v = nla_data(refs[i].value);
+			u32 len = nla_len(refs[i].value);
+
+			if (refs[i].task)
+				continue;
+			if (held && held + len > IEC_IMAGE_HOLD_BYTES)
+				break;
+			if (iec_rises(d, v))
+				refs[i].raised = d->single_event;
+			memcpy(d->addr, v, len);
+			held += len;
+		}
+		iec2kmod_image_unlock();
+		cond_resched();
 	}
-	iec2kmod_image_unlock();
-	for (i = 0; i < nevents; i++)
-		iec2kmod_event(events[i]);
-	/* instance variables, each between two cycles of its task */
-	err = 0;
+	mutex_unlock(&iec_resources_lock);
+	mutex_unlock(&iec_ctl_mutex);
+	/* every raised SINGLE variable wakes its event tasks, however many */
+	for (i = 0; i < n; i++)
+		if (refs[i].raised)
+			iec2kmod_event(refs[i].raised - 1);
+	/*
+	 * instance variables, each between two cycles of its task, with no
+	 * mutex held (a force that came meanwhile wins: -EBUSY)
+	 */
+	deadline = jiffies + msecs_to_jiffies(IEC_BOUNDARY_WAIT_MS);
 	for (i = 0; i < n && !err; i++) {
 		struct iec_task *t = refs[i].task;
 
@@ -635,14 +835,19 @@ int iec_nl_var_set(struct sk_buff *skb, struct genl_info *info)
 			continue;
 		err = iec_task_boundary_copy(t, refs[i].desc->addr,
 					     nla_data(refs[i].value),
-					     nla_len(refs[i].value));
+					     nla_len(refs[i].value), refs[i].desc,
+					     deadline);
 	}
 	if (err)
-		NL_SET_ERR_MSG(info->extack, "the task stays inside a cycle");
-out:
+		NL_SET_ERR_MSG(info->extack,
+			       "the task stays inside a cycle, or the variable was forced");
+	iec_refs_free(refs, n);
+	return err;
+
+out_locked:
 	mutex_unlock(&iec_resources_lock);
 	mutex_unlock(&iec_ctl_mutex);
-	kfree(refs);
+	iec_refs_free(refs, n);
 	return err;
 }
 
@@ -667,6 +872,13 @@ int iec_nl_var_force(struct sk_buff *skb, struct genl_info *info)
 		err = iec_value_check(&refs[i], info->extack);
 		if (err)
 			goto out;
+		/* a constant, an FB output, a step: not even forced */
+		if (!refs[i].desc->writable) {
+			NL_SET_ERR_MSG(info->extack, "the variable is read-only");
+			err = -EACCES;
+			goto out;
+		}
+		/* no duplicate in refs[] (iec_nl_vars()): each counts once */
 		if (!iec_var_forced(&refs[i]))
 			added++;
 	}
@@ -691,6 +903,7 @@ int iec_nl_var_force(struct sk_buff *skb, struct genl_info *info)
 		forces[i]->size = len;
 		memcpy(forces[i]->value, nla_data(refs[i].value), len);
 	}
+	/* one force (one variable's memcpy) per lock hold */
 	for (i = 0; i < n; i++) {
 		struct iec_force *f = forces[i], *old;
 		struct iec_task *t = refs[i].task;

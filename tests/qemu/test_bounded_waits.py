@@ -31,6 +31,7 @@ plc_manager link on the guest's sys.path), not the installed one.
 from __future__ import annotations
 
 import compileall
+import errno
 import json
 import time
 from pathlib import Path
@@ -198,6 +199,46 @@ def test_stop_clear_and_unload_give_up_on_a_long_cycle_naming_the_task(guest, st
         cmd = "stop rheavy"
         rc, out, guest_s[cmd] = check(cmd, lambda: guest_timed(guest, f"echo {cmd} > {ctl}"))
         assert timed_out(rc, out), (cmd, out, guest.dmesg(since=mark))
+
+        # a read of the stuck task's instance variable waits for a cycle
+        # boundary (EBUSY after about 1 s) holding no mutex: a STATUS sent
+        # meanwhile (raw netlink, tests/qemu/rawnl.py) answers at once
+        # (issue 23: it used to wait behind the read's retry sleeps)
+        code = ("import json, sys, threading, time\n"
+                f"sys.path.insert(0, {str(HERE)!r})\n"
+                "from rawnl import Genl, var\n"
+                "res = {}\n"
+                "def reader():\n"
+                "    nl, t0 = Genl(), time.monotonic()\n"
+                "    res['get'] = nl.cmd('IEC_CMD_VAR_GET', var('rheavy.h.k'))[0]\n"
+                "    res['get_s'] = time.monotonic() - t0\n"
+                "nl = Genl()\n"
+                "th = threading.Thread(target=reader)\n"
+                "th.start()\n"
+                "time.sleep(0.2)\n"
+                "t0 = time.monotonic()\n"
+                "res['status'] = nl.cmd('IEC_CMD_STATUS')[0]\n"
+                "res['status_s'] = time.monotonic() - t0\n"
+                "th.join()\n"
+                "print('RES ' + json.dumps(res))\n")
+        # (the read's EBUSY after its whole wait shows the cycle ran all along)
+        tries = []
+        for _ in range(6):
+            if in_cycle_ms(guest, manifest) < 0:
+                assert guest.run(f"echo start rheavy > {ctl}").exit_code == 0
+                wait_until(lambda: in_cycle_ms(guest, manifest) >= 0, "a cycle", 60)
+                guest.run(f"echo stop rheavy > {ctl}")
+            wait_until(lambda: in_cycle_ms(guest, manifest) > 300, "a long cycle", 60)
+            r = guest.pyrun(code, timeout=60)
+            assert r.exit_code == 0 and "RES " in r.output, r.output
+            res = json.loads(r.output.split("RES ", 1)[1].splitlines()[0])
+            tries.append(res)
+            if res["get"] == errno.EBUSY:
+                break
+        assert res["get"] == errno.EBUSY and res["get_s"] >= 0.8, tries
+        assert res["status"] == 0 and res["status_s"] < 0.4, tries
+        print(f"\nVAR_GET in a long cycle: EBUSY after {res['get_s']:.2f} s; "
+              f"STATUS meanwhile: {res['status_s'] * 1000:.0f} ms")
         assert guest_s[cmd] < 1.0, guest_s
         # a slot the stuck task does not run is not held up by it (the
         # slot it runs: `clear all` below)
