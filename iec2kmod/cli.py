@@ -93,6 +93,17 @@ def build_parser() -> argparse.ArgumentParser:
                         "unrolled (default 16); a run that needs more is reported undecided")
     v.add_argument("--timeout", type=float, default=120, metavar="S",
                    help="solver time limit per query in seconds (default 120)")
+    v.add_argument("--engine", choices=("z3", "explicit"), default="z3",
+                   help="z3: bounded model checking and k-induction (default); explicit: "
+                        "breadth-first exploration of every reachable state over the reference "
+                        "interpreter with every input valuation at every step (small finite "
+                        "configurations; the referee of the z3 engine)")
+    v.add_argument("--max-states", type=int, default=200000, metavar="N",
+                   help="explicit engine: states explored before answering 'too large' "
+                        "(default 200000)")
+    v.add_argument("--max-inputs", type=int, default=4096, metavar="N",
+                   help="explicit engine: input valuations per step before answering 'too "
+                        "large' (default 4096)")
     x = sub.add_parser("export", help="write a model of a configuration for another tool")
     x.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
     x.add_argument("--uppaal", action="store_true", required=True,

@@ -24,6 +24,9 @@ def _fmt_time(ns):
 
 
 def run_verify(args) -> int:
+    if getattr(args, "engine", "z3") == "explicit":
+        from .explicit import run_cli
+        return run_cli(args)
     from ..cli import front_end, print_diagnostics
     from ..diagnostics import Diagnostics
     from . import Refuse, UsageError, verify
