@@ -81,7 +81,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "checked after every cycle (repeatable; {verify NAME: EXPR} pragmas "
                         "in the sources are checked too)")
     v.add_argument("--assume", action="append", default=[], metavar="EXPR",
-                   help="a constraint on the inputs at the start of every cycle (repeatable)")
+                   help="a constraint on the inputs of every step, evaluated where the properties "
+                        "are: after the step, with the inputs it read (repeatable)")
     v.add_argument("--depth", type=int, default=20, metavar="N",
                    help="cycles of bounded model checking and of induction (default 20)")
     v.add_argument("--instance", metavar="PATH",

@@ -200,20 +200,26 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
                                        "range or a division by zero in it)")
         return v
 
-    # properties and assumptions on the state as it is (before the cycle)
+    # the properties as functions of a state (cex.replay evaluates them on
+    # the interpreter's state after cycle K)
     state_terms = {}
+    for p, name, pou, inst, e in checked:
+        if p.kind == "property":
+            state_terms[name] = evaluate(p, pou, inst, e)
+    sym.run_cycle(enc)
+    # properties AND assumptions at one time point: the state after the
+    # step (every released task's copy-out done), with the inputs the step
+    # read -- a program input connected to an address holds the value the
+    # step copied in.  (Assumptions were evaluated on the state before the
+    # step, where such an input still held the previous step's copy.)
+    post_props = []
     assumes = []
     for p, name, pou, inst, e in checked:
         v = evaluate(p, pou, inst, e)
         if p.kind == "assume":
             assumes.append(v)
         else:
-            state_terms[name] = v
-    sym.run_cycle(enc)
-    post_props = []
-    for p, name, pou, inst, e in checked:
-        if p.kind == "property":
-            post_props.append((name, evaluate(p, pou, inst, e)))
+            post_props.append((name, v))
     # classify the leaves
     outside = _written_from_outside(sym)
     state, inputs, consts = [], [], []

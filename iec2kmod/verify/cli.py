@@ -23,6 +23,17 @@ def _fmt_time(ns):
     return f"{ns / 1e6:g} ms"
 
 
+def sim_command(files, csv_path, cycle, sym):
+    """The `iec2kmod sim` command that replays a counterexample to the end
+    of step `cycle`: step K runs at (K-1) * step, and sim's --duration
+    includes the cycles released at that instant."""
+    import shlex
+    end = (cycle - 1) * sym.period
+    dur = f"{end // 1_000_000}ms" if end % 1_000_000 == 0 else f"{end}ns"
+    return " ".join(["iec2kmod", "sim", *map(shlex.quote, map(str, files)), "--inputs",
+                     shlex.quote(str(csv_path)), "--duration", dur])
+
+
 def run_verify(args) -> int:
     if getattr(args, "engine", "z3") == "explicit":
         from .explicit import run_cli
@@ -100,6 +111,7 @@ def run_verify(args) -> int:
                       f"replay in the interpreter: {why}", file=sys.stderr)
                 return EXIT_INTERNAL
             text += f"\n{'':{width + 4}}counterexample: {csv_path} (sim --inputs), {vcd_path}"
+            text += f"\n{'':{width + 4}}replay: {sim_command(args.files, csv_path, r.cycle, sym)}"
         elif r.fault is not None:
             kind, pou, src, pos = r.fault
             where = ""

@@ -4,16 +4,18 @@
     inputs   U: the free leaves, fresh in every cycle, inside their domain
     T(X, U)  the post-cycle value of each state leaf
     F(X, U)  a runtime fault happens in the cycle (a violation)
-    P(X, U)  each property, on the state after the cycle
-    A(X, U)  the assumptions, on the state at the start of the cycle
+    P(X, U)  each property, on the state after the cycle (with the inputs
+             the cycle read)
+    A(X, U)  the assumptions, at the same point as the properties
 
 BMC unrolls from the initial state; cycle k is checked once every cycle
 before it held (so the first violation is the one reported).  k-induction
 proves "for every path of k+1 cycles from any state satisfying the proved
 invariants, if the first k cycles hold so does the last"; with the base case
 to depth k+1 this proves the property for every depth.  Paths in the
-induction step are kept simple (pairwise distinct states), which makes the
-method complete for finite state.  Invariants about hidden state (timer
+induction step are kept simple (the states before each of its cycles
+pairwise distinct; the state after the violating cycle may repeat one of
+them), which makes the method complete for finite state.  Invariants about hidden state (timer
 locations, enumeration ranges...) are candidates proved first by Houdini
 (one-step induction, dropping the ones that fail until the rest is
 inductive): only proved ones strengthen the induction."""
@@ -463,9 +465,18 @@ def check_one(ts: System, name, prop, depth, timeout_ms, no_fault, stop_early=Fa
         # induction: a path of k cycles from any state of the invariants
         cons, pairs = iu.step(k)
         ind.add(*cons)
-        for j in range(0, k):
+        # simple paths: the PRE-states of the k cycles pairwise distinct
+        # (X_0..X_{k-1}), never the post-state X_k of the violating cycle.
+        # The violation is a fact of the last cycle (its inputs, the state
+        # before it), not of X_k alone: a shortest counterexample may end
+        # in a state it passed before (a latch holding while an input
+        # drops), and cutting that loop removes the violating cycle.  A loop
+        # between two pre-states can be cut: the path from the second one
+        # repeats after the first.
+        for j in range(0, k - 1):
             if ts.state:
-                ind.add(lor(*[lnot(smt_eq(iu.X[j][var], iu.X[k][var])) for _, var, _, _ in ts.state]))
+                ind.add(lor(*[lnot(smt_eq(iu.X[j][var], iu.X[k - 1][var]))
+                              for _, var, _, _ in ts.state]))
         if ind_pairs is not None:
             ind.add(*good(ind_pairs))
         ind_pairs = pairs

@@ -1,0 +1,145 @@
+"""Issue 22: the four unsound verdicts of `iec2kmod verify` (each one a
+class, each program here one of the class), vacuity, the sim command of a
+counterexample replayed to the violation, streaming verdicts and
+--timeout.  A counterexample is replayed with the command verify prints,
+in the compiled C engine, and the violation is read from sim's final
+values."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import textwrap
+
+import pytest
+
+try:
+    import z3  # noqa: F401
+except ImportError:
+    z3 = None
+
+from iec2kmod import cli
+
+
+@pytest.fixture(autouse=True)
+def _need_z3():
+    if z3 is None:
+        pytest.fail("z3-solver is not installed: pip install z3-solver (scripts/setup.sh)")
+
+
+def project(tmp_path, body, name="p.st"):
+    d = tmp_path / "proj"
+    d.mkdir(exist_ok=True)
+    (d / name).write_text(textwrap.dedent(body))
+    return d
+
+
+def verify(capsys, proj, tmp_path, *args):
+    rc = cli.main(["verify", str(proj), "--cex-dir", str(tmp_path / "cex"), *map(str, args)])
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+def verdict(out, name):
+    m = re.search(rf"^  {re.escape(name)}\s+(.*)$", out, re.M)
+    assert m, out
+    return m.group(1)
+
+
+def replay(capsys, out, name, watch):
+    """Runs the `replay:` command printed under the check `name` (with
+    --watch added) and returns sim's final values {variable: text}."""
+    lines = out.splitlines()
+    i = next(n for n, ln in enumerate(lines) if ln.startswith(f"  {name} "))
+    cmd = next(ln.split("replay: ", 1)[1] for ln in lines[i + 1:i + 4] if "replay: " in ln)
+    argv = shlex.split(cmd)
+    assert argv[:2] == ["iec2kmod", "sim"], cmd
+    rc = cli.main(argv[1:] + ["--watch", ",".join(watch)])
+    sim_out = capsys.readouterr().out
+    final = dict(re.findall(r"^  (\S+)\s+(\S+)$", sim_out, re.M))
+    return rc, final
+
+
+PRESS = """
+    PROGRAM PRESS
+      VAR_INPUT GUARD_SHUT : BOOL; HAND_L : BOOL; HAND_R : BOOL; ESTOP : BOOL; END_VAR
+      VAR_OUTPUT CLOSE : BOOL; OPEN : BOOL; END_VAR
+      VAR ARMED : BOOL; T : TON; END_VAR
+      ARMED := (GUARD_SHUT OR T.Q) AND HAND_L AND HAND_R AND NOT ESTOP;
+      T(IN := ARMED, PT := T#200ms);
+      CLOSE := T.Q AND ARMED;
+      OPEN := NOT CLOSE;
+    END_PROGRAM
+    CONFIGURATION CELL
+      VAR_GLOBAL
+        GUARD AT %IX0.0 : BOOL; L AT %IX0.1 : BOOL; R AT %IX0.2 : BOOL; STOP AT %IX0.3 : BOOL;
+        RAM_CLOSE AT %QX0.0 : BOOL; RAM_OPEN AT %QX0.1 : BOOL;
+      END_VAR
+      RESOURCE PLC1 ON CPU0
+        TASK CYC (INTERVAL := T#10ms, PRIORITY := 1);
+        PROGRAM P1 WITH CYC : PRESS (GUARD_SHUT := GUARD, HAND_L := L, HAND_R := R, ESTOP := STOP,
+                                     CLOSE => RAM_CLOSE, OPEN => RAM_OPEN);
+      END_RESOURCE
+    END_CONFIGURATION
+"""
+
+
+def test_induction_does_not_prove_a_latch_broken_by_an_input(tmp_path, capsys):
+    """Class 1: k-induction kept the states of its path pairwise distinct
+    INCLUDING the state after the violating cycle.  The violation reads
+    that cycle's input (GUARD drops while the latch holds), so the
+    shortest counterexample ends in a state it was in before (T.Q, CLOSE
+    latched): the constraint cut every counterexample of length >= 2 and
+    'proved' the property."""
+    proj = project(tmp_path, PRESS)
+    rc, out, err = verify(capsys, proj, tmp_path, "--property", "NOT (RAM_CLOSE AND NOT GUARD)",
+                          "--depth", "40")
+    v = verdict(out, "property 1")
+    assert rc == 3 and v.startswith("violated at cycle 22"), out + err
+    rc, final = replay(capsys, out, "property 1", ["GUARD", "RAM_CLOSE"])
+    assert final == {"GUARD": "FALSE", "RAM_CLOSE": "TRUE"}, final
+
+
+CNT = """
+    PROGRAM Cnt
+    VAR_INPUT go : BOOL; END_VAR
+    VAR_OUTPUT n : INT; END_VAR
+    {ASSUME}
+    {verify never_counts: n = 0}
+    {verify absurd: FALSE}
+    IF go AND n < 1000 THEN n := n + 1; END_IF;
+    END_PROGRAM
+    CONFIGURATION C RESOURCE R ON CPU0
+      TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+      PROGRAM p WITH t : Cnt (go := %IX0.0);
+    END_RESOURCE END_CONFIGURATION
+"""
+
+
+@pytest.mark.parametrize("pragma,cli_assume", [("{assume: go}", []),
+                                               ("", ["--assume", "R.p.go"])])
+def test_assumption_on_a_connected_input_reads_this_steps_copy(tmp_path, capsys, pragma,
+                                                                cli_assume):
+    """Class 2: assumptions were evaluated on the state before the cycle,
+    where a program input connected to an address still held the previous
+    cycle's copy (its initial FALSE in cycle 1): `go` assumed TRUE made
+    every run end before cycle 1, and everything was 'proved'."""
+    proj = project(tmp_path, CNT.replace("{ASSUME}", pragma))
+    rc, out, err = verify(capsys, proj, tmp_path, *cli_assume)
+    assert rc == 3, out + err
+    for name in ("R.p.never_counts", "R.p.absurd"):
+        assert verdict(out, name).startswith("violated at cycle 1"), out
+        # the replay runs exactly cycle 1 (n = 1, not 2), with go TRUE: the
+        # counterexample satisfies the assumption
+        rc, final = replay(capsys, out, name, ["R.p.go", "R.p.n"])
+        assert final == {"R.p.go": "TRUE", "R.p.n": "1"}, final
+
+
+def test_counterexample_respects_an_assumption_against_the_input(tmp_path, capsys):
+    """`--assume "NOT R.p.go"` gave a counterexample with go TRUE in cycle 1."""
+    proj = project(tmp_path, CNT.replace("{ASSUME}", ""))
+    rc, out, err = verify(capsys, proj, tmp_path, "--assume", "NOT R.p.go")
+    assert verdict(out, "R.p.never_counts").startswith("proved"), out
+    assert verdict(out, "R.p.absurd").startswith("violated at cycle 1"), out
+    rc, final = replay(capsys, out, "R.p.absurd", ["R.p.go", "R.p.n"])
+    assert final == {"R.p.go": "FALSE", "R.p.n": "0"}, final
