@@ -271,13 +271,16 @@ class Snapshots:
 
     # encoding: scalars as they are (floats by their bits), containers as tuples
     def _enc(self, x, now):
-        if isinstance(x, Instance):
+        t = type(x)
+        if t is bool or t is int or t is str:
+            return x
+        if t is Instance:
             return self._inst(x, now)
-        if isinstance(x, list):
+        if t is list:
             return tuple([self._enc(y, now) for y in x])
-        if isinstance(x, dict):
+        if t is dict:
             return tuple([self._enc(y, now) for y in x.values()])
-        if isinstance(x, float):
+        if t is float:
             return ("f", _PACK(x))
         return x
 
@@ -307,19 +310,21 @@ class Snapshots:
                 tuple([self._inst(i, now) for i in self.insts]))
 
     def _dec(self, holder, key, enc, now):
+        if type(enc) is not tuple:          # a scalar
+            holder[key] = enc
+            return
         x = holder[key]
-        if isinstance(x, Instance):
+        t = type(x)
+        if t is Instance:
             self._dec_inst(x, enc, now)
-        elif isinstance(x, list):
+        elif t is list:
             for i, y in enumerate(enc):
                 self._dec(x, i, y, now)
-        elif isinstance(x, dict):
+        elif t is dict:
             for k, y in zip(list(x.keys()), enc):
                 self._dec(x, k, y, now)
-        elif isinstance(enc, tuple):
+        else:                               # a float, by its bits
             holder[key] = struct.unpack("<d", enc[1])[0]
-        else:
-            holder[key] = enc
 
     def _dec_inst(self, inst, enc, now):
         v = inst.v
