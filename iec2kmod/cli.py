@@ -8,7 +8,8 @@ errors, 70 internal error (a bug of ours, reported in one line).
 `iec2kmod verify`: 0 every property proved, 1 source errors or a construct
 that cannot be encoded, 2 usage, 3 a property violated (counterexample
 written), 4 no violation up to --depth cycles but not every property
-proved, 70 internal error.
+proved (or unknown: --timeout), 5 vacuous (the assumptions allow no run
+longer than K cycles), 70 internal error.
 """
 
 from __future__ import annotations
@@ -92,8 +93,10 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--unroll", type=int, default=16, metavar="N",
                    help="iterations a WHILE/REPEAT loop or a FOR loop with variable bounds is "
                         "unrolled (default 16); a run that needs more is reported undecided")
-    v.add_argument("--timeout", type=float, default=120, metavar="S",
-                   help="solver time limit per query in seconds (default 120)")
+    v.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="time limit of the whole verification: the checks not decided by "
+                        "then are reported 'unknown (timeout)', the others are kept "
+                        "(default: none; one solver query is limited to 120 s)")
     x = sub.add_parser("export", help="write a model of a configuration for another tool")
     x.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
     x.add_argument("--uppaal", action="store_true", required=True,

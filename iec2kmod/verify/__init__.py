@@ -136,6 +136,8 @@ class Outcome:
     seconds: float = 0.0
     leaves: int = 0
     inputs: int = 0
+    assumptions: list = field(default_factory=list)   # their texts, as the report names them
+    runs: object = None       # engine.Runs: how long the runs the assumptions allow are
 
 
 def _scopes(sym, prop, instance, diags):
@@ -263,6 +265,9 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
                   sym=sym, state_terms={n: fix_all(t, cpairs) for n, t in state_terms.items()})
     out.leaves = len(state)
     out.inputs = len(inputs)
+    out.assumptions = [" ".join(p.text.split()) + (f" (in {name[:-len(p.name) - 1]})"
+                                                   if p.program is not None else "")
+                       for p, name, pou, inst, e in checked if p.kind == "assume"]
     out.cpairs = cpairs
     return out
 
@@ -354,15 +359,23 @@ def fix_all(t, pairs):
 
 
 def verify(project, cli_props=(), cli_assumes=(), depth=20, instance=None, diags=None,
-           timeout_ms=60000, unroll=16):
+           timeout_ms=60000, unroll=16, on_built=None, on_result=None, deadline=None):
     """Builds and checks; returns an Outcome (None on source errors, in
-    diags).  Raises Refuse for a construct that cannot be encoded."""
+    diags).  Raises Refuse for a construct that cannot be encoded.
+    on_built(outcome) once the system is built, on_result(result) as each
+    check is decided; deadline (time.monotonic()): the checks not decided
+    by then are unknown (timeout)."""
     diags = diags if diags is not None else Diagnostics()
     t0 = time.perf_counter()
     out = build(project, list(cli_props), list(cli_assumes), instance, diags, unroll)
     if out is None:
         return None
-    out.results, out.invariants = check(out.system, depth, timeout_ms)
+    if on_built is not None:
+        on_built(out)
+    info = {}
+    out.results, out.invariants = check(out.system, depth, timeout_ms, info=info,
+                                        on_result=on_result, deadline=deadline)
+    out.runs = info.get("runs")
     out.seconds = time.perf_counter() - t0
     return out
 

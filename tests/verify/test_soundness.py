@@ -143,3 +143,43 @@ def test_counterexample_respects_an_assumption_against_the_input(tmp_path, capsy
     assert verdict(out, "R.p.absurd").startswith("violated at cycle 1"), out
     rc, final = replay(capsys, out, "R.p.absurd", ["R.p.go", "R.p.n"])
     assert final == {"R.p.go": "FALSE", "R.p.n": "0"}, final
+
+
+@pytest.mark.parametrize("assume,longest", [("%IX0.0 AND NOT %IX0.0", 0),
+                                            ("R.p.go AND R.p.n < 3", 2)])
+def test_assumptions_that_block_runs_are_vacuous(tmp_path, capsys, assume, longest):
+    """Class 3: contradictory assumptions (no run at all), or ones that
+    block every run after a few cycles, proved everything: the solver's
+    path constraints were unsatisfiable, and an unsatisfiable induction
+    query reads as 'proved'.  Now the runs the assumptions allow are
+    measured first (bounded model checking of the assumptions alone) and
+    a verdict about longer runs is 'vacuous', exit status 5."""
+    proj = project(tmp_path, CNT.replace("{ASSUME}", ""))
+    rc, out, err = verify(capsys, proj, tmp_path, "--assume", assume, "--property", "FALSE",
+                          "--property", "R.p.n < 4")
+    want = (f"vacuous: the assumptions allow no run longer than {longest} "
+            f"cycle{'s' if longest != 1 else ''} (assuming {assume})")
+    assert verdict(out, "property 2") == want, out
+    assert verdict(out, "no runtime error") == want, out
+    if longest == 0:
+        assert rc == 5, out + err
+        assert verdict(out, "property 1") == want, out
+    else:
+        # FALSE is violated in the runs the assumptions allow (cycle 1):
+        # violated wins over vacuous
+        assert rc == 3, out + err
+        assert verdict(out, "property 1").startswith("violated at cycle 1"), out
+    assert "proved" not in out, out
+
+
+def test_proved_names_its_assumptions(tmp_path, capsys):
+    proj = project(tmp_path, CNT.replace("{ASSUME}", "{assume: go}"))
+    rc, out, err = verify(capsys, proj, tmp_path, "--property", "R.p.n <= 1000",
+                          "--assume", "R.p.n >= 0")
+    assert rc == 3, out + err       # the pragmas never_counts and absurd
+    assert re.fullmatch(r"proved \(induction over \d+ cycles?, [0-9.]+ s; assuming go "
+                        r"\(in R\.p\); R\.p\.n >= 0(; they allow runs of 20 cycles, .*)?\)",
+                        verdict(out, "property 1")), out
+    rc, out, err = verify(capsys, project(tmp_path, PRESS), tmp_path,
+                          "--property", "RAM_OPEN = NOT RAM_CLOSE")
+    assert rc == 0 and "no assumptions)" in verdict(out, "property 1"), out
