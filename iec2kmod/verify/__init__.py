@@ -67,9 +67,14 @@ interpreter's storage layout and initial values):
     is a signed 64-bit count in the kernel too);
   * runtime faults -- division by zero, index out of range, subrange,
     invalid enumeration, MUX selector, loop budget -- are violations of the
-    implicit property "no runtime error".  A faulting cycle is the end of a
-    run (the task stops), so the other properties are checked on runs
-    without a runtime error.
+    implicit property "no runtime error".  As in the kernel and the
+    interpreter, a fault stops only its task: the faulting cycle publishes
+    none of its writes to globals and %Q/%M, the task never runs again
+    (a hidden state bit per task), and the other tasks go on; the
+    variables of the faulted task's program instances take any value at
+    the fault (the interpreter keeps what the cycle wrote before the
+    faulting statement).  The properties are checked on every run, after
+    a fault too.
 
 What is refused, with an error naming the construct (never approximated):
 STRING/WSTRING values and the string functions -- lazily: they are not
@@ -252,7 +257,8 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     ts = System(
         state=[(leaf, leaf.var, const_of(leaf.init, leaf.type), fix(leaf.c[leaf.k]))
                for leaf in state],
-        inputs=[(leaf, leaf.var, sym.domain(leaf, leaf.var)) for leaf in inputs],
+        inputs=[(leaf, leaf.var, sym.domain(leaf, leaf.var)) for leaf in inputs]
+        + [(None, h, dom) for h, dom in sym.havoc],
         faults=[(fix(c), kind, pou, src, pos) for c, kind, pou, src, pos in enc.faults],
         props=[(n, fix(t)) for n, t in post_props],
         assume=fix(land(*assumes)) if assumes else TRUE,

@@ -54,6 +54,7 @@ class Result:
     abstract: bool = False    # proved on the floating-point abstraction
     free: list = field(default_factory=list)   # constructs free in its verdict (stand-ins)
     timeout: bool = False     # unknown: the --timeout deadline stopped it
+    havoc: list = field(default_factory=list)  # the faulted tasks' variables it reads
     runs_to: int = 0          # proved: the assumptions' runs were found to exist
                               # only up to this depth (0: of every length)
 
@@ -359,8 +360,13 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None, info=None,
         while True:
             sub = restrict(cur["ts"], roots)
             sub.props = [(name, term)] if term is not None else []
-            if term is not None and not no_fault:
-                sub.faults = []     # not read: the property alone, on every run
+            if term is not None:
+                # a runtime fault stops its task and the run goes on: the
+                # property is checked after it too.  Only the encoding's
+                # own limit (a loop longer than --unroll) ends the runs a
+                # property is checked on
+                sub.faults = [f for f in sub.faults if f[1].startswith(UNROLL)] \
+                    if no_fault else []
             # before the stronger invariants, only the cheap abstractions,
             # and not far (induction without them gets slow as k grows)
             if cur["strong"]:
@@ -375,6 +381,8 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None, info=None,
                     (r.status == "violated" and _stand_ins_read(sub, refused))
             if not undecided or cur["strong"]:
                 _sound_or_refuse(r, sub, refused)
+                r.havoc = sorted({str(v).split(":", 1)[1] for leaf, v, _ in sub.inputs
+                                  if leaf is None and str(v).startswith("$havoc")})
                 return r
             cur["ts"] = proved_system(full.invariants + extra)
             cur["strong"] = True
@@ -412,9 +420,10 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None, info=None,
     first = run(fault_roots, "no runtime error", None, no_fault=False)
     results = [first]
     invs = set()
+    unroll_roots = [c for c, kind, *_ in ts.faults if kind.startswith(UNROLL)]
     for name, term in full.props:
-        no_fault = first.status != "proved" and bool(full.faults)
-        r = run([term] + (fault_roots if no_fault else []), name, term, no_fault)
+        no_fault = first.status != "proved" and bool(unroll_roots)
+        r = run([term] + (unroll_roots if no_fault else []), name, term, no_fault)
         results.append(r)
         invs.update(n for n, _ in r.invariants)
     return results, sorted(invs)

@@ -183,3 +183,46 @@ def test_proved_names_its_assumptions(tmp_path, capsys):
     rc, out, err = verify(capsys, project(tmp_path, PRESS), tmp_path,
                           "--property", "RAM_OPEN = NOT RAM_CLOSE")
     assert rc == 0 and "no assumptions)" in verdict(out, "property 1"), out
+
+
+TWO_TASKS = """
+    PROGRAM Faulty
+    VAR_EXTERNAL g : INT; END_VAR
+    VAR z : INT; END_VAR
+    VAR_OUTPUT q : INT; END_VAR
+    g := 7;
+    q := 100 / z;
+    END_PROGRAM
+    PROGRAM Counter
+    VAR_OUTPUT n : INT; END_VAR
+    IF n < 100 THEN n := n + 1; END_IF;
+    END_PROGRAM
+    CONFIGURATION C
+    VAR_GLOBAL out_q : INT; g : INT; END_VAR
+    RESOURCE R ON CPU0
+      TASK fast (INTERVAL := T#10ms, PRIORITY := 1);
+      TASK slow (INTERVAL := T#20ms, PRIORITY := 2);
+      PROGRAM f WITH slow : Faulty (q => out_q);
+      PROGRAM c WITH fast : Counter;
+    END_RESOURCE END_CONFIGURATION
+"""
+
+
+def test_a_fault_stops_only_its_task(tmp_path, capsys):
+    """Class 4: a runtime fault ended the run for every task (the
+    properties were checked on fault-free runs only), so with a task that
+    always faults in cycle 1 every property of the other task was proved,
+    FALSE included.  Now a hidden bit per task stops the faulting one, its
+    faulting cycle publishes nothing (g and out_q stay 0), and the other
+    task goes on."""
+    proj = project(tmp_path, TWO_TASKS)
+    rc, out, err = verify(capsys, proj, tmp_path, "--property", "R.c.n < 5", "--property",
+                          "FALSE", "--property", "g <> 7 AND out_q = 0")
+    assert rc == 3, out + err
+    assert verdict(out, "no runtime error").startswith(
+        "violated at cycle 1: division by zero in Faulty"), out
+    assert verdict(out, "property 1") == "violated at cycle 5", out
+    assert verdict(out, "property 2") == "violated at cycle 1", out
+    assert verdict(out, "property 3").startswith("proved"), out
+    rc, final = replay(capsys, out, "property 1", ["R.c.n", "g", "out_q"])
+    assert final == {"R.c.n": "5", "g": "0", "out_q": "0"}, final
