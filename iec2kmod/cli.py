@@ -110,7 +110,8 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def print_diagnostics(diags, stream=sys.stderr) -> None:
+def print_diagnostics(diags, stream=None) -> None:
+    stream = stream if stream is not None else sys.stderr     # the current one (tests capture it)
     for d in diags.sorted():
         print(d.format(), file=stream)
 

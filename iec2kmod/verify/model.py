@@ -345,6 +345,9 @@ class SymbolicMachine:
                 if pi.task is not task:
                     continue
                 for lf in self.leaves:
+                    cur = lf.c[lf.k]
+                    if z3.is_expr(cur) and cur.eq(lf.var):
+                        continue    # not written by the cycle (an input stays one)
                     if lf.keys[:2] == ("I", path):
                         h = z3.Const(f"$havoc{len(self.havoc)}:{lf.name}", lf.var.sort())
                         self.havoc.append((h, self.domain(lf, h)))

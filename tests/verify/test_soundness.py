@@ -226,3 +226,28 @@ def test_a_fault_stops_only_its_task(tmp_path, capsys):
     assert verdict(out, "property 3").startswith("proved"), out
     rc, final = replay(capsys, out, "property 1", ["R.c.n", "g", "out_q"])
     assert final == {"R.c.n": "5", "g": "0", "out_q": "0"}, final
+
+
+def test_guards_narrow_the_interval_invariants(tmp_path, capsys):
+    """`x := x + 1; IF x > 9 THEN x := 0; END_IF` is If(x + 1 <= 9, x + 1, 0):
+    the guard cuts its own branch to [.., 9], so the candidate 0 <= x <= 9
+    exists, Houdini proves it, and disp <= 90 is proved (it only 'held up
+    to 20 cycles')."""
+    proj = project(tmp_path, """
+        PROGRAM Disp
+        VAR x : INT; END_VAR
+        VAR_OUTPUT disp : INT; END_VAR
+        x := x + 1;
+        IF x > 9 THEN x := 0; END_IF;
+        disp := x * 10;
+        END_PROGRAM
+        CONFIGURATION C RESOURCE R ON CPU0
+          TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+          PROGRAM p WITH t : Disp;
+        END_RESOURCE END_CONFIGURATION
+    """)
+    rc, out, err = verify(capsys, proj, tmp_path, "--property", "R.p.disp <= 90",
+                          "--property", "R.p.disp >= 0")
+    assert rc == 0, out + err
+    assert verdict(out, "property 1").startswith("proved"), out
+    assert verdict(out, "property 2").startswith("proved"), out
