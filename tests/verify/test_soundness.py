@@ -251,3 +251,54 @@ def test_guards_narrow_the_interval_invariants(tmp_path, capsys):
     assert rc == 0, out + err
     assert verdict(out, "property 1").startswith("proved"), out
     assert verdict(out, "property 2").startswith("proved"), out
+
+
+def test_verdicts_stream_and_timeout_keeps_the_decided_ones(tmp_path):
+    """Each verdict is printed when it is decided (a time-out lost verdicts
+    decided in seconds); --timeout is the deadline of the whole run: what
+    is not decided by then is 'unknown (timeout)', the others are kept."""
+    import os
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+    proj = project(tmp_path, """
+        PROGRAM Cnt
+        VAR_OUTPUT n : DINT; END_VAR
+        n := n + 1;
+        END_PROGRAM
+        CONFIGURATION C RESOURCE R ON CPU0
+          TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+          PROGRAM p WITH t : Cnt;
+        END_RESOURCE END_CONFIGURATION
+    """)
+    root = Path(__file__).resolve().parents[2]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(root)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
+    t0 = time.monotonic()
+    # property 2 is violated only at cycle 1000000: bounded model checking
+    # cannot get there in 4 s
+    p = subprocess.Popen([sys.executable, "-m", "iec2kmod", "verify", str(proj),
+                          "--cex-dir", str(tmp_path / "cex"), "--depth", "2000000",
+                          "--timeout", "4", "-p", "R.p.n = R.p.n", "-p", "R.p.n <> 1000000",
+                          "-p", "TRUE"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    import threading
+    killer = threading.Timer(60, p.kill)       # nothing waits forever
+    killer.start()
+    seen = {}
+    for line in p.stdout:
+        seen[line.split("  ")[1] if line.startswith("  ") else line] = \
+            (time.monotonic() - t0, line.rstrip())
+    rc = p.wait(timeout=60)
+    killer.cancel()
+    end = time.monotonic() - t0
+    err = p.stderr.read()
+    assert rc == 4, (seen, err)
+    assert seen["property 1"][1].split("  ")[-1].startswith("proved"), seen
+    # printed as soon as decided: seconds before the run ended at its deadline
+    assert end - seen["property 1"][0] > 2.5, (end, seen)
+    assert seen["property 2"][1].split("  ")[-1].startswith(
+        "unknown (timeout): holds up to "), seen
+    assert seen["property 3"][1].split("  ")[-1] == "unknown (timeout)", seen
+    assert 3.5 < end < 30, end
