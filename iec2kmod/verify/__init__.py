@@ -210,9 +210,12 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     # the properties as functions of a state (cex.replay evaluates them on
     # the interpreter's state after cycle K)
     state_terms = {}
+    assume_terms = []
     for p, name, pou, inst, e in checked:
         if p.kind == "property":
             state_terms[name] = evaluate(p, pou, inst, e)
+        else:
+            assume_terms.append((" ".join(p.text.split()), evaluate(p, pou, inst, e)))
     sym.run_cycle(enc)
     # properties AND assumptions at one time point: the state after the
     # step (every released task's copy-out done), with the inputs the step
@@ -269,6 +272,7 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     ts.extra = partition_candidates(ts.state)
     out = Outcome(props=[c[1] for c in checked if c[0].kind == "property"], system=ts,
                   sym=sym, state_terms={n: fix_all(t, cpairs) for n, t in state_terms.items()})
+    out.assume_terms = [(t, fix_all(v, cpairs)) for t, v in assume_terms]
     out.leaves = len(state)
     out.inputs = len(inputs)
     out.assumptions = [" ".join(p.text.split()) + (f" (in {name[:-len(p.name) - 1]})"

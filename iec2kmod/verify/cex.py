@@ -177,6 +177,17 @@ def replay(out, result, trace_path, vcd_path=None):
             t, task, kind_, pou, file, line = hits[0]
             return True, f"{file}:{line}: runtime error: {kind_} in {pou}"
         return False, "the interpreter ran the trace without a runtime error"
+    # the trace satisfies the assumptions at every step, as the interpreter
+    # runs it (independently of the encoding: the time point is the same)
+    for k in range(1, result.cycle + 1):
+        at = (k - 1) * period
+        mk = Machine(project)
+        rk = interp.run(project, at, watch=[], inputs=trace_path, machine=mk)
+        pairs = state_pairs(out, mk, at, {f[1] for f in rk.faults})
+        for text, term in getattr(out, "assume_terms", ()):
+            v = z3.simplify(z3.substitute(term, *pairs))
+            if not z3.is_true(v):
+                return False, f"the trace breaks the assumption '{text}' at step {k} ({v})"
     # a fault stops its task; the property is checked after it too
     stopped = {f[1] for f in res.faults}
     term = out.state_terms[result.name]

@@ -302,3 +302,24 @@ def test_verdicts_stream_and_timeout_keeps_the_decided_ones(tmp_path):
         "unknown (timeout): holds up to "), seen
     assert seen["property 3"][1].split("  ")[-1] == "unknown (timeout)", seen
     assert 3.5 < end < 30, end
+
+
+def test_replay_refuses_a_trace_that_breaks_an_assumption(tmp_path):
+    """The replay in the interpreter (before any violation is reported)
+    checks the assumptions at every step of the trace, at the documented
+    point: a counterexample breaking its own assumption (class 2) is not
+    confirmed."""
+    from iec2kmod.cli import front_end
+    from iec2kmod.verify import verify as run_verify
+    from iec2kmod.verify.cex import replay, write_trace
+    proj = project(tmp_path, CNT.replace("{ASSUME}", "{assume: go}"))
+    out = run_verify(front_end([str(proj)]), depth=3)
+    r = next(r for r in out.results if r.name == "R.p.absurd")
+    assert r.status == "violated" and r.cycle == 1
+    good = tmp_path / "good.csv"
+    write_trace(out, r, good)
+    assert replay(out, r, str(good)) == (True, "the property is FALSE after that cycle")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,variable,value\n0ns,%IX0.0,FALSE\n")
+    ok, why = replay(out, r, str(bad))
+    assert not ok and "breaks the assumption 'go' at step 1" in why, why
