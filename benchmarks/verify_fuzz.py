@@ -138,7 +138,8 @@ def properties(unit, rnd):
 
 # ------------------------------------------------------------ verify's output
 LINE = re.compile(r"^  (no runtime error|property \d+)\s+(proved|holds up to (\d+) cycles|"
-                  r"violated at cycle (\d+))(.*)$", re.M)
+                  r"violated at cycle (\d+)|unknown \(timeout\)(?:: holds up to (\d+) cycles)?)"
+                  r"(.*)$", re.M)
 
 
 def parse_verdicts(out):
@@ -146,8 +147,11 @@ def parse_verdicts(out):
     res = {}
     for m in LINE.finditer(out):
         name, what = m.group(1), m.group(2)
-        if what == "proved":
+        if what.startswith("proved"):
             res[name] = ("proved", None)
+        elif what.startswith("unknown (timeout)"):
+            # verify's --timeout: no claim past the cycles it had checked
+            res[name] = ("bounded", int(m.group(5) or 0))
         elif m.group(3) is not None:
             res[name] = ("bounded", int(m.group(3)))
         else:
@@ -265,7 +269,7 @@ def run_project(seed, size, depth, timeout, traces, workdir):
     src.write_text(unit.standalone())
     props = properties(unit, rnd)
     args = ["verify", str(src), "--depth", str(depth), "--cex-dir", str(wd / "cex"),
-            "--timeout", str(max(1, timeout // 3))]
+            "--timeout", str(max(1, timeout * 2 // 3))]     # the whole run's deadline
     for p in props:
         args += ["-p", p.text]
     rc, out, err, secs = cli(args, timeout, wd)

@@ -8,7 +8,8 @@ errors, 70 internal error (a bug of ours, reported in one line).
 `iec2kmod verify`: 0 every property proved, 1 source errors or a construct
 that cannot be encoded, 2 usage, 3 a property violated (counterexample
 written), 4 no violation up to --depth cycles but not every property
-proved, 70 internal error.
+proved (or unknown: --timeout), 5 vacuous (the assumptions allow no run
+longer than K cycles), 70 internal error.
 """
 
 from __future__ import annotations
@@ -92,8 +93,10 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--unroll", type=int, default=16, metavar="N",
                    help="iterations a WHILE/REPEAT loop or a FOR loop with variable bounds is "
                         "unrolled (default 16); a run that needs more is reported undecided")
-    v.add_argument("--timeout", type=float, default=120, metavar="S",
-                   help="solver time limit per query in seconds (default 120)")
+    v.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="time limit of the whole verification: the checks not decided by "
+                        "then are reported 'unknown (timeout)', the others are kept "
+                        "(default: none; one solver query is limited to 120 s)")
     v.add_argument("--engine", choices=("z3", "explicit"), default="z3",
                    help="z3: bounded model checking and k-induction (default); explicit: "
                         "breadth-first exploration of every reachable state over the reference "
@@ -118,7 +121,8 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def print_diagnostics(diags, stream=sys.stderr) -> None:
+def print_diagnostics(diags, stream=None) -> None:
+    stream = stream if stream is not None else sys.stderr     # the current one (tests capture it)
     for d in diags.sorted():
         print(d.format(), file=stream)
 

@@ -712,8 +712,8 @@ def _duration(ns):
 def run_cli(args) -> int:
     """`iec2kmod verify --engine explicit`.  Exit status: 0 every property
     proved, 1 source errors or a construct not explored, 2 usage or I/O, 3 a
-    property violated, 4 too large (no violation found), 5 vacuous (no
-    violation, none too large), 70 internal error."""
+    property violated, 5 vacuous (no violation), 4 too large (no violation,
+    none vacuous), 70 internal error -- the z3 engine's order."""
     import re
     import shlex
     import sys
@@ -756,7 +756,7 @@ def run_cli(args) -> int:
     cex_dir = Path(args.cex_dir)
     width = max(len(r.name) for r in out.results)
     worst = EXIT_PROVED
-    rank = {EXIT_PROVED: 0, EXIT_VACUOUS: 1, EXIT_UNDECIDED: 2, EXIT_VIOLATED: 3}
+    rank = {EXIT_PROVED: 0, EXIT_UNDECIDED: 1, EXIT_VACUOUS: 2, EXIT_VIOLATED: 3}   # as z3's
     for r in out.results:
         code = EXIT_PROVED
         if r.status == "proved":

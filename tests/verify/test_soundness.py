@@ -143,3 +143,183 @@ def test_counterexample_respects_an_assumption_against_the_input(tmp_path, capsy
     assert verdict(out, "R.p.absurd").startswith("violated at cycle 1"), out
     rc, final = replay(capsys, out, "R.p.absurd", ["R.p.go", "R.p.n"])
     assert final == {"R.p.go": "FALSE", "R.p.n": "0"}, final
+
+
+@pytest.mark.parametrize("assume,longest", [("%IX0.0 AND NOT %IX0.0", 0),
+                                            ("R.p.go AND R.p.n < 3", 2)])
+def test_assumptions_that_block_runs_are_vacuous(tmp_path, capsys, assume, longest):
+    """Class 3: contradictory assumptions (no run at all), or ones that
+    block every run after a few cycles, proved everything: the solver's
+    path constraints were unsatisfiable, and an unsatisfiable induction
+    query reads as 'proved'.  Now the runs the assumptions allow are
+    measured first (bounded model checking of the assumptions alone) and
+    a verdict about longer runs is 'vacuous', exit status 5."""
+    proj = project(tmp_path, CNT.replace("{ASSUME}", ""))
+    rc, out, err = verify(capsys, proj, tmp_path, "--assume", assume, "--property", "FALSE",
+                          "--property", "R.p.n < 4")
+    want = (f"vacuous: the assumptions allow no run longer than {longest} "
+            f"cycle{'s' if longest != 1 else ''} (assuming {assume})")
+    assert verdict(out, "property 2") == want, out
+    assert verdict(out, "no runtime error") == want, out
+    if longest == 0:
+        assert rc == 5, out + err
+        assert verdict(out, "property 1") == want, out
+    else:
+        # FALSE is violated in the runs the assumptions allow (cycle 1):
+        # violated wins over vacuous
+        assert rc == 3, out + err
+        assert verdict(out, "property 1").startswith("violated at cycle 1"), out
+    assert "proved" not in out, out
+
+
+def test_proved_names_its_assumptions(tmp_path, capsys):
+    proj = project(tmp_path, CNT.replace("{ASSUME}", "{assume: go}"))
+    rc, out, err = verify(capsys, proj, tmp_path, "--property", "R.p.n <= 1000",
+                          "--assume", "R.p.n >= 0")
+    assert rc == 3, out + err       # the pragmas never_counts and absurd
+    assert re.fullmatch(r"proved \(induction over \d+ cycles?, [0-9.]+ s; assuming go "
+                        r"\(in R\.p\); R\.p\.n >= 0(; they allow runs of 20 cycles, .*)?\)",
+                        verdict(out, "property 1")), out
+    rc, out, err = verify(capsys, project(tmp_path, PRESS), tmp_path,
+                          "--property", "RAM_OPEN = NOT RAM_CLOSE")
+    assert rc == 0 and "no assumptions)" in verdict(out, "property 1"), out
+
+
+TWO_TASKS = """
+    PROGRAM Faulty
+    VAR_EXTERNAL g : INT; END_VAR
+    VAR z : INT; END_VAR
+    VAR_OUTPUT q : INT; END_VAR
+    g := 7;
+    q := 100 / z;
+    END_PROGRAM
+    PROGRAM Counter
+    VAR_OUTPUT n : INT; END_VAR
+    IF n < 100 THEN n := n + 1; END_IF;
+    END_PROGRAM
+    CONFIGURATION C
+    VAR_GLOBAL out_q : INT; g : INT; END_VAR
+    RESOURCE R ON CPU0
+      TASK fast (INTERVAL := T#10ms, PRIORITY := 1);
+      TASK slow (INTERVAL := T#20ms, PRIORITY := 2);
+      PROGRAM f WITH slow : Faulty (q => out_q);
+      PROGRAM c WITH fast : Counter;
+    END_RESOURCE END_CONFIGURATION
+"""
+
+
+def test_a_fault_stops_only_its_task(tmp_path, capsys):
+    """Class 4: a runtime fault ended the run for every task (the
+    properties were checked on fault-free runs only), so with a task that
+    always faults in cycle 1 every property of the other task was proved,
+    FALSE included.  Now a hidden bit per task stops the faulting one, its
+    faulting cycle publishes nothing (g and out_q stay 0), and the other
+    task goes on."""
+    proj = project(tmp_path, TWO_TASKS)
+    rc, out, err = verify(capsys, proj, tmp_path, "--property", "R.c.n < 5", "--property",
+                          "FALSE", "--property", "g <> 7 AND out_q = 0")
+    assert rc == 3, out + err
+    assert verdict(out, "no runtime error").startswith(
+        "violated at cycle 1: division by zero in Faulty"), out
+    assert verdict(out, "property 1") == "violated at cycle 5", out
+    assert verdict(out, "property 2") == "violated at cycle 1", out
+    assert verdict(out, "property 3").startswith("proved"), out
+    rc, final = replay(capsys, out, "property 1", ["R.c.n", "g", "out_q"])
+    assert final == {"R.c.n": "5", "g": "0", "out_q": "0"}, final
+
+
+def test_guards_narrow_the_interval_invariants(tmp_path, capsys):
+    """`x := x + 1; IF x > 9 THEN x := 0; END_IF` is If(x + 1 <= 9, x + 1, 0):
+    the guard cuts its own branch to [.., 9], so the candidate 0 <= x <= 9
+    exists, Houdini proves it, and disp <= 90 is proved (it only 'held up
+    to 20 cycles')."""
+    proj = project(tmp_path, """
+        PROGRAM Disp
+        VAR x : INT; END_VAR
+        VAR_OUTPUT disp : INT; END_VAR
+        x := x + 1;
+        IF x > 9 THEN x := 0; END_IF;
+        disp := x * 10;
+        END_PROGRAM
+        CONFIGURATION C RESOURCE R ON CPU0
+          TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+          PROGRAM p WITH t : Disp;
+        END_RESOURCE END_CONFIGURATION
+    """)
+    rc, out, err = verify(capsys, proj, tmp_path, "--property", "R.p.disp <= 90",
+                          "--property", "R.p.disp >= 0")
+    assert rc == 0, out + err
+    assert verdict(out, "property 1").startswith("proved"), out
+    assert verdict(out, "property 2").startswith("proved"), out
+
+
+def test_verdicts_stream_and_timeout_keeps_the_decided_ones(tmp_path):
+    """Each verdict is printed when it is decided (a time-out lost verdicts
+    decided in seconds); --timeout is the deadline of the whole run: what
+    is not decided by then is 'unknown (timeout)', the others are kept."""
+    import os
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+    proj = project(tmp_path, """
+        PROGRAM Cnt
+        VAR_OUTPUT n : DINT; END_VAR
+        n := n + 1;
+        END_PROGRAM
+        CONFIGURATION C RESOURCE R ON CPU0
+          TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+          PROGRAM p WITH t : Cnt;
+        END_RESOURCE END_CONFIGURATION
+    """)
+    root = Path(__file__).resolve().parents[2]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(root)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
+    t0 = time.monotonic()
+    # property 2 is violated only at cycle 1000000: bounded model checking
+    # cannot get there in 4 s
+    p = subprocess.Popen([sys.executable, "-m", "iec2kmod", "verify", str(proj),
+                          "--cex-dir", str(tmp_path / "cex"), "--depth", "2000000",
+                          "--timeout", "4", "-p", "R.p.n = R.p.n", "-p", "R.p.n <> 1000000",
+                          "-p", "TRUE"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    import threading
+    killer = threading.Timer(60, p.kill)       # nothing waits forever
+    killer.start()
+    seen = {}
+    for line in p.stdout:
+        seen[line.split("  ")[1] if line.startswith("  ") else line] = \
+            (time.monotonic() - t0, line.rstrip())
+    rc = p.wait(timeout=60)
+    killer.cancel()
+    end = time.monotonic() - t0
+    err = p.stderr.read()
+    assert rc == 4, (seen, err)
+    assert seen["property 1"][1].split("  ")[-1].startswith("proved"), seen
+    # printed as soon as decided: seconds before the run ended at its deadline
+    assert end - seen["property 1"][0] > 2.5, (end, seen)
+    assert seen["property 2"][1].split("  ")[-1].startswith(
+        "unknown (timeout): holds up to "), seen
+    assert seen["property 3"][1].split("  ")[-1] == "unknown (timeout)", seen
+    assert 3.5 < end < 30, end
+
+
+def test_replay_refuses_a_trace_that_breaks_an_assumption(tmp_path):
+    """The replay in the interpreter (before any violation is reported)
+    checks the assumptions at every step of the trace, at the documented
+    point: a counterexample breaking its own assumption (class 2) is not
+    confirmed."""
+    from iec2kmod.cli import front_end
+    from iec2kmod.verify import verify as run_verify
+    from iec2kmod.verify.cex import replay, write_trace
+    proj = project(tmp_path, CNT.replace("{ASSUME}", "{assume: go}"))
+    out = run_verify(front_end([str(proj)]), depth=3)
+    r = next(r for r in out.results if r.name == "R.p.absurd")
+    assert r.status == "violated" and r.cycle == 1
+    good = tmp_path / "good.csv"
+    write_trace(out, r, good)
+    assert replay(out, r, str(good)) == (True, "the property is FALSE after that cycle")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,variable,value\n0ns,%IX0.0,FALSE\n")
+    ok, why = replay(out, r, str(bad))
+    assert not ok and "breaks the assumption 'go' at step 1" in why, why
