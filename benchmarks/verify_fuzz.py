@@ -30,7 +30,16 @@ encoding refuses them and a refusal hides the rest of the project):
     vm`; the properties evaluated after every step: a violation within N
     steps contradicts "holds up to N", any violation contradicts "proved".
 
-Exit status 1 when there is an internal error or a contradicted verdict."""
+Exit status 1 when there is an internal error or a contradicted verdict.
+
+    python3 benchmarks/verify_fuzz.py --referee explicit --count 500 --seed 7 --depth 45
+
+--referee explicit: the soundness campaign of issue 22 instead
+(tests/verify/soundgen.py): projects with planted deep bugs over small
+domains, each verified by the z3 engine (to --depth) and by the explicit
+referee (`verify --engine explicit`, --max-states); every disagreement
+printed with its project's seed (--unit SEED runs it again); exit 1 when
+there is one."""
 
 from __future__ import annotations
 
@@ -138,7 +147,8 @@ def properties(unit, rnd):
 
 # ------------------------------------------------------------ verify's output
 LINE = re.compile(r"^  (no runtime error|property \d+)\s+(proved|holds up to (\d+) cycles|"
-                  r"violated at cycle (\d+))(.*)$", re.M)
+                  r"violated at cycle (\d+)|unknown \(timeout\)(?:: holds up to (\d+) cycles)?)"
+                  r"(.*)$", re.M)
 
 
 def parse_verdicts(out):
@@ -146,8 +156,11 @@ def parse_verdicts(out):
     res = {}
     for m in LINE.finditer(out):
         name, what = m.group(1), m.group(2)
-        if what == "proved":
+        if what.startswith("proved"):
             res[name] = ("proved", None)
+        elif what.startswith("unknown (timeout)"):
+            # verify's --timeout: no claim past the cycles it had checked
+            res[name] = ("bounded", int(m.group(5) or 0))
         elif m.group(3) is not None:
             res[name] = ("bounded", int(m.group(3)))
         else:
@@ -265,7 +278,7 @@ def run_project(seed, size, depth, timeout, traces, workdir):
     src.write_text(unit.standalone())
     props = properties(unit, rnd)
     args = ["verify", str(src), "--depth", str(depth), "--cex-dir", str(wd / "cex"),
-            "--timeout", str(max(1, timeout // 3))]
+            "--timeout", str(max(1, timeout * 2 // 3))]     # the whole run's deadline
     for p in props:
         args += ["-p", p.text]
     rc, out, err, secs = cli(args, timeout, wd)
@@ -434,7 +447,14 @@ def main(argv=None):
     ap.add_argument("--traces", type=int, default=3, help="random traces per project")
     ap.add_argument("--keep", metavar="DIR", help="copy failing projects here")
     ap.add_argument("--inputs-of", help=argparse.SUPPRESS)
+    ap.add_argument("--referee", choices=("traces", "explicit"), default="traces",
+                    help="explicit: the soundness campaign against the explicit-state engine")
+    ap.add_argument("--max-states", type=int, default=20000,
+                    help="--referee explicit: states before the referee says too large")
+    ap.add_argument("--jobs", type=int, default=2, help="--referee explicit: worker processes")
     a = ap.parse_args(argv)
+    if a.referee == "explicit":
+        return referee_main(a)
     if a.inputs_of:
         _inputs_main(a.inputs_of, 8, a.seed)
         return 0
@@ -448,6 +468,27 @@ def main(argv=None):
         shutil.rmtree(work, ignore_errors=True)
     print(table(res, time.time() - t0))
     return 1 if any(r["outcome"] in ("internal", "contradicted") for r in res) else 0
+
+
+def referee_main(a):
+    import soundgen
+    seeds = a.unit or [a.seed * 1000 + i for i in range(a.count)]
+    t0 = time.time()
+
+    def log(r):
+        x = ", ".join(f"{s}" + (f"@{k}" if s in ("violated", "vacuous") else "")
+                      for s, k in r["explicit"].values())
+        print(f"{r['seed']}: {'+'.join(r.get('patterns', []))} {r['states']} states "
+              f"({r['explicit_s']:.1f} s), z3 {r['z3_s']:.1f} s: {x}"
+              + "".join(f"\n    DISAGREEMENT: {p}" for p in r["problems"]), flush=True)
+    res = soundgen.campaign(seeds, a.depth, a.timeout * 1000, a.max_states, a.jobs, log=log)
+    bad = [(r["seed"], p) for r in res for p in r["problems"]]
+    print(f"{len(res)} projects in {time.time() - t0:.0f} s (z3 depth {a.depth}, explicit "
+          f"--max-states {a.max_states}); {len(bad)} disagreements")
+    print("verdicts: " + soundgen.summary(res))
+    for s, p in bad:
+        print(f"  project {s}: {p}")
+    return 1 if bad else 0
 
 
 if __name__ == "__main__":

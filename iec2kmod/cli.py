@@ -8,7 +8,8 @@ errors, 70 internal error (a bug of ours, reported in one line).
 `iec2kmod verify`: 0 every property proved, 1 source errors or a construct
 that cannot be encoded, 2 usage, 3 a property violated (counterexample
 written), 4 no violation up to --depth cycles but not every property
-proved, 70 internal error.
+proved (or unknown: --timeout), 5 vacuous (the assumptions allow no run
+longer than K cycles), 70 internal error.
 """
 
 from __future__ import annotations
@@ -81,7 +82,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "checked after every cycle (repeatable; {verify NAME: EXPR} pragmas "
                         "in the sources are checked too)")
     v.add_argument("--assume", action="append", default=[], metavar="EXPR",
-                   help="a constraint on the inputs at the start of every cycle (repeatable)")
+                   help="a constraint on the inputs of every step, evaluated where the properties "
+                        "are: after the step, with the inputs it read (repeatable)")
     v.add_argument("--depth", type=int, default=20, metavar="N",
                    help="cycles of bounded model checking and of induction (default 20)")
     v.add_argument("--instance", metavar="PATH",
@@ -91,8 +93,21 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--unroll", type=int, default=16, metavar="N",
                    help="iterations a WHILE/REPEAT loop or a FOR loop with variable bounds is "
                         "unrolled (default 16); a run that needs more is reported undecided")
-    v.add_argument("--timeout", type=float, default=120, metavar="S",
-                   help="solver time limit per query in seconds (default 120)")
+    v.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="time limit of the whole verification: the checks not decided by "
+                        "then are reported 'unknown (timeout)', the others are kept "
+                        "(default: none; one solver query is limited to 120 s)")
+    v.add_argument("--engine", choices=("z3", "explicit"), default="z3",
+                   help="z3: bounded model checking and k-induction (default); explicit: "
+                        "breadth-first exploration of every reachable state over the reference "
+                        "interpreter with every input valuation at every step (small finite "
+                        "configurations; the referee of the z3 engine)")
+    v.add_argument("--max-states", type=int, default=200000, metavar="N",
+                   help="explicit engine: states explored before answering 'too large' "
+                        "(default 200000)")
+    v.add_argument("--max-inputs", type=int, default=4096, metavar="N",
+                   help="explicit engine: input valuations per step before answering 'too "
+                        "large' (default 4096)")
     x = sub.add_parser("export", help="write a model of a configuration for another tool")
     x.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
     x.add_argument("--uppaal", action="store_true", required=True,
@@ -106,7 +121,8 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def print_diagnostics(diags, stream=sys.stderr) -> None:
+def print_diagnostics(diags, stream=None) -> None:
+    stream = stream if stream is not None else sys.stderr     # the current one (tests capture it)
     for d in diags.sorted():
         print(d.format(), file=stream)
 

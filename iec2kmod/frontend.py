@@ -43,18 +43,30 @@ class InputError(Exception):
     """A file cannot be read (usage or I/O error, exit code 2)."""
 
 
-def collect_files(paths) -> list[str]:
-    """Expands directories into their .st/.il/.iec files, sorted."""
+SOURCE_SUFFIXES = (".st", ".il", ".iec")
+
+
+def collect_files(paths, ignored=None) -> list[str]:
+    """Expands directories into their .st/.il/.iec files, sorted; the
+    other files of a directory are not sources (appended to `ignored`,
+    for a note).  A file named on the command line must be a source."""
     out = []
     for p in paths:
         path = Path(p)
         if path.is_dir():
-            found = sorted(str(f) for f in path.rglob("*")
-                           if f.suffix.lower() in (".st", ".il", ".iec", ".txt") and f.is_file())
+            files = sorted(f for f in path.rglob("*") if f.is_file())
+            found = [str(f) for f in files if f.suffix.lower() in SOURCE_SUFFIXES]
+            if ignored is not None:
+                # the files a project directory also holds (notes, a
+                # README.txt): only a name that looks like text is worth a
+                # note, not every build artefact
+                ignored += [str(f) for f in files if f.suffix.lower() == ".txt"]
             if not found:
                 raise InputError(f"{p}: no .st, .il or .iec files in this directory")
             out += found
         elif path.is_file():
+            if path.suffix.lower() not in SOURCE_SUFFIXES:
+                raise InputError(f"{p}: not a source file (sources are .st, .il or .iec files)")
             out.append(str(path))
         elif path.exists():
             raise InputError(f"{p}: not a regular file")
@@ -305,8 +317,11 @@ def run(paths, use_cache: bool = True, jobs: int | None = None) -> FrontEndResul
     """Parses and checks a project: every diagnostic is collected."""
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    sources = [_read(p) for p in collect_files(paths)]
+    ignored = []
+    sources = [_read(p) for p in collect_files(paths, ignored)]
     timings["read"] = time.perf_counter() - t0
+    notes = [Diagnostic(p, 1, 1, "note", "ignored: not a source file (sources are .st, .il "
+                                         "or .iec files)") for p in ignored]
 
     key = None
     if use_cache:
@@ -317,11 +332,12 @@ def run(paths, use_cache: bool = True, jobs: int | None = None) -> FrontEndResul
         cached = _load_cached(key)
         if cached is not None:
             diags = Diagnostics()
-            diags.items = cached
+            diags.items = notes + list(cached)
             timings["cache"] = time.perf_counter() - t0
             return FrontEndResult([], diags, None, timings, cached=True)
 
     diags = Diagnostics()
+    diags.items.extend(notes)
     t = time.perf_counter()
     parsed = parse_all(sources, jobs)
     timings["parse"] = time.perf_counter() - t
@@ -347,7 +363,7 @@ def run(paths, use_cache: bool = True, jobs: int | None = None) -> FrontEndResul
             if gc_was_enabled:
                 gc.enable()
     if key is not None:
-        _store_cached(key, diags.items)
+        _store_cached(key, [d for d in diags.items if d not in notes])
     return FrontEndResult(units, diags, project, timings)
 
 

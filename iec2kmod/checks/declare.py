@@ -696,6 +696,23 @@ class Declarer:
         if pou.kind not in ("FUNCTION", "FUNCTION_BLOCK"):
             return
         node = pou.node
+        # EN and ENO are the implicit parameters of every call: a variable
+        # of the block named so would silently become them (a VAR_INPUT en
+        # FALSE skips the whole body).  ENO declared as a BOOL output is
+        # the standard's explicit form (ed.3 6.6.1.5) and stays.
+        for name, v in pou.vars.items():
+            if name == "EN" and v.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"):
+                self.error(v.src, v.pos, f"a {v.section} named {v.name} in {pou.kind} "
+                           f"{pou.name}: EN is the implicit enable input of every call "
+                           "(EN := FALSE skips the body); rename the variable")
+            elif name == "ENO" and v.section in ("VAR_INPUT", "VAR_IN_OUT"):
+                self.error(v.src, v.pos, f"a {v.section} named {v.name} in {pou.kind} "
+                           f"{pou.name}: ENO is the implicit enable output of every call; "
+                           "rename the variable")
+            elif name == "ENO" and v.section == "VAR_OUTPUT" and v.type is not BOOL \
+                    and getattr(v.type, "name", None) != "ERROR":
+                self.error(v.src, v.pos, f"ENO, the implicit enable output of {pou.name}, "
+                           "is BOOL; rename the variable")
         v = pou.vars.get("ENO")
         if v is None:
             if not _mentions([node.body, node.sfc], "ENO"):

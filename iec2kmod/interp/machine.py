@@ -564,45 +564,7 @@ def _schedule(self, table, idx, events, end):
         for n, tk in enumerate(tasks):
             if tk.interval and next_release[n] == t:
                 pending[n] = True
-        while True:
-            for n, tk in enumerate(tasks):
-                if tk.single is None:
-                    continue
-                c, k = tk.single
-                s = bool(c[k])
-                if s and not prev_single[n]:
-                    pending[n] = True
-                prev_single[n] = s
-            best = -1
-            for n in range(ntasks):
-                if pending[n] and (best < 0 or tasks[n].priority < tasks[best].priority):
-                    best = n
-            if best < 0:
-                break
-            pending[best] = False
-            if faulted[best]:
-                continue
-            rt.now = t
-            tk = tasks[best]
-            # the watchdog in simulated time: iterations of SIM_ITERATION_NS
-            wd = tk.watchdog_ns // SIM_ITERATION_NS if tk.watchdog_ns else LOOP_BUDGET
-            granted = rt.budget = min(wd, LOOP_BUDGET)
-            fault = self._run_task(tk)
-            cycles[best] += 1
-            if fault is not None and fault.kind == LOOP and wd < LOOP_BUDGET:
-                fault.kind = WATCHDOG
-            if fault is None and tk.interval and tk.watchdog_overruns:
-                if (granted - rt.budget) * SIM_ITERATION_NS > tk.interval:
-                    late[best] += 1
-                    if late[best] >= tk.watchdog_overruns:
-                        self._restore_globals(self._cycle_saved)
-                        fault = Fault(OVERRUN)
-                else:
-                    late[best] = 0
-            if fault is not None:
-                faulted[best] = True
-                res.faults.append((t, tasks[best].name, fault.kind, fault.pou or "?",
-                                   getattr(fault, "file", None) or "?", fault.line or 0))
+        self._instant(t, pending, faulted, prev_single, late, cycles, res.faults)
         for k, i, e in watched:
             v = e.get()
             if i in last and _same(e.kind, v, last[i]):
@@ -624,6 +586,59 @@ def _schedule(self, table, idx, events, end):
     for n, tk in enumerate(tasks):
         res.cycles[tk.name] = cycles[n]
     return res
+
+
+def _instant(self, t, pending, faulted, prev_single, late, cycles, faults):
+    """One instant t of the scheduler, after the inputs of t are applied and
+    the periodic tasks released at t are marked pending: the event tasks'
+    edges looked for before every task run, the pending task of highest
+    priority run (declaration order on ties), until none is pending.  The
+    lists (one entry per task) are the scheduler's state, updated in place;
+    a fault appends (t, task, kind, pou, file, line) to faults and stops
+    its task (faulted).  The explicit-state verifier
+    (iec2kmod.verify.explicit) runs one instant at a time through this."""
+    tasks = self.tasks
+    ntasks = len(tasks)
+    rt = self.rt
+    while True:
+        for n, tk in enumerate(tasks):
+            if tk.single is None:
+                continue
+            c, k = tk.single
+            s = bool(c[k])
+            if s and not prev_single[n]:
+                pending[n] = True
+            prev_single[n] = s
+        best = -1
+        for n in range(ntasks):
+            if pending[n] and (best < 0 or tasks[n].priority < tasks[best].priority):
+                best = n
+        if best < 0:
+            break
+        pending[best] = False
+        if faulted[best]:
+            continue
+        rt.now = t
+        tk = tasks[best]
+        # the watchdog in simulated time: iterations of SIM_ITERATION_NS
+        wd = tk.watchdog_ns // SIM_ITERATION_NS if tk.watchdog_ns else LOOP_BUDGET
+        granted = rt.budget = min(wd, LOOP_BUDGET)
+        fault = self._run_task(tk)
+        cycles[best] += 1
+        if fault is not None and fault.kind == LOOP and wd < LOOP_BUDGET:
+            fault.kind = WATCHDOG
+        if fault is None and tk.interval and tk.watchdog_overruns:
+            if (granted - rt.budget) * SIM_ITERATION_NS > tk.interval:
+                late[best] += 1
+                if late[best] >= tk.watchdog_overruns:
+                    self._restore_globals(self._cycle_saved)
+                    fault = Fault(OVERRUN)
+            else:
+                late[best] = 0
+        if fault is not None:
+            faulted[best] = True
+            faults.append((t, tasks[best].name, fault.kind, fault.pou or "?",
+                               getattr(fault, "file", None) or "?", fault.line or 0))
 
 
 def _run_task(self, task):
@@ -670,6 +685,7 @@ def _restore_globals(self, saved):
 
 
 Machine.schedule = _schedule
+Machine._instant = _instant
 Machine._run_task = _run_task
 Machine._save_globals = _save_globals
 Machine._restore_globals = _restore_globals

@@ -67,9 +67,14 @@ interpreter's storage layout and initial values):
     is a signed 64-bit count in the kernel too);
   * runtime faults -- division by zero, index out of range, subrange,
     invalid enumeration, MUX selector, loop budget -- are violations of the
-    implicit property "no runtime error".  A faulting cycle is the end of a
-    run (the task stops), so the other properties are checked on runs
-    without a runtime error.
+    implicit property "no runtime error".  As in the kernel and the
+    interpreter, a fault stops only its task: the faulting cycle publishes
+    none of its writes to globals and %Q/%M, the task never runs again
+    (a hidden state bit per task), and the other tasks go on; the
+    variables of the faulted task's program instances take any value at
+    the fault (the interpreter keeps what the cycle wrote before the
+    faulting statement).  The properties are checked on every run, after
+    a fault too.
 
 What is refused, with an error naming the construct (never approximated):
 STRING/WSTRING values and the string functions -- lazily: they are not
@@ -136,6 +141,8 @@ class Outcome:
     seconds: float = 0.0
     leaves: int = 0
     inputs: int = 0
+    assumptions: list = field(default_factory=list)   # their texts, as the report names them
+    runs: object = None       # engine.Runs: how long the runs the assumptions allow are
 
 
 def _scopes(sym, prop, instance, diags):
@@ -200,20 +207,29 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
                                        "range or a division by zero in it)")
         return v
 
-    # properties and assumptions on the state as it is (before the cycle)
+    # the properties as functions of a state (cex.replay evaluates them on
+    # the interpreter's state after cycle K)
     state_terms = {}
+    assume_terms = []
+    for p, name, pou, inst, e in checked:
+        if p.kind == "property":
+            state_terms[name] = evaluate(p, pou, inst, e)
+        else:
+            assume_terms.append((" ".join(p.text.split()), evaluate(p, pou, inst, e)))
+    sym.run_cycle(enc)
+    # properties AND assumptions at one time point: the state after the
+    # step (every released task's copy-out done), with the inputs the step
+    # read -- a program input connected to an address holds the value the
+    # step copied in.  (Assumptions were evaluated on the state before the
+    # step, where such an input still held the previous step's copy.)
+    post_props = []
     assumes = []
     for p, name, pou, inst, e in checked:
         v = evaluate(p, pou, inst, e)
         if p.kind == "assume":
             assumes.append(v)
         else:
-            state_terms[name] = v
-    sym.run_cycle(enc)
-    post_props = []
-    for p, name, pou, inst, e in checked:
-        if p.kind == "property":
-            post_props.append((name, evaluate(p, pou, inst, e)))
+            post_props.append((name, v))
     # classify the leaves
     outside = _written_from_outside(sym)
     state, inputs, consts = [], [], []
@@ -244,7 +260,8 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     ts = System(
         state=[(leaf, leaf.var, const_of(leaf.init, leaf.type), fix(leaf.c[leaf.k]))
                for leaf in state],
-        inputs=[(leaf, leaf.var, sym.domain(leaf, leaf.var)) for leaf in inputs],
+        inputs=[(leaf, leaf.var, sym.domain(leaf, leaf.var)) for leaf in inputs]
+        + [(None, h, dom) for h, dom in sym.havoc],
         faults=[(fix(c), kind, pou, src, pos) for c, kind, pou, src, pos in enc.faults],
         props=[(n, fix(t)) for n, t in post_props],
         assume=fix(land(*assumes)) if assumes else TRUE,
@@ -255,8 +272,12 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     ts.extra = partition_candidates(ts.state)
     out = Outcome(props=[c[1] for c in checked if c[0].kind == "property"], system=ts,
                   sym=sym, state_terms={n: fix_all(t, cpairs) for n, t in state_terms.items()})
+    out.assume_terms = [(t, fix_all(v, cpairs)) for t, v in assume_terms]
     out.leaves = len(state)
     out.inputs = len(inputs)
+    out.assumptions = [" ".join(p.text.split()) + (f" (in {name[:-len(p.name) - 1]})"
+                                                   if p.program is not None else "")
+                       for p, name, pou, inst, e in checked if p.kind == "assume"]
     out.cpairs = cpairs
     return out
 
@@ -348,15 +369,23 @@ def fix_all(t, pairs):
 
 
 def verify(project, cli_props=(), cli_assumes=(), depth=20, instance=None, diags=None,
-           timeout_ms=60000, unroll=16):
+           timeout_ms=60000, unroll=16, on_built=None, on_result=None, deadline=None):
     """Builds and checks; returns an Outcome (None on source errors, in
-    diags).  Raises Refuse for a construct that cannot be encoded."""
+    diags).  Raises Refuse for a construct that cannot be encoded.
+    on_built(outcome) once the system is built, on_result(result) as each
+    check is decided; deadline (time.monotonic()): the checks not decided
+    by then are unknown (timeout)."""
     diags = diags if diags is not None else Diagnostics()
     t0 = time.perf_counter()
     out = build(project, list(cli_props), list(cli_assumes), instance, diags, unroll)
     if out is None:
         return None
-    out.results, out.invariants = check(out.system, depth, timeout_ms)
+    if on_built is not None:
+        on_built(out)
+    info = {}
+    out.results, out.invariants = check(out.system, depth, timeout_ms, info=info,
+                                        on_result=on_result, deadline=deadline)
+    out.runs = info.get("runs")
     out.seconds = time.perf_counter() - t0
     return out
 

@@ -119,9 +119,12 @@ def lookup(machine, keys):
     return (c.v if isinstance(c, Instance) else c), k
 
 
-def leaf_value(machine, leaf, now):
+def leaf_value(machine, leaf, now, stopped=()):
     """A leaf's value in an interpreter Machine (the hidden elapsed time of
-    a timer from its start time T0, as the encoding holds it)."""
+    a timer from its start time T0, as the encoding holds it; stopped: the
+    names of the tasks a fault stopped)."""
+    if leaf.keys[0] == "S":
+        return leaf.keys[1] in stopped
     if leaf.keys[0] == "E":
         # the SINGLE variable as the last edge detection of the instant saw it
         c, k = lookup(machine, leaf.single_keys)
@@ -143,12 +146,12 @@ def out_period(leaf):
     return leaf.period
 
 
-def state_pairs(out, machine, now):
+def state_pairs(out, machine, now, stopped=()):
     pairs = []
     for leaf in out.sym.leaves:
         if leaf.role == "const":
             continue
-        pairs.append((leaf.var, const_of(leaf_value(machine, leaf, now), leaf.type)))
+        pairs.append((leaf.var, const_of(leaf_value(machine, leaf, now, stopped), leaf.type)))
     return pairs
 
 
@@ -174,10 +177,21 @@ def replay(out, result, trace_path, vcd_path=None):
             t, task, kind_, pou, file, line = hits[0]
             return True, f"{file}:{line}: runtime error: {kind_} in {pou}"
         return False, "the interpreter ran the trace without a runtime error"
-    if res.faults:
-        return False, f"the interpreter faulted: {res.faults[0]}"
+    # the trace satisfies the assumptions at every step, as the interpreter
+    # runs it (independently of the encoding: the time point is the same)
+    for k in range(1, result.cycle + 1):
+        at = (k - 1) * period
+        mk = Machine(project)
+        rk = interp.run(project, at, watch=[], inputs=trace_path, machine=mk)
+        pairs = state_pairs(out, mk, at, {f[1] for f in rk.faults})
+        for text, term in getattr(out, "assume_terms", ()):
+            v = z3.simplify(z3.substitute(term, *pairs))
+            if not z3.is_true(v):
+                return False, f"the trace breaks the assumption '{text}' at step {k} ({v})"
+    # a fault stops its task; the property is checked after it too
+    stopped = {f[1] for f in res.faults}
     term = out.state_terms[result.name]
-    v = z3.simplify(z3.substitute(term, *state_pairs(out, m, end)))
+    v = z3.simplify(z3.substitute(term, *state_pairs(out, m, end, stopped)))
     if z3.is_false(v):
         return True, "the property is FALSE after that cycle"
     return False, f"the interpreter's state satisfies the property ({v})"

@@ -4,16 +4,18 @@
     inputs   U: the free leaves, fresh in every cycle, inside their domain
     T(X, U)  the post-cycle value of each state leaf
     F(X, U)  a runtime fault happens in the cycle (a violation)
-    P(X, U)  each property, on the state after the cycle
-    A(X, U)  the assumptions, on the state at the start of the cycle
+    P(X, U)  each property, on the state after the cycle (with the inputs
+             the cycle read)
+    A(X, U)  the assumptions, at the same point as the properties
 
 BMC unrolls from the initial state; cycle k is checked once every cycle
 before it held (so the first violation is the one reported).  k-induction
 proves "for every path of k+1 cycles from any state satisfying the proved
 invariants, if the first k cycles hold so does the last"; with the base case
 to depth k+1 this proves the property for every depth.  Paths in the
-induction step are kept simple (pairwise distinct states), which makes the
-method complete for finite state.  Invariants about hidden state (timer
+induction step are kept simple (the states before each of its cycles
+pairwise distinct; the state after the violating cycle may repeat one of
+them), which makes the method complete for finite state.  Invariants about hidden state (timer
 locations, enumeration ranges...) are candidates proved first by Houdini
 (one-step induction, dropping the ones that fail until the rest is
 inductive): only proved ones strengthen the induction."""
@@ -29,9 +31,20 @@ from .encode import FALSE, REFUSED, TRUE, UNROLL, Refuse, land, lnot, lor, smt_e
 
 
 @dataclass
+class Runs:
+    """What the assumptions allow: runs of `longest` cycles at most
+    (None: of every length checked, to `depth`); `total`: proved that every
+    reachable state has a successor (runs of every length exist)."""
+    longest: int | None = None
+    depth: int = 0
+    total: bool = False
+    assumed: bool = False     # are there assumptions at all
+
+
+@dataclass
 class Result:
     name: str
-    status: str = "unknown"   # proved | bounded | violated | unknown
+    status: str = "unknown"   # proved | bounded | violated | unknown | vacuous
     cycle: int = 0            # violated: the cycle; bounded: the depth
     k: int = 0                # proved: the induction depth
     seconds: float = 0.0
@@ -40,6 +53,10 @@ class Result:
     invariants: list = field(default_factory=list)
     abstract: bool = False    # proved on the floating-point abstraction
     free: list = field(default_factory=list)   # constructs free in its verdict (stand-ins)
+    timeout: bool = False     # unknown: the --timeout deadline stopped it
+    havoc: list = field(default_factory=list)  # the faulted tasks' variables it reads
+    runs_to: int = 0          # proved: the assumptions' runs were found to exist
+                              # only up to this depth (0: of every length)
 
 
 @dataclass
@@ -99,6 +116,35 @@ class Unroller:
         return z3.substitute(term, *pairs) if pairs else term
 
 
+# the wall-clock deadline of the whole verification (time.monotonic()),
+# None: none.  Every query is cut to what is left of it; a check the
+# deadline stops is "unknown (timeout)".
+_deadline = [None]
+
+
+def solve(s):
+    """s.check() within the deadline (each solver also has its own
+    per-query limit, set where it is made); unknown when none is left."""
+    d = _deadline[0]
+    if d is not None:
+        left = int((d - time.monotonic()) * 1000)
+        if left <= 0:
+            return z3.unknown
+        s.set("timeout", left if left < s._per_query else s._per_query)
+    return s.check()
+
+
+def new_solver(timeout_ms):
+    s = z3.Solver()
+    s.set("timeout", timeout_ms)
+    s._per_query = timeout_ms
+    return s
+
+
+def timed_out():
+    return _deadline[0] is not None and time.monotonic() >= _deadline[0]
+
+
 def _fault_term(ts, pairs):
     return lor(*[Unroller.sub(c, pairs) for c, *_ in ts.faults])
 
@@ -117,8 +163,7 @@ def houdini(ts: System, timeout_ms: int):
         return []
     u = Unroller(ts, "h")
     u.vars_at(0)
-    s = z3.Solver()
-    s.set("timeout", timeout_ms)
+    s = new_solver(timeout_ms)
     cons, pairs = u.step(1)
     s.add(*cons)
     s.add(lnot(_fault_term(ts, pairs)))
@@ -130,7 +175,7 @@ def houdini(ts: System, timeout_ms: int):
             s.add(Unroller.sub(term, pre_pairs))
         posts = [Unroller.sub(term, post_pairs) for _, term in cands]
         s.add(lor(*[lnot(p) for p in posts]))
-        r = s.check()
+        r = solve(s)
         if r == z3.unsat:
             s.pop()
             return cands
@@ -273,7 +318,8 @@ WEAK_DEPTH = 4
 WEAK_TIMEOUT_MS = 10000
 
 
-def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
+def check(ts: System, depth: int, timeout_ms: int = 60000, log=None, info=None,
+          on_result=None, deadline=None):
     """Results for every property, the first one 'no runtime error'.  Each
     one is decided on its own cone of influence; the properties are checked
     on runs without a runtime error unless none can happen (proved).  The
@@ -284,7 +330,13 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
     check that k-induction does not close with them is decided again with
     the stronger candidates of ts.extra (the state machines' per-step
     ranges, ranges.partition_candidates), proved by Houdini once, only when
-    some check needs them: they are many, and most programs do not."""
+    some check needs them: they are many, and most programs do not.
+
+    Every verdict is passed to on_result as soon as it is decided; the
+    assumptions' runs (runs_allowed) turn the verdicts about runs they do
+    not allow into "vacuous"; past `deadline` (time.monotonic()) the checks
+    left are "unknown" with .timeout set.  info["runs"]: the Runs."""
+    _deadline[0] = deadline
     fault_roots = [c for c, *_ in ts.faults]
     refused = ts.refused
     extra = list(getattr(ts, "extra", []))
@@ -308,8 +360,13 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
         while True:
             sub = restrict(cur["ts"], roots)
             sub.props = [(name, term)] if term is not None else []
-            if term is not None and not no_fault:
-                sub.faults = []     # not read: the property alone, on every run
+            if term is not None:
+                # a runtime fault stops its task and the run goes on: the
+                # property is checked after it too.  Only the encoding's
+                # own limit (a loop longer than --unroll) ends the runs a
+                # property is checked on
+                sub.faults = [f for f in sub.faults if f[1].startswith(UNROLL)] \
+                    if no_fault else []
             # before the stronger invariants, only the cheap abstractions,
             # and not far (induction without them gets slow as k grows)
             if cur["strong"]:
@@ -324,23 +381,99 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None):
                     (r.status == "violated" and _stand_ins_read(sub, refused))
             if not undecided or cur["strong"]:
                 _sound_or_refuse(r, sub, refused)
+                r.havoc = sorted({str(v).split(":", 1)[1] for leaf, v, _ in sub.inputs
+                                  if leaf is None and str(v).startswith("$havoc")})
                 return r
             cur["ts"] = proved_system(full.invariants + extra)
             cur["strong"] = True
 
-    t0 = time.perf_counter()
-    first = decide(fault_roots, "no runtime error", None, no_fault=False)
-    first.seconds = time.perf_counter() - t0
+    runs = runs_allowed(cur["ts"], depth, timeout_ms)
+
+    def vacuous(r):
+        # no run longer than runs.longest cycles: a verdict about longer
+        # runs (proved, holds up to N >= longest, undecided after it) is
+        # about no run at all
+        if runs.longest is None or r.status == "violated":
+            if r.status == "proved" and not runs.total:
+                r.runs_to = runs.depth
+            return r
+        if r.status in ("proved", "bounded") or r.cycle >= runs.longest:
+            r.status, r.cycle, r.k = "vacuous", runs.longest, 0
+        return r
+
+    if info is not None:
+        info["runs"] = runs
+
+    def run(roots, name, term, no_fault):
+        t0 = time.perf_counter()
+        if timed_out():
+            r = Result(name, status="unknown", timeout=True)
+        else:
+            r = vacuous(decide(roots, name, term, no_fault))
+            if r.status == "unknown" and timed_out():
+                r.timeout = True
+        r.seconds = time.perf_counter() - t0
+        if on_result is not None:
+            on_result(r)        # each verdict as soon as it is decided
+        return r
+
+    first = run(fault_roots, "no runtime error", None, no_fault=False)
     results = [first]
     invs = set()
+    unroll_roots = [c for c, kind, *_ in ts.faults if kind.startswith(UNROLL)]
     for name, term in full.props:
-        t0 = time.perf_counter()
-        no_fault = first.status != "proved" and bool(full.faults)
-        r = decide([term] + (fault_roots if no_fault else []), name, term, no_fault)
-        r.seconds = time.perf_counter() - t0
+        no_fault = first.status != "proved" and bool(unroll_roots)
+        r = run([term] + (unroll_roots if no_fault else []), name, term, no_fault)
         results.append(r)
         invs.update(n for n, _ in r.invariants)
     return results, sorted(invs)
+
+
+def runs_allowed(ts: System, depth: int, timeout_ms: int) -> Runs:
+    """How long the runs the assumptions admit are.  Bounded model
+    checking of the assumptions alone (on their cone of influence, with
+    the input domains): the first k with no run of k cycles makes every
+    verdict after cycle k-1 vacuous.  When runs of `depth` cycles exist,
+    totality is tried: no state satisfying the proved invariants lacks a
+    successor step satisfying the assumptions (for all inputs ... a
+    quantified query): then runs of every length exist."""
+    res = Runs(depth=depth, assumed=not z3.is_true(z3.simplify(ts.assume)))
+    if not res.assumed:
+        res.total = True
+        return res
+    sub = restrict(ts, [])
+    s = new_solver(timeout_ms)
+    u = Unroller(sub, "r")
+    u.vars_at(0, initial=True)
+    for k in range(1, depth + 1):
+        cons, _ = u.step(k)
+        s.add(*cons)
+        r = solve(s)
+        if r == z3.unsat:
+            res.longest = k - 1
+            return res
+        if r != z3.sat:
+            return res      # undecided: no claim either way
+    # totality: exists X (invariants) such that for all inputs U the step
+    # breaks the assumptions (or the input domains)?  unsat: total
+    t = new_solver(min(timeout_ms, 10000))
+    v = Unroller(sub, "t")
+    v.vars_at(0)
+    cons, pairs = v.step(1)
+    y0 = [(var, v.X[0][var]) for _, var, _, _ in sub.state]
+    for _, term in sub.invariants:
+        t.add(Unroller.sub(term, y0))
+    # the post-state equalities define X_1; the step is possible when the
+    # domains and the assumption hold for some inputs
+    step_ok = land(*[c for c in cons])
+    xs = list(v.X[1].values())
+    us = list(v.U[0].values())
+    if us or xs:
+        t.add(z3.ForAll(us + xs, lnot(step_ok)) if (us or xs) else lnot(step_ok))
+    else:
+        t.add(lnot(step_ok))
+    res.total = solve(t) == z3.unsat
+    return res
 
 
 def _stand_ins_read(sub, refused):
@@ -423,12 +556,10 @@ def check_one(ts: System, name, prop, depth, timeout_ms, no_fault, stop_early=Fa
             g.append(lnot(_fault_term(ts, pairs)))
         return g
 
-    base = z3.Solver()
-    base.set("timeout", timeout_ms)
+    base = new_solver(timeout_ms)
     bu = Unroller(ts, "b")
     bu.vars_at(0, initial=True)
-    ind = z3.Solver()
-    ind.set("timeout", timeout_ms)
+    ind = new_solver(timeout_ms)
     iu = Unroller(ts, "i")
     iu.vars_at(0)
     y0 = [(var, iu.X[0][var]) for _, var, _, _ in ts.state]
@@ -442,7 +573,7 @@ def check_one(ts: System, name, prop, depth, timeout_ms, no_fault, stop_early=Fa
         base.add(viol(pairs))
         if no_fault and prop is not None:
             base.add(lnot(_fault_term(ts, pairs)))
-        r = base.check()
+        r = solve(base)
         if r == z3.sat and stop_early:
             res.status, res.cycle = "violated", k
             return res
@@ -463,9 +594,18 @@ def check_one(ts: System, name, prop, depth, timeout_ms, no_fault, stop_early=Fa
         # induction: a path of k cycles from any state of the invariants
         cons, pairs = iu.step(k)
         ind.add(*cons)
-        for j in range(0, k):
+        # simple paths: the PRE-states of the k cycles pairwise distinct
+        # (X_0..X_{k-1}), never the post-state X_k of the violating cycle.
+        # The violation is a fact of the last cycle (its inputs, the state
+        # before it), not of X_k alone: a shortest counterexample may end
+        # in a state it passed before (a latch holding while an input
+        # drops), and cutting that loop removes the violating cycle.  A loop
+        # between two pre-states can be cut: the path from the second one
+        # repeats after the first.
+        for j in range(0, k - 1):
             if ts.state:
-                ind.add(lor(*[lnot(smt_eq(iu.X[j][var], iu.X[k][var])) for _, var, _, _ in ts.state]))
+                ind.add(lor(*[lnot(smt_eq(iu.X[j][var], iu.X[k - 1][var]))
+                              for _, var, _, _ in ts.state]))
         if ind_pairs is not None:
             ind.add(*good(ind_pairs))
         ind_pairs = pairs
@@ -473,7 +613,7 @@ def check_one(ts: System, name, prop, depth, timeout_ms, no_fault, stop_early=Fa
         ind.add(viol(pairs))
         if no_fault and prop is not None:
             ind.add(lnot(_fault_term(ts, pairs)))
-        r = ind.check()
+        r = solve(ind)
         ind.pop()
         if r == z3.unsat:
             res.status, res.k = "proved", k

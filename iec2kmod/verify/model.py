@@ -20,7 +20,7 @@ from ..interp.machine import Machine
 from ..interp.model import Instance
 from ..interp.values import base_of
 from .encode import (FALSE, Opaque, store_into, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
-                     land, lnot, sort_of)
+                     land, lnot, lor, sort_of)
 
 INT64_MAX = (1 << 63) - 1
 
@@ -78,6 +78,13 @@ class SymbolicMachine:
                                                          None), "$tick", ("T",))
             leaf = self.by_name["$tick"]
             leaf.period, leaf.ticks = self.period, self.ticks
+        # a task stopped by a runtime fault: it never runs again, the
+        # other tasks go on (a constant FALSE when no cycle of it can fault)
+        self.havoc = []             # [(constant, domain)]: free values (inputs)
+        for t in self.tasks:
+            self.clock["$stop_" + t.name] = False
+            self._hidden(self.clock, "$stop_" + t.name, _BOOL, "$stop_" + t.name,
+                         ("S", t.name))
         for t in self.events:
             # the SINGLE variable's value at the last edge detection (its initial value)
             c, k = self.machine.cells[id(t.single)]
@@ -307,10 +314,45 @@ class SymbolicMachine:
         insts = {id(pi): inst for (_, inst), pi in zip(m.instances, self.programs)}
         tick = self.clock["$tick"] if self.ticks > 1 else None
 
+        published = [lf for lf in self.leaves
+                     if lf.keys and (lf.keys[0] in ("G", "%") or str(lf.keys[0]).startswith("R:"))]
+
         def run_task(task, g):
-            for pi in self.programs:
-                if pi.task is task:
-                    self.run_program(enc, pi, insts[id(pi)], g)
+            # a stopped task does not run; a cycle that faults publishes
+            # none of its writes to globals and %Q/%M (the kernel does not
+            # copy its image out) and stops its task.  The variables of its
+            # program instances keep, in the interpreter and the kernel,
+            # what the cycle wrote before the statement that faulted: any
+            # value here (free: what is proved holds for every one of them)
+            stop_key = "$stop_" + task.name
+            stop = self.clock[stop_key]
+            g = land(g, lnot(stop))
+            before = [(lf, lf.c[lf.k]) for lf in published]
+            n0 = len(enc.faults)
+            mine = [pi for pi in self.programs if pi.task is task]
+            for pi in mine:
+                self.run_program(enc, pi, insts[id(pi)], g)
+            from .encode import UNROLL
+            real = [c for c, kind, *_ in enc.faults[n0:] if not kind.startswith(UNROLL)]
+            if not real:
+                return
+            f = lor(*real)
+            for lf, old in before:
+                cur = lf.c[lf.k]
+                if not (z3.is_expr(cur) and z3.is_expr(old) and cur.eq(old)):
+                    lf.c[lf.k] = ite(f, old, cur)
+            for (path, _), pi in zip(m.instances, self.programs):
+                if pi.task is not task:
+                    continue
+                for lf in self.leaves:
+                    cur = lf.c[lf.k]
+                    if z3.is_expr(cur) and cur.eq(lf.var):
+                        continue    # not written by the cycle (an input stays one)
+                    if lf.keys[:2] == ("I", path):
+                        h = z3.Const(f"$havoc{len(self.havoc)}:{lf.name}", lf.var.sort())
+                        self.havoc.append((h, self.domain(lf, h)))
+                        lf.c[lf.k] = ite(f, h, lf.c[lf.k])
+            self.clock[stop_key] = z3.Or(stop, f)
         if not self.events:
             for task, g in self.task_runs(tick):
                 run_task(task, g)

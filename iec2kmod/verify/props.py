@@ -5,8 +5,9 @@ Pragma syntax (anywhere a comment may stand; the keyword is case-insensitive):
 
     {verify NAME: EXPR}     a property, checked after every cycle of the task
     {verify: EXPR}          the same, named after its position
-    {assume: EXPR}          a constraint on the inputs (and state) at the start
-                            of every cycle
+    {assume: EXPR}          a constraint on every step's inputs (and state),
+                            evaluated where the properties are: on the state
+                            after the step, with the inputs the step read
 
 Inside a PROGRAM (between PROGRAM and END_PROGRAM) names are the program's
 own variables -- inputs, outputs, internals, FB instances and their

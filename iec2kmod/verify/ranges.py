@@ -112,8 +112,60 @@ def _compile(roots):
 def _eval(nodes, env):
     out = [None] * len(nodes)
     for k, n in enumerate(nodes):
-        out[k] = _op(n, [out[c] for c in n.kids], env)
+        a = [out[c] for c in n.kids]
+        if n.kind == z3.Z3_OP_ITE and n.w > 0 and a[0] == _U:
+            # the guard narrows the branch that is its own operand:
+            # If(x + 1 <= 9, x + 1, 0) is in [lo, 9] u {0}
+            a = [a[0], _narrow(nodes, out, n.kids[0], n.kids[1], a[1], True),
+                 _narrow(nodes, out, n.kids[0], n.kids[2], a[2], False)]
+        out[k] = _op(n, a, env)
     return out
+
+
+# the comparison as "left OP right" read the other way round
+_FLIP = {z3.Z3_OP_SLEQ: z3.Z3_OP_SGEQ, z3.Z3_OP_SGEQ: z3.Z3_OP_SLEQ,
+         z3.Z3_OP_SLT: z3.Z3_OP_SGT, z3.Z3_OP_SGT: z3.Z3_OP_SLT, z3.Z3_OP_EQ: z3.Z3_OP_EQ}
+_NEGATE = {z3.Z3_OP_SLEQ: z3.Z3_OP_SGT, z3.Z3_OP_SGT: z3.Z3_OP_SLEQ,
+           z3.Z3_OP_SLT: z3.Z3_OP_SGEQ, z3.Z3_OP_SGEQ: z3.Z3_OP_SLT}
+
+
+def _narrow(nodes, out, ci, bi, iv, truth):
+    """The interval iv of branch node bi where the guard node ci has the
+    truth value `truth`: when the guard compares bi itself (the same node)
+    with a constant, signed, the interval is cut to the values where the
+    comparison has that outcome (an empty cut leaves iv as it is: sound,
+    only less precise)."""
+    if iv is None or isinstance(iv[0], bool):
+        return iv
+    c = nodes[ci]
+    while c.kind == z3.Z3_OP_NOT and len(c.kids) == 1:
+        truth = not truth
+        c = nodes[c.kids[0]]
+    if c.kind not in _FLIP or len(c.kids) != 2:
+        return iv
+    p, q = c.kids
+    op = c.kind
+    if q == bi and nodes[p].kind == "num":
+        p, q, op = q, p, _FLIP[op]
+    if p != bi or nodes[q].kind != "num":
+        return iv
+    k = nodes[q].val
+    if not truth:
+        if op == z3.Z3_OP_EQ:
+            return iv           # x <> k: no interval cut (but at its ends)
+        op = _NEGATE[op]
+    lo, hi = iv
+    if op == z3.Z3_OP_SLEQ:
+        hi = min(hi, k)
+    elif op == z3.Z3_OP_SLT:
+        hi = min(hi, k - 1)
+    elif op == z3.Z3_OP_SGEQ:
+        lo = max(lo, k)
+    elif op == z3.Z3_OP_SGT:
+        lo = max(lo, k + 1)
+    else:
+        lo, hi = max(lo, k), min(hi, k)
+    return (lo, hi) if lo <= hi else iv
 
 
 def _op(n, a, env):

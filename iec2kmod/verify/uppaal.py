@@ -23,7 +23,11 @@ The network (seed 004 for the program logic, seed 002 for the timers):
     as bounded ints, every arithmetic result wrapped into its type by the
     functions wrap_s8/wrap_u8/wrap_s16/wrap_u16 of the declarations; TIME
     as an int counting milliseconds (the model's time unit);
-  * each property P as the query  A[] (Task.wait imply (P)).
+  * each property P as the query  A[] (Task.wait imply (P)): in `wait`
+    the scan's copy-out is done and the inputs it selected are still in
+    their variables -- the point where `iec2kmod verify` checks properties
+    and assumptions (the state after step K with the inputs step K read;
+    the initial state, before the first scan, is not checked by either).
 
 What cannot be exported is refused with an error naming the construct (the
 model is exact or not written): REAL, 32/64-bit integers, strings, arrays

@@ -209,9 +209,9 @@ def test_counter_and_writes_into_instances(tmp_path):
     like the manager) is seen although no input changed (the epoch)."""
     text = """
 FUNCTION_BLOCK Count
-VAR_INPUT en : BOOL; END_VAR
+VAR_INPUT ena : BOOL; END_VAR
 VAR_OUTPUT n : DINT; END_VAR
-IF en THEN n := n + 1; END_IF;
+IF ena THEN n := n + 1; END_IF;
 END_FUNCTION_BLOCK
 
 FUNCTION_BLOCK Hold
@@ -224,7 +224,7 @@ END_FUNCTION_BLOCK
 PROGRAM Main
 VAR_EXTERNAL run : BOOL; total : DINT; out : INT; END_VAR
 VAR c : Count; h : Hold; END_VAR
-c(en := run);
+c(ena := run);
 total := c.n;
 h(x := 5);
 out := h.y;
@@ -582,18 +582,18 @@ def test_idempotent_block_settles_in_one_evaluation(tmp_path):
 
 EDGE = """
 FUNCTION_BLOCK Pulse
-VAR_INPUT x, en : BOOL; END_VAR
+VAR_INPUT x, ena : BOOL; END_VAR
 VAR_OUTPUT n : INT; lit : BOOL; END_VAR
 VAR t : R_TRIG; END_VAR
 t(CLK := x);
-IF t.Q AND en THEN n := n + 1; END_IF;
-lit := x AND en;
+IF t.Q AND ena THEN n := n + 1; END_IF;
+lit := x AND ena;
 END_FUNCTION_BLOCK
 
 PROGRAM Main
 VAR_EXTERNAL a, e : BOOL; n : INT; END_VAR
 VAR p : Pulse; END_VAR
-p(x := a, en := e);
+p(x := a, ena := e);
 n := p.n;
 END_PROGRAM
 """ + CONFIG.format(globals="a, e : BOOL; n : INT;")

@@ -87,6 +87,8 @@ def run(project, cycles, seed):
         now = (k - 1) * P
         ins = {}
         for leaf, var, _ in ts.inputs:
+            if leaf is None:
+                continue    # the free values of a faulted task (read only after a fault)
             v = random_value(rnd, leaf)
             c, key = lookup(m, leaf.keys)
             c[key] = v
