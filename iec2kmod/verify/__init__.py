@@ -116,7 +116,7 @@ from dataclasses import dataclass, field
 import z3
 
 from ..diagnostics import Diagnostics, SourceFile
-from .encode import TRUE, Encoder, Frame, Refuse, const_of, land
+from .encode import FALSE, TRUE, Encoder, Frame, Refuse, const_of, land
 from .engine import System, check
 from .model import SymbolicMachine
 from .ranges import partition_candidates, range_candidates
@@ -253,26 +253,42 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
             state.append(leaf)
     cpairs = [(leaf.var, const_of(leaf.init, leaf.type)) for leaf in consts]
 
-    def fix(t):
-        t = z3.substitute(t, *cpairs) if cpairs else t
-        return z3.simplify(t)
+    # the placeholders "task T faults in this step": their conditions (a
+    # later task's may read what an earlier one's fault restored), or FALSE
+    resolved = []
+    for flag, cond in sym.fault_flags:
+        resolved.append((flag, z3.substitute(cond, *resolved) if resolved else cond))
+    no_faults = [(flag, FALSE) for flag, _ in sym.fault_flags]
 
-    ts = System(
-        state=[(leaf, leaf.var, const_of(leaf.init, leaf.type), fix(leaf.c[leaf.k]))
-               for leaf in state],
-        inputs=[(leaf, leaf.var, sym.domain(leaf, leaf.var)) for leaf in inputs]
-        + [(None, h, dom) for h, dom in sym.havoc],
-        faults=[(fix(c), kind, pou, src, pos) for c, kind, pou, src, pos in enc.faults],
-        props=[(n, fix(t)) for n, t in post_props],
-        assume=fix(land(*assumes)) if assumes else TRUE,
-        refused=dict(enc.refused))
-    ts.stand_ins = list(enc.stand_ins)
-    ts.invariants = ([(n, fix(t)) for n, t in sym.invariant_candidates(lambda lf: lf.var)]
-                     + range_candidates(ts.state))
-    ts.extra = partition_candidates(ts.state)
+    def system(flags):
+        def fix(t):
+            # the flags first: their conditions read constants too
+            t = z3.substitute(t, *flags) if flags else t
+            t = z3.substitute(t, *cpairs) if cpairs else t
+            return z3.simplify(t)
+        ts = System(
+            state=[(leaf, leaf.var, const_of(leaf.init, leaf.type), fix(leaf.c[leaf.k]))
+                   for leaf in state],
+            inputs=[(leaf, leaf.var, sym.domain(leaf, leaf.var)) for leaf in inputs]
+            + ([(None, h, dom) for h, dom in sym.havoc] if flags is resolved else []),
+            faults=[(fix(c), kind, pou, src, pos) for c, kind, pou, src, pos in enc.faults],
+            props=[(n, fix(t)) for n, t in post_props],
+            assume=fix(land(*assumes)) if assumes else TRUE,
+            refused=dict(enc.refused))
+        ts.stand_ins = list(enc.stand_ins)
+        ts.invariants = ([(n, fix(t)) for n, t in sym.invariant_candidates(lambda lf: lf.var)]
+                         + range_candidates(ts.state))
+        ts.extra = partition_candidates(ts.state)
+        return ts
+
+    ts = system(resolved)
+    # once 'no runtime error' is proved no task ever stops: the properties
+    # are decided on the system without the stopping (engine.check), whose
+    # interval invariants the free values of a faulted task do not spoil
+    ts.nofault = system(no_faults) if sym.fault_flags else None
     out = Outcome(props=[c[1] for c in checked if c[0].kind == "property"], system=ts,
                   sym=sym, state_terms={n: fix_all(t, cpairs) for n, t in state_terms.items()})
-    out.assume_terms = [(t, fix_all(v, cpairs)) for t, v in assume_terms]
+    out.assume_terms = [(t, fix_all(v, cpairs + resolved)) for t, v in assume_terms]
     out.leaves = len(state)
     out.inputs = len(inputs)
     out.assumptions = [" ".join(p.text.split()) + (f" (in {name[:-len(p.name) - 1]})"

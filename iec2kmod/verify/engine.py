@@ -166,7 +166,11 @@ def houdini(ts: System, timeout_ms: int):
     s = new_solver(timeout_ms)
     cons, pairs = u.step(1)
     s.add(*cons)
-    s.add(lnot(_fault_term(ts, pairs)))
+    # a runtime fault stops its task and the run goes on: the invariants
+    # must survive faulting steps too.  Only the encoding's own limit (a
+    # loop longer than --unroll) ends the runs the checks look at
+    s.add(lnot(lor(*[Unroller.sub(c, pairs) for c, kind, *_ in ts.faults
+                     if kind.startswith(UNROLL)])))
     pre_pairs = [(var, u.X[0][var]) for _, var, _, _ in ts.state]
     post_pairs = [(var, u.X[1][var]) for _, var, _, _ in ts.state]
     while cands:
@@ -337,6 +341,13 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None, info=None,
     not allow into "vacuous"; past `deadline` (time.monotonic()) the checks
     left are "unknown" with .timeout set.  info["runs"]: the Runs."""
     _deadline[0] = deadline
+    # ts.nofault: the system without the stopping of a faulted task (build):
+    # 'no runtime error' is decided there -- its runs end at the first
+    # fault, and until then both systems take the same steps (the first
+    # task that faults in a step sees what it sees in ts) --, and the
+    # properties too once it is proved (no task ever stops then)
+    nofault = getattr(ts, "nofault", None)
+    whole, ts = ts, (nofault if nofault is not None else ts)
     fault_roots = [c for c, *_ in ts.faults]
     refused = ts.refused
     extra = list(getattr(ts, "extra", []))
@@ -344,8 +355,10 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None, info=None,
     # at every evaluation: each stand-in constant is one evaluation site of
     # the one cycle the encoding unrolls, an input here, so fresh in every
     # cycle -- an over-approximation of what the strings compute
-    full = System(ts.state, ts.inputs + [(None, c, TRUE) for c in ts.stand_ins], ts.faults,
-                  ts.props, ts.assume, ts.invariants)
+    def with_stand_ins(s):
+        return System(s.state, s.inputs + [(None, c, TRUE) for c in ts.stand_ins], s.faults,
+                      s.props, s.assume, s.invariants)
+    full = with_stand_ins(ts)
 
     def proved_system(cands):
         free = System(full.state, full.inputs, full.faults, full.props, full.assume, cands)
@@ -387,7 +400,12 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None, info=None,
             cur["ts"] = proved_system(full.invariants + extra)
             cur["strong"] = True
 
-    runs = runs_allowed(cur["ts"], depth, timeout_ms)
+    # the runs the assumptions allow, faults and all (no invariants proved
+    # for that system yet: the totality query goes without)
+    runs = runs_allowed(cur["ts"] if nofault is None else
+                        with_stand_ins(System(whole.state, whole.inputs, whole.faults,
+                                              whole.props, whole.assume, [])),
+                        depth, timeout_ms)
 
     def vacuous(r):
         # no run longer than runs.longest cycles: a verdict about longer
@@ -420,6 +438,13 @@ def check(ts: System, depth: int, timeout_ms: int = 60000, log=None, info=None,
     first = run(fault_roots, "no runtime error", None, no_fault=False)
     results = [first]
     invs = set()
+    if first.status != "proved" and nofault is not None:
+        # a task may fault: the properties on the runs where it stops and
+        # the others go on
+        ts = whole
+        full = with_stand_ins(whole)
+        extra = list(getattr(whole, "extra", []))
+        cur["ts"], cur["strong"] = proved_system(full.invariants), not extra
     unroll_roots = [c for c, kind, *_ in ts.faults if kind.startswith(UNROLL)]
     for name, term in full.props:
         no_fault = first.status != "proved" and bool(unroll_roots)

@@ -81,6 +81,11 @@ class SymbolicMachine:
         # a task stopped by a runtime fault: it never runs again, the
         # other tasks go on (a constant FALSE when no cycle of it can fault)
         self.havoc = []             # [(constant, domain)]: free values (inputs)
+        # [(placeholder Bool, the task's fault condition)]: the placeholder
+        # stands for "this task faults in this step" in the post terms;
+        # build() puts the condition in (or FALSE, for the system used once
+        # 'no runtime error' is proved)
+        self.fault_flags = []
         for t in self.tasks:
             self.clock["$stop_" + t.name] = False
             self._hidden(self.clock, "$stop_" + t.name, _BOOL, "$stop_" + t.name,
@@ -336,7 +341,8 @@ class SymbolicMachine:
             real = [c for c, kind, *_ in enc.faults[n0:] if not kind.startswith(UNROLL)]
             if not real:
                 return
-            f = lor(*real)
+            f = z3.Bool(f"$fault_{task.name}#{len(self.fault_flags)}")
+            self.fault_flags.append((f, lor(*real)))
             for lf, old in before:
                 cur = lf.c[lf.k]
                 if not (z3.is_expr(cur) and z3.is_expr(old) and cur.eq(old)):
