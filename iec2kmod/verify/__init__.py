@@ -115,13 +115,13 @@ from dataclasses import dataclass, field
 
 import z3
 
-from ..diagnostics import Diagnostics, SourceFile
+from ..diagnostics import Diagnostics
 from .encode import FALSE, TRUE, Encoder, Frame, Refuse, const_of, land
 from .engine import System, check
 from .model import SymbolicMachine
 from .ranges import partition_candidates, range_candidates
-from .props import (Prop, PropChecker, config_scope, instance_of_path, parse_expr,
-                    scan_pragmas)
+from .props import (PropChecker, collect, config_scope, instance_of_path,
+                    parse_expr)
 
 __all__ = ["verify", "Refuse", "Outcome", "UsageError"]
 
@@ -168,15 +168,7 @@ def build(project, cli_props, cli_assumes, instance, diags, unroll=16):
     properties; None when diags got errors."""
     sym = SymbolicMachine(project)
     sym.max_iter = unroll
-    props, bad = scan_pragmas(project)
-    for src, pos, msg in bad:
-        diags.error(src, pos, msg)
-    for n, text in enumerate(cli_props, 1):
-        props.append(Prop("property", f"property {n}", text,
-                          SourceFile(f"<--property {n}>", text), 0, None))
-    for n, text in enumerate(cli_assumes, 1):
-        props.append(Prop("assume", f"assume {n}", text,
-                          SourceFile(f"<--assume {n}>", text), 0, None))
+    props = collect(project, cli_props, cli_assumes, diags)
     directs = dict(sym.machine.direct_types)
     checked = []
     for p in props:

@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 
 from .. import ast
 from ..checks.types import BOOL, EnumT, SubrangeT, concrete
-from ..diagnostics import Diagnostics, SourceFile
+from ..diagnostics import Diagnostics
 from ..interp.compiler import PouCompiler
 from ..interp.errors import Fault
 from ..interp.machine import Machine
@@ -397,16 +397,8 @@ class _NS:
 def properties(project, m, cli_props, cli_assumes, instance, diags):
     """[(kind, name, fn() -> bool, text)] bound to Machine m; None after
     errors (in diags)."""
-    from .props import Prop, PropChecker, parse_expr, scan_pragmas
-    props, bad = scan_pragmas(project)
-    for src, pos, msg in bad:
-        diags.error(src, pos, msg)
-    for n, text in enumerate(cli_props, 1):
-        props.append(Prop("property", f"property {n}", text,
-                          SourceFile(f"<--property {n}>", text), 0, None))
-    for n, text in enumerate(cli_assumes, 1):
-        props.append(Prop("assume", f"assume {n}", text,
-                          SourceFile(f"<--assume {n}>", text), 0, None))
+    from .props import PropChecker, collect, parse_expr
+    props = collect(project, cli_props, cli_assumes, diags)
     directs = dict(m.direct_types)
     out = []
     for p in props:
@@ -691,16 +683,9 @@ def replay(out, result, trace_path, vcd_path=None, cli_props=(), instance=None):
 
 
 # ------------------------------------------------------------ the command
-EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE, EXIT_VIOLATED, EXIT_UNDECIDED, EXIT_VACUOUS, \
-    EXIT_INTERNAL = 0, 1, 2, 3, 4, 5, 70
-
-
-def _fmt_time(ns):
-    if ns % 1_000_000_000 == 0:
-        return f"{ns // 1_000_000_000} s"
-    if ns % 1_000_000 == 0:
-        return f"{ns // 1_000_000} ms"
-    return f"{ns / 1e6:g} ms"
+from .cli import EXIT_BOUNDED as EXIT_UNDECIDED  # noqa: E402  (the exit statuses are the command's)
+from .cli import (EXIT_INTERNAL, EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE,  # noqa: E402
+                  EXIT_VACUOUS, EXIT_VIOLATED, _fmt_time)
 
 
 def _duration(ns):

@@ -260,3 +260,19 @@ def instance_of_path(sym, path):
 
 
 _ = (StructT, BOOL)
+
+
+def collect(project, cli_props, cli_assumes, diags):
+    """Every property and assumption of a check: the {verify}/{assume}
+    pragmas of the sources, then --property and --assume (errors of the
+    pragmas into *diags*).  Both engines start from this list."""
+    props, bad = scan_pragmas(project)
+    for src, pos, msg in bad:
+        diags.error(src, pos, msg)
+    for n, text in enumerate(cli_props, 1):
+        props.append(Prop("property", f"property {n}", text,
+                          SourceFile(f"<--property {n}>", text), 0, None))
+    for n, text in enumerate(cli_assumes, 1):
+        props.append(Prop("assume", f"assume {n}", text,
+                          SourceFile(f"<--assume {n}>", text), 0, None))
+    return props
