@@ -96,7 +96,7 @@ def dense(args):
             print(f"  {name:>10}: {secs:6.3f} s")
         one, _ = check([path], tmp / "dcache-serial", extra=("-j", "1"))
         print(f"on one core:  {one:6.2f} s  (check -j 1: the statements not spread)")
-        print(f"target: <= 4.3 s (half of MatIEC's 8.6 s):",
+        print("target: <= 4.3 s (half of MatIEC's 8.6 s):",
               "MET" if walls[0] <= 4.3 else "NOT MET", f"({load()})")
 
 

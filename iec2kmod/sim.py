@@ -13,7 +13,6 @@ import hashlib
 import os
 import shutil
 import subprocess
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,7 +23,7 @@ from .checks.types import Elementary, EnumT, SubrangeT, concrete
 from .codegen import generate, source_list
 from .codegen import cnames as N
 from .codegen.body import copy_value
-from .codegen.plan import BindingError, PlanEmitter, build_plan, unbound_pointer_check
+from .codegen.plan import PlanEmitter, build_plan, unbound_pointer_check
 from .codegen.pou import frame_need
 from .literals import LiteralError, classify, parse_duration
 

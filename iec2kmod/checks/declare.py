@@ -8,8 +8,7 @@ from contextlib import contextmanager
 from .. import ast
 from . import stdlib
 from .symbols import POUInfo, Project, Var
-from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, LiteralT,
-                    StringT, StructT, SubrangeT, Type, assignable)
+from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, Type, assignable)
 from .types import identical as _identical
 
 SECTIONS_IN_POU = {
@@ -517,7 +516,7 @@ class Declarer:
                 return
             if isinstance(expr, ast.Ref) and t.has(expr.name):
                 return
-            self.error(src, expr.pos, f"initial value of an enumeration must be one of its values")
+            self.error(src, expr.pos, "initial value of an enumeration must be one of its values")
             return
         if isinstance(base, StringT):
             if lit_kind not in ("string", "wstring"):
@@ -646,7 +645,7 @@ class Declarer:
                                        "VAR_ACCESS)")
                 continue
             parts = d.path.split(".")
-            v, owner, t_cur = None, pou, None
+            v, t_cur = None, None
             for n, part in enumerate(parts):
                 if part.isdigit():
                     self.error(src, d.pos, f"access path '{d.name}': a bit ({d.path}) cannot "

@@ -4,7 +4,7 @@ standard function blocks of IEC 61131-3."""
 from __future__ import annotations
 
 from .symbols import POUInfo, Var
-from .types import (BOOL, ELEMENTARY, ERROR, INT, LREAL, TIME, AnyIntResult, Elementary, ErrorT,
+from .types import (BOOL, ELEMENTARY, INT, LREAL, TIME, AnyIntResult, Elementary, ErrorT,
                     LiteralT,
                     StringT, STRING, assignable, cat, common, concrete, is_bit, is_bool, is_int,
                     is_num, is_real, is_string, is_elementary)

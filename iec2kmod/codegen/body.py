@@ -11,9 +11,9 @@ import re
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.il import IL_ARITH, IL_COMPARE, IL_LOGIC, _CR
+from ..checks.il import IL_ARITH, IL_COMPARE, IL_LOGIC
 from ..checks.symbols import Var
-from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT, FBType,
+from ..checks.types import (BOOL, ArrayT, EnumT, ErrorT, FBType,
                             LiteralT, StringT, StructT, SubrangeT, concrete, identical)
 from . import analysis
 from . import cnames as N
@@ -1019,7 +1019,6 @@ class BodyEmitter:
         left = CRNode(i.pos, cr_in, depth)
         neg = op.endswith("N") and op in IL_LOGIC
         if op in IL_LOGIC:
-            right_t = concrete(operand.type) if not isinstance(operand.type, LiteralT) else res
             r = self.expr.emit(f, operand, res)
             if neg:
                 r = f"((iec_bool)!{r})" if res is BOOL else f"iec_not_{N.type_tag(res)}({r})"

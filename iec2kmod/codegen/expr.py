@@ -14,8 +14,8 @@ from ..checks import stdlib
 from ..checks.body import EnumValue
 from ..checks.il import _CR
 from ..checks.symbols import Var
-from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, ErrorT, FBType,
-                            LiteralT, StringT, StructT, SubrangeT, cat, common, concrete)
+from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, FBType,
+                            LiteralT, StringT, StructT, SubrangeT, common, concrete)
 from . import cnames as N
 
 INT64_MIN = -(1 << 63)
@@ -431,8 +431,6 @@ class ExprEmitter:
         res = concrete(fres.result)
         if isinstance(fres.result, LiteralT) and t is not None:
             res = concrete(t)
-        vals = lambda: self.seq(f, [(a, concrete(pt) if not isinstance(pt, LiteralT) else res)
-                                    for a, pt in zip(args, pts)])
         tag = lambda ty: N.type_tag(ty)
         if fam in ("ADD", "SUB", "MUL", "DIV", "MOD"):
             vs = self.seq(f, [(a, res) for a in args])

@@ -291,7 +291,6 @@ def _expand(path, lvalue, t, writable, owner, out, budget):
     if isinstance(t, ArrayT):
         elem, count = N.array_flat(t)
         # list the flat elements with their IEC indexes
-        idx = [[]]
         cur = t
         dims = []
         while isinstance(cur, ArrayT):

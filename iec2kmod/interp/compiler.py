@@ -23,7 +23,7 @@ from . import std
 from .conv import converter, int_to_f32, int_to_f64
 from .errors import ENUM, INDEX, LOOP, RANGE, Fault
 from .fbs import body_of
-from .model import BitCell, Instance, copier
+from .model import BitCell, copier
 from .values import base_of, f32_safe, wrap, wrap64
 
 EXIT = 1
@@ -1005,7 +1005,6 @@ class PouCompiler:
     def il_instr(self, i, labels, n):
         op = i.op
         cr_in = i.cr_in
-        rt = self.rt
         if op is None:
             f = self.call_expr(i.call)
 

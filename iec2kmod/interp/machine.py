@@ -538,7 +538,6 @@ class _Scheduler:
 def _schedule(self, table, idx, events, end):
     tasks = self.tasks
     ntasks = len(tasks)
-    rt = self.rt
     res = VMResult([table[i].path for i in idx], [], end_ns=end)
     next_release = [0] * ntasks
     cycles = [0] * ntasks

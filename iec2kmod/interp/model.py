@@ -11,7 +11,7 @@ in scope -- at every depth of FB nesting) or at every call (in-outs)."""
 from __future__ import annotations
 
 from .. import ast
-from ..checks.types import (ArrayT, Elementary, EnumT, FBType, LiteralT, StringT, StructT,
+from ..checks.types import (ArrayT, Elementary, EnumT, LiteralT, StringT, StructT,
                             SubrangeT, concrete)
 from .values import base_of, convert_implicit, f32_safe
 

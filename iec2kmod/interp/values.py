@@ -26,8 +26,7 @@ from __future__ import annotations
 
 import struct
 
-from ..checks.types import (ArrayT, Elementary, EnumT, FBType, LiteralT, StringT, StructT,
-                            SubrangeT, concrete)
+from ..checks.types import (Elementary, EnumT, StringT, SubrangeT, concrete)
 
 _F32 = struct.Struct("<f")
 F32_MAX_ROUND = 3.4028235677973366e38   # (2 - 2^-24) * 2^127: the rounding boundary

@@ -27,7 +27,7 @@ from ..codegen import generate, pou_order, uses_real
 from ..codegen import cnames as N
 from ..codegen.expr import Frame, Raw
 from ..codegen.body import BodyEmitter, copy_value
-from ..codegen.plan import PlanEmitter, build_plan, kind_of, unbound_pointer_check
+from ..codegen.plan import PlanEmitter, build_plan, unbound_pointer_check
 from ..codegen.pou import InitEmitter, callees, frame_need, pou_struct
 
 RUNTIME_HEADERS = ("iec_platform.h", "iec_types.h", "iec_fault.h", "iec_int.h", "iec_conv.h",
@@ -117,7 +117,7 @@ def interface_hash(pou, project, sel=None) -> str:
     (every variable, nested FB instance and type, and with --selective the
     selective execution state).  Algorithms may change across a hot swap;
     this may not."""
-    parts = [f"abi 1", "\n".join(pou_struct(pou, sel))]
+    parts = ["abi 1", "\n".join(pou_struct(pou, sel))]
     seen = set()
     for v in pou.vars.values():
         parts.append(f"{v.section} {v.name} {getattr(v.type, 'name', '?')}")
@@ -252,7 +252,6 @@ def _generate_tree(project, out: Path, selective=None) -> dict:
                              "interface": interface_description(pou)})
 
     # ------------------------------------------------- configuration module
-    pe = PlanEmitter(project, plan)
     image_members = []
     single_events = {}
     for tp in plan.tasks:

@@ -18,7 +18,6 @@ import z3
 from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, concrete
 from ..interp.machine import Machine
 from ..interp.model import Instance
-from ..interp.values import base_of
 from .encode import (FALSE, Opaque, store_into, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
                      land, lnot, lor, sort_of)
 
@@ -190,7 +189,6 @@ class SymbolicMachine:
 
     @staticmethod
     def _index_text(t, n):
-        dims = []
         cur = t
         rem = n
         parts = []

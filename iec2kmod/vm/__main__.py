@@ -11,7 +11,6 @@ shell    boot a guest and run the lines typed on stdin one by one
 from __future__ import annotations
 
 import argparse
-import os
 import shlex
 import sys
 import tempfile

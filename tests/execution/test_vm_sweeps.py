@@ -87,7 +87,7 @@ def operations_source() -> str:
         else:
             body.append(f"    un_{t}[i] := NOT v_{t}[i];")
             decl.append(f"    sh_{t} : ARRAY[0..{m*4*15-1}] OF {t};")
-            body += [f"    FOR n := 0 TO 14 DO", f"      k := (i * 15 + n) * 4;",
+            body += ["    FOR n := 0 TO 14 DO", "      k := (i * 15 + n) * 4;",
                      f"      sh_{t}[k] := SHL(v_{t}[i], n * 5 - 3);", f"      sh_{t}[k + 1] := SHR(v_{t}[i], n * 5 - 3);",
                      f"      sh_{t}[k + 2] := ROL(v_{t}[i], n * 5 - 3);", f"      sh_{t}[k + 3] := ROR(v_{t}[i], n * 5 - 3);",
                      "    END_FOR;"]

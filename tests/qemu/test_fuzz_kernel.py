@@ -17,7 +17,6 @@ are printed on failure)."""
 
 from __future__ import annotations
 
-import json
 import shutil
 import subprocess
 import sys

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import compileall
 import json
-import shlex
 import shutil
 import time
 from pathlib import Path

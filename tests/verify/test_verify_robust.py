@@ -18,7 +18,6 @@ except ImportError:     # the tier fails and says what to install
     z3 = None
 
 from iec2kmod import cli
-from iec2kmod.diagnostics import Diagnostics
 
 ROOT = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
