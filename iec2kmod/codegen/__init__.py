@@ -12,6 +12,7 @@ user-space library.  Output is deterministic: same input, same bytes."""
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 from dataclasses import dataclass, field
 
@@ -112,12 +113,20 @@ def _has_real(t):
     return cat(t) == "real"
 
 
+def source_names(project):
+    """[(unit, name)]: each source's path relative to the directory that
+    holds all of them (``traffic_light.st``), so that what generated files
+    say they come from (comments, the source hash) does not depend on where
+    the project lies on the build machine."""
+    paths = [os.path.abspath(u.src.path) for u in project.units]
+    base = os.path.commonpath([os.path.dirname(p) for p in paths]) if paths else ""
+    return [(u, os.path.relpath(p, base).replace(os.sep, "/"))
+            for u, p in zip(project.units, paths)]
+
+
 def source_list(project):
-    out = []
-    for unit in project.units:
-        out.append({"path": unit.src.path,
-                    "sha": hashlib.sha256(unit.src.text.encode()).hexdigest()[:16]})
-    return out
+    return [{"path": name, "sha": hashlib.sha256(unit.src.text.encode()).hexdigest()[:16]}
+            for unit, name in source_names(project)]
 
 
 def generate(project, name: str | None = None, selective=None) -> GeneratedC:
@@ -159,9 +168,10 @@ def generate(project, name: str | None = None, selective=None) -> GeneratedC:
     memo = {}
     tpl = env.get_template("pou.c.j2")
     bodies = {}
+    names = {id(u.src): name for u, name in source_names(project)}
     for pou in order:
         text = tpl.render(kind=pou.kind, name=pou.name, version=__version__,
-                          path=pou.src.path, line=pou.src.linecol(pou.node.pos)[0],
+                          path=names.get(id(pou.src), pou.src.path), line=pou.src.linecol(pou.node.pos)[0],
                           functions=["\n".join(pou_body(project, pou, selective))])
         bodies[pou.key] = (f"pou_{pou.name.lower()}.c", text)
     # string temporaries of the bodies (CONCAT results ...) need their types too

@@ -23,7 +23,7 @@ from jinja2 import Environment, FileSystemLoader, StrictUndefined
 
 from .. import __version__
 from ..checks.types import ArrayT, FBType, StringT, StructT, EnumT, concrete
-from ..codegen import generate, pou_order, uses_real
+from ..codegen import generate, pou_order, source_names, uses_real
 from ..codegen import cnames as N
 from ..codegen.expr import Frame, Raw
 from ..codegen.body import BodyEmitter, copy_value
@@ -185,7 +185,7 @@ def _generate_tree(project, out: Path, selective=None) -> dict:
     plan = build_plan(project)
     cfg = project.configurations[0]
     cname = _ident(cfg.name)
-    sources = sorted((u.src.path, u.src.text) for u in project.units)
+    sources = sorted((name, u.src.text) for u, name in source_names(project))
     source_hash = _sha(*[p + "\0" + t for p, t in sources])[:16]
 
     out.mkdir(parents=True, exist_ok=True)

@@ -88,3 +88,28 @@ def test_the_oldest_entries_are_evicted(tmp_path, cache, monkeypatch):
     buildcache._evict(str(cache))
     assert [buildcache.restore(k, str(tmp_path / "x")) is not None for k in keys] == \
         [False, True, True]
+
+
+def test_generated_trees_do_not_depend_on_where_the_project_lies(tmp_path):
+    """What a tree says it was generated from (comments, the source hash)
+    names the sources relative to their directory: the same project in two
+    places gives byte-identical trees (and so one build cache entry)."""
+    import shutil
+    import subprocess
+    import sys
+    root = __import__("pathlib").Path(__file__).resolve().parents[2]
+    trees = []
+    for place in ("a", "b/deeper"):
+        src = tmp_path / place / "two_resources"
+        shutil.copytree(root / "examples" / "two_resources", src)
+        out = tmp_path / f"out_{len(trees)}"
+        p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "gen", str(src), "-o", str(out)],
+                           cwd=root, capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        trees.append(out)
+    files = sorted(str(f.relative_to(trees[0])) for f in trees[0].rglob("*") if f.is_file())
+    assert files
+    for rel in files:
+        a, b = (trees[0] / rel).read_bytes(), (trees[1] / rel).read_bytes()
+        assert a == b, rel
+        assert str(tmp_path).encode() not in a, rel

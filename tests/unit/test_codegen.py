@@ -21,7 +21,7 @@ assert len(EXAMPLES) >= 12, f"only {len(EXAMPLES)} example projects under {ROOT 
 _GEN = r"""
 import hashlib, json, sys
 from iec2kmod import frontend
-from iec2kmod.codegen import generate
+from iec2kmod.codegen import generate, source_names
 from iec2kmod.sim import render_sim
 out = {}
 for d in sys.argv[1:]:
@@ -32,8 +32,11 @@ for d in sys.argv[1:]:
     files.update({name: text for name, text in gen.bodies.values()})
     sim_files, _ = render_sim(res.project)
     files["sim_project.c"] = sim_files["sim_project.c"]
-    out[d] = {"files": files, "sources": sorted(s.src.path for s in res.project.units),
-              "pou_src": {name: p.src.path for name, p in
+    # named relative to the directory holding the sources (no machine path)
+    names = {id(u.src): n for u, n in source_names(res.project)}
+    assert all("/" not in n for n in names.values()), names
+    out[d] = {"files": files, "sources": sorted(names.values()),
+              "pou_src": {name: names[id(p.src)] for name, p in
                           ((f"pou_{p.name.lower()}.c", p) for p in res.project.pous.values())}}
 print(json.dumps(out))
 """
