@@ -50,7 +50,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from iec2kmod import frontend, sim  # noqa: E402
-from iec2kmod.codegen.plan import build_plan  # noqa: E402
+from iec2kmod.compilation import Compilation  # noqa: E402
+from iec2kmod.traces import read_trace  # noqa: E402
 
 INTERVAL_MS = 10
 
@@ -436,18 +437,18 @@ KERNEL_CFLAGS = "-fno-strict-aliasing"
 EXTRA_CFLAGS = KERNEL_CFLAGS.split()
 
 
-def _build(project, work, selective):
+def _build(comp, work):
     saved = list(sim.CFLAGS)
     sim.CFLAGS[:] = [f if f != "-O1" else "-O2" for f in saved] + EXTRA_CFLAGS
     try:
-        return sim.build(project, work / "build", selective=selective)
+        return sim.build(comp, work / "build")
     finally:
         sim.CFLAGS[:] = saved
 
 
 def measure(project, exe, plan, trace_path, cycles, work):
     """(instructions per scan inside the task, (evaluated, skipped))."""
-    events = sim.read_trace(str(trace_path), plan)
+    events = read_trace(str(trace_path), plan.table)
     ev = work / "events.txt"
     with open(ev, "w") as fh:
         for t, _, i, kind, value in events:
@@ -467,12 +468,12 @@ def measure(project, exe, plan, trace_path, cycles, work):
     return int(m.group(1)) / cycles, counts
 
 
-def same_traces(project, plan, trace_path, cycles, work):
-    """The plain and the selective simulation agree on every global."""
+def same_traces(plain, sel, trace_path, cycles, work):
+    """The plain and the selective simulation (two Compilations of one
+    project) agree on every global."""
     end = (cycles - 1) * INTERVAL_MS * 1_000_000
-    a = sim.run(project, end, inputs=str(trace_path), build_dir=work / "build")
-    b = sim.run(project, end, inputs=str(trace_path), build_dir=work / "build",
-                selective="all")
+    a = sim.run(plain, end, inputs=str(trace_path), build_dir=work / "build")
+    b = sim.run(sel, end, inputs=str(trace_path), build_dir=work / "build")
     if a.changes != b.changes or a.faults != b.faults:
         raise SystemExit("plain and selective traces differ: a bug of selective execution")
 
@@ -505,14 +506,15 @@ def main(argv=None):
         if not res.ok:
             raise SystemExit("\n".join(d.format() for d in res.diags.sorted()))
         project = res.project
-        plan = build_plan(project)
-        plain_exe, _ = _build(project, work, None)
-        sel_exe, _ = _build(project, work, "all")
+        plain, sel = Compilation(project), Compilation(project, "all")
+        plan = plain.plan
+        plain_exe, _ = _build(plain, work)
+        sel_exe, _ = _build(sel, work)
         for rate in rates:
             tp = work / f"trace_{rate:g}.csv"
             tp.write_text(trace(inputs, start, rate, a.cycles, a.seed))
             if rate in (rates[0], rates[-1]) or rate == 1:
-                same_traces(project, plan, tp, min(a.cycles, 120), work)
+                same_traces(plain, sel, tp, min(a.cycles, 120), work)
             ip, _ = measure(project, plain_exe, plan, tp, a.cycles, work)
             isel, (ev, sk) = measure(project, sel_exe, plan, tp, a.cycles, work)
             share = 100.0 * sk / (ev + sk) if ev + sk else 0.0

@@ -49,7 +49,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from iec2kmod import frontend, sim  # noqa: E402
-from iec2kmod.codegen.plan import build_plan  # noqa: E402
+from iec2kmod.compilation import Compilation  # noqa: E402
 
 _spec = importlib.util.spec_from_file_location("selbench", ROOT / "benchmarks" / "selective.py")
 selbench = importlib.util.module_from_spec(_spec)
@@ -214,9 +214,10 @@ def main(argv=None):
     if not res.ok:
         raise SystemExit("\n".join(d.format() for d in res.diags.sorted()))
     project = res.project
-    plan = build_plan(project)
-    plain_exe, _ = selbench._build(project, work, None)
-    sel_exe, _ = selbench._build(project, work, "all")
+    plain, sel = Compilation(project), Compilation(project, "all")
+    plan = plain.plan
+    plain_exe, _ = selbench._build(plain, work)
+    sel_exe, _ = selbench._build(sel, work)
     ws_exe = build_writer_side(sel_exe, work)
     nvars = len(re.findall(r'^\t\{ "', (sel_exe.parent / "sim_project.c").read_text()
                            .split("sim_vars[] = {", 1)[1].split("};", 1)[0], re.M))

@@ -156,23 +156,25 @@ def front_end(files):
     return result.project
 
 
-def selective_plan(project, mode):
-    """The selective pass for --selective MODE (None: plain); its warnings
-    (pragmas) are printed like the front end's."""
-    if not mode:
-        return None
-    from .codegen.selective import SelectivePlan
-    from .diagnostics import Diagnostics
-    plan = SelectivePlan(project, mode)
-    diags = Diagnostics()
-    for src, offset, message in plan.warnings:
-        diags.warning(src, offset, message)
-    print_diagnostics(diags)
-    return plan
+def compile_project(project, mode=None):
+    """The Compilation of a checked project (compilation.py) for
+    --selective MODE (None: plain); the selective pass's warnings (pragmas)
+    are printed like the front end's."""
+    from .compilation import Compilation
+    comp = Compilation(project, mode)
+    if comp.selective is not None:
+        from .diagnostics import Diagnostics
+        diags = Diagnostics()
+        for src, offset, message in comp.selective.warnings:
+            diags.warning(src, offset, message)
+        print_diagnostics(diags)
+    return comp
 
 
 def cmd_sim(args) -> int:
     from . import sim
+    from .compilation import CompileError
+    from .traces import TraceError, format_value, write_csv, write_vcd
     project = front_end(args.files)
     if project is None:
         return EXIT_SOURCE
@@ -181,14 +183,17 @@ def cmd_sim(args) -> int:
             raise sim.SimError("--sanitize applies to the C engine only")
         if args.engine == "vm" and args.selective:
             raise sim.SimError("--selective applies to the C engine only")
-        sel = selective_plan(project, args.selective)
+        if args.engine == "vm":
+            from . import interp
+            try:
+                machine = interp.Machine(project)
+                table = machine.table()
+            except interp.VMError as exc:
+                raise sim.SimError(str(exc)) from None
+        else:
+            comp = compile_project(project, args.selective)
+            table = comp.plan.table
         if args.list:
-            if args.engine == "vm":
-                from .interp import Machine
-                table = Machine(project).table()
-            else:
-                from .codegen.plan import build_plan
-                table = build_plan(project).table
             for e in table:
                 access = "rw" if e.writable else "ro"
                 print(f"{e.path:40} {getattr(e.type, 'name', '?'):16} {access}")
@@ -205,17 +210,13 @@ def cmd_sim(args) -> int:
             end = sim.parse_time(args.duration)
         watch = [w for w in args.watch.split(",") if w.strip()] if args.watch else None
         if args.engine == "vm":
-            from . import interp
             try:
-                machine = interp.Machine(project)
-                table = machine.table()
                 res = interp.run(project, end, watch=watch, inputs=args.inputs, machine=machine)
             except interp.VMError as exc:
                 raise sim.SimError(str(exc)) from None
         else:
-            res = sim.run(project, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize,
-                          selective=sel)
-    except sim.SimError as exc:
+            res = sim.run(comp, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize)
+    except (sim.SimError, TraceError, CompileError) as exc:
         print(f"iec2kmod: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except sim.InternalError as exc:
@@ -229,14 +230,9 @@ def cmd_sim(args) -> int:
         print(f"{file}:{line}: runtime error: {fault} in {pou} (task {task}, "
               f"t={t / 1e9:.6f} s); the task is stopped", file=sys.stderr)
     if args.csv:
-        sim.write_csv(res, args.csv)
+        write_csv(res, args.csv)
     if args.vcd:
-        if args.engine == "vm":
-            from types import SimpleNamespace
-            sim.write_vcd(res, args.vcd, SimpleNamespace(table=table))
-        else:
-            from .codegen.plan import build_plan
-            sim.write_vcd(res, args.vcd, build_plan(project))
+        write_vcd(res, args.vcd, table)
     final = res.values_at()
     width = max((len(n) for n in res.names), default=10)
     print(f"simulated {res.end_ns / 1e9:g} s; cycles: " +
@@ -247,12 +243,13 @@ def cmd_sim(args) -> int:
             or "none"))
     for n in res.names:
         v = final.get(n, "")
-        print(f"  {n:<{width}}  {sim.format_value(None, v)}")
+        print(f"  {n:<{width}}  {format_value(None, v)}")
     return EXIT_SOURCE if res.faults else EXIT_OK
 
 
 def cmd_gen(args) -> int:
     from pathlib import Path
+    from .compilation import CompileError
     from .kmod import generate_tree
     project = front_end(args.files)
     if project is None:
@@ -261,7 +258,12 @@ def cmd_gen(args) -> int:
     if out.exists() and not out.is_dir():
         print(f"iec2kmod: error: {out} exists and is not a directory", file=sys.stderr)
         return EXIT_USAGE
-    manifest = generate_tree(project, out, selective=selective_plan(project, args.selective))
+    try:
+        comp = compile_project(project, args.selective)
+    except CompileError as exc:
+        print(f"iec2kmod: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    manifest = generate_tree(comp, out)
     print(f"wrote {out}: {len(manifest['modules'])} modules "
           f"({', '.join(m['name'] for m in manifest['modules'])})")
     return EXIT_OK

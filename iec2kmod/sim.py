@@ -8,29 +8,29 @@ CSV trace (time, variable, value); outputs go to CSV and VCD."""
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import os
 import shutil
 import subprocess
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from jinja2 import Environment, FileSystemLoader, StrictUndefined
 
 from . import __version__
-from .checks.types import Elementary, EnumT, SubrangeT, concrete
-from .codegen import generate, source_list
+from .checks.types import concrete
+from .codegen import source_list
 from .codegen import cnames as N
 from .codegen.body import copy_value
-from .codegen.plan import PlanEmitter, build_plan, unbound_pointer_check
+from .codegen.plan import unbound_pointer_check
 from .codegen.pou import frame_need
-from .literals import LiteralError, classify, parse_duration
+from .compilation import Compilation, CompileError
+from .execmodel import LOOP_BUDGET
+from .traces import TraceError, format_value, parse_time, read_trace, write_csv, write_vcd
+from .traces import Trace as SimResult
 
-
-# the same per-cycle loop budget as the kernel's tasks, so that a long loop
-# faults in the simulation exactly when it would in the kernel
-from .kmod import DEFAULT_LOOP_BUDGET as LOOP_BUDGET  # noqa: E402
+# the trace functions are traces.py's; sim.<name> stays for its callers
+__all__ = ["run", "build", "render_sim", "SimError", "InternalError", "SimResult",
+           "format_value", "parse_time", "read_trace", "write_csv", "write_vcd"]
 
 
 class SimError(Exception):
@@ -39,26 +39,6 @@ class SimError(Exception):
 
 class InternalError(Exception):
     """The generated C did not compile: a bug of ours."""
-
-
-@dataclass
-class SimResult:
-    names: list                      # watched IEC paths
-    changes: list                    # (t_ns, index into names, value)
-    faults: list = field(default_factory=list)   # (t_ns, task, fault, pou, file, line)
-    cycles: dict = field(default_factory=dict)   # task -> cycles run
-    selective: dict = field(default_factory=dict)  # task -> (blocks evaluated, skipped)
-    end_ns: int = 0
-    stderr: str = ""                             # the simulator's stderr (sanitizer reports)
-
-    def values_at(self, t_ns=None):
-        """Last value of every watched variable at time t (default: the end)."""
-        out = {}
-        for t, i, v in self.changes:
-            if t_ns is not None and t > t_ns:
-                break
-            out[self.names[i]] = v
-        return out
 
 
 def runtime_dir() -> Path:
@@ -71,12 +51,13 @@ def sim_dir() -> Path:
     return ROOT / "sim"
 
 
-def render_sim(project, selective=None):
-    """Generated sources of the simulator: {file name: text}, plan.
-    *selective*: a codegen.selective.SelectivePlan, or None (plain)."""
-    gen = generate(project, selective=selective)
-    plan = build_plan(project)
-    pe = PlanEmitter(project, plan)
+def render_sim(what, selective=None):
+    """Generated sources of the simulator: ({file name: text}, plan).
+    *what*: a Compilation (or a checked project and *selective* as for
+    compilation.selective_plan)."""
+    comp = Compilation.of(what, selective)
+    project, plan, gen, selective = comp.project, comp.plan, comp.gen, comp.selective
+    pe = comp.emitter
     f, init = pe.global_inits()
     for ip in plan.instances:
         init.append(f"{N.pou_prefix(ip.pou)}_init(&{ip.c_name});")
@@ -85,29 +66,19 @@ def render_sim(project, selective=None):
         for b in ip.bindings:
             init += b.lines(ip.c_name, lambda g: g.c_name)
         if selective is not None and selective.has_layout(ip.pou) and \
-                not selective.instance_selective(program_instance(project, ip)):
+                not selective.instance_selective(ip.inst):
             init.append(f"{ip.c_name}.sel.plain = 1;")
+
+    def call(ip):
+        if selective is not None and selective.has_layout(ip.pou):
+            run = f"{N.pou_prefix(ip.pou)}_run(&{ip.c_name}, ctx, true);"
+        else:
+            run = f"{N.pou_prefix(ip.pou)}_body(&{ip.c_name}, ctx);"
+        return [run, "if (ctx->fault != IEC_FAULT_NONE)", "\treturn;"]
+
     tasks = []
+    implicit = project.configurations[0].resources[0].node.name is None
     for tp in plan.tasks:
-        body = []
-        for ip in tp.instances:
-            cf, lines = pe.connection_inputs(ip)
-            block = cf.pre + lines
-            if selective is not None and selective.has_layout(ip.pou):
-                block.append(f"{N.pou_prefix(ip.pou)}_run(&{ip.c_name}, ctx, true);")
-            else:
-                block.append(f"{N.pou_prefix(ip.pou)}_body(&{ip.c_name}, ctx);")
-            block.append("if (ctx->fault != IEC_FAULT_NONE)")
-            block.append("\treturn;")
-            block += pe.connection_outputs(ip)
-            body.append(f"/* {ip.path} : {ip.pou.name} */")
-            if cf.decls:
-                body += ["{"] + ["\t" + d for d in cf.decls + block] + ["}"]
-            else:
-                body += block
-        if not body:
-            body = ["(void)ctx;"]
-        implicit = project.configurations[0].resources[0].node.name is None
         size = "16U"
         for need in sorted({frame_need(ip.pou) for ip in tp.instances}):
             size = f"IEC_FRAME_MAX({need}, {size})"
@@ -116,7 +87,8 @@ def render_sim(project, selective=None):
                       "interval": tp.interval_ns or 0, "priority": tp.priority,
                       "loop_budget": LOOP_BUDGET, "watchdog_ns": tp.watchdog_ns,
                       "watchdog_overruns": tp.watchdog_overruns,
-                      "single": f"&{tp.single.c_name}" if tp.single else "NULL", "body": body})
+                      "single": f"&{tp.single.c_name}" if tp.single else "NULL",
+                      "body": pe.task_run(tp, call)})
     vars_ = [{"path": N.c_string(e.path.encode()), "addr": f"&{e.c_lvalue}", "kind": e.kind,
               "size": e.size} for e in plan.table]
     pou_files = [{"pou": N.c_string(p.name.encode()), "path": N.c_string(p.src.path.encode())}
@@ -212,30 +184,11 @@ def runtime_objects(build_dir: Path, sanitize: bool = False) -> list:
     return objs
 
 
-def program_instance(project, ip):
-    """The checked model's ProgramInstance of an InstancePlan."""
-    from .codegen.plan import _qual
-    for r in project.configurations[0].resources:
-        for inst in r.programs:
-            if r.name == ip.resource and _qual(r, inst.name) == ip.path:
-                return inst
-    raise KeyError(ip.path)
-
-
-def selective_plan(project, selective):
-    """A SelectivePlan for ``--selective[=mode]`` (None or False: plain)."""
-    if not selective:
-        return None
-    from .codegen.selective import SelectivePlan
-    if isinstance(selective, SelectivePlan):
-        return selective
-    return SelectivePlan(project, "all" if selective is True else selective)
-
-
-def build(project, build_dir: Path, sanitize: bool = False, selective=None) -> Path:
-    """Compiles the simulator; returns the executable (cached by content).
-    *selective*: None, True/'all' or 'marked' (``--selective``)."""
-    files, plan = render_sim(project, selective_plan(project, selective))
+def build(what, build_dir: Path, sanitize: bool = False, selective=None):
+    """Compiles the simulator of *what* (a Compilation, or a checked project
+    and *selective*: None, True/'all' or 'marked'); returns (executable,
+    plan), the executable cached by content."""
+    files, plan = render_sim(what, selective)
     objs = runtime_objects(build_dir, sanitize)
     h = hashlib.sha256(__version__.encode() + (b"san" if sanitize else b""))
     for name in sorted(files):
@@ -262,105 +215,16 @@ def build(project, build_dir: Path, sanitize: bool = False, selective=None) -> P
     return exe, plan
 
 
-def parse_time(text: str) -> int:
-    """T#1.5s, TIME#100ms, 250ms, 1.5s, or a number of seconds."""
-    s = text.strip()
-    try:
-        if "#" in s:
-            kind, value, _ = classify(s)
-            if kind != "time":
-                raise ValueError
-            return value
-        for unit in ("ms", "us", "ns", "s", "m", "h", "d"):
-            if s.lower().endswith(unit) and s[:-len(unit)].replace(".", "", 1).isdigit():
-                return parse_duration(s)
-        return round(float(s) * 1e9)
-    except (LiteralError, ValueError):
-        raise SimError(f"'{text}' is not a time (write T#100ms, 100ms or 0.1)") from None
-
-
-def value_for(entry, text: str):
-    """(kind, value) of an IEC literal for a variable of the table."""
-    s = text.strip()
-    try:
-        t = concrete(entry.type)
-        if isinstance(t, EnumT):
-            name = s.split("#")[-1].upper()
-            if name not in t.values:
-                raise ValueError(f"'{s}' is not a value of {t.name}")
-            return "i", t.values[name][1]
-        sign = 1
-        if s[:1] in "+-" and "#" not in s:
-            sign, s = (-1 if s[0] == "-" else 1), s[1:].strip()
-        kind, value, _ = classify(s)
-        if sign < 0 and kind in ("int", "real"):
-            value = -value
-    except (LiteralError, ValueError, IndexError) as exc:
-        raise SimError(f"invalid value '{text}' for {entry.path}: {exc}") from None
-    if entry.kind == "f":
-        if kind not in ("int", "real"):
-            raise SimError(f"{entry.path} is REAL: '{text}' is not a number")
-        return "f", float(value)
-    if entry.kind in ("s", "w"):
-        raise SimError(f"{entry.path}: string inputs are not supported by the simulator")
-    if kind == "bool" or (entry.kind == "b" and kind == "int" and value in (0, 1)):
-        return "i", int(value)
-    if kind in ("int", "time", "date", "tod", "dt"):
-        if entry.kind == "b":
-            raise SimError(f"{entry.path} is BOOL: '{text}' is not TRUE/FALSE")
-        rng = _int_range(entry.type) if kind == "int" else None
-        if rng is not None and not rng[0] <= int(value) <= rng[1]:
-            # as plc-manager write refuses it: never wrapped silently
-            raise SimError(f"invalid value '{text}' for {entry.path}: out of range "
-                           f"{rng[0]}..{rng[1]}")
-        return "i", int(value)
-    raise SimError(f"invalid value '{text}' for {entry.path}")
-
-
-def _int_range(t):
-    """(low, high) of an integer, bit string or subrange type; None otherwise."""
-    t = concrete(t)
-    if isinstance(t, SubrangeT):
-        return t.low, t.high
-    return t.range if isinstance(t, Elementary) else None
-
-
-def read_trace(path: str, plan):
-    """Input events from a CSV trace: time,variable,value (header optional)."""
-    index = {e.path.upper(): i for i, e in enumerate(plan.table)}
-    events = []
-    try:
-        with open(path, newline="") as fh:
-            for n, row in enumerate(csv.reader(fh), 1):
-                if not row or row[0].strip().startswith("#"):
-                    continue
-                if n == 1 and row[0].strip().lower() == "time":
-                    continue
-                if len(row) != 3:
-                    raise SimError(f"{path}:{n}: expected time,variable,value")
-                i = index.get(row[1].strip().upper())
-                if i is None:
-                    raise SimError(f"{path}:{n}: unknown variable '{row[1].strip()}'")
-                e = plan.table[i]
-                if not e.writable:
-                    raise SimError(f"{path}:{n}: '{e.path}' cannot be written")
-                try:
-                    kind, value = value_for(e, row[2])
-                    t = parse_time(row[0])
-                except SimError as exc:
-                    raise SimError(f"{path}:{n}: {exc}") from None
-                events.append((t, n, i, kind, value))
-    except OSError as exc:
-        raise SimError(f"{path}: {exc.strerror}") from None
-    events.sort(key=lambda ev: (ev[0], ev[1]))
-    return events
-
-
-def run(project, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=False,
+def run(what, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=False,
         timeout=600, selective=None) -> SimResult:
+    """Runs the simulator of *what* (a Compilation, or a checked project
+    and *selective* as for build) from 0 to end_ns of simulated time."""
     build_dir = Path(build_dir or (Path(os.environ.get("IEC2KMOD_CACHE") or
                                         Path.home() / ".cache" / "iec2kmod") / "sim"))
-    exe, plan = build(project, build_dir, sanitize, selective)
+    try:
+        exe, plan = build(what, build_dir, sanitize, selective)
+    except CompileError as exc:
+        raise SimError(str(exc)) from None
     index = {e.path.upper(): i for i, e in enumerate(plan.table)}
     if watch:
         idx = []
@@ -371,7 +235,10 @@ def run(project, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=
             idx.append(i)
     else:
         idx = [i for i, e in enumerate(plan.table) if e.owner == "global" or e.owner == "direct"]
-    events = read_trace(inputs, plan) if inputs else []
+    try:
+        events = read_trace(inputs, plan.table) if inputs else []
+    except TraceError as exc:
+        raise SimError(str(exc)) from None
     ev_path = exe.parent / f"events.{os.getpid()}.txt"
     with open(ev_path, "w") as fh:
         for t, _, i, kind, value in events:
@@ -423,79 +290,3 @@ def _decode(entry, text):
                 return name
         return v
     return int(text)
-
-
-def format_value(entry_type, v):
-    if isinstance(v, bool):
-        return "TRUE" if v else "FALSE"
-    return str(v)
-
-
-def write_csv(res: SimResult, path):
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["time_ns"] + res.names)
-        cur = [""] * len(res.names)
-        i = 0
-        ch = res.changes
-        while i < len(ch):
-            t = ch[i][0]
-            while i < len(ch) and ch[i][0] == t:
-                cur[ch[i][1]] = format_value(None, ch[i][2])
-                i += 1
-            w.writerow([t] + cur)
-
-
-def write_vcd(res: SimResult, path, plan=None):
-    ids = [_vcd_id(k) for k in range(len(res.names))]
-    kinds = {}
-    if plan is not None:
-        by_path = {e.path: e for e in plan.table}
-        kinds = {n: by_path[n] for n in res.names if n in by_path}
-    with open(path, "w") as fh:
-        fh.write(f"$date iec2kmod sim $end\n$version iec2kmod {__version__} $end\n"
-                 "$timescale 1ns $end\n$scope module plc $end\n")
-        for n, vid in zip(res.names, ids):
-            e = kinds.get(n)
-            if e is not None and e.kind == "b":
-                fh.write(f"$var wire 1 {vid} {_vcd_name(n)} $end\n")
-            elif e is not None and e.kind == "f":
-                fh.write(f"$var real 64 {vid} {_vcd_name(n)} $end\n")
-            elif e is not None and e.kind in ("s", "w"):
-                fh.write(f"$var string 1 {vid} {_vcd_name(n)} $end\n")
-            else:
-                bits = e.size * 8 if e is not None else 64
-                fh.write(f"$var integer {bits} {vid} {_vcd_name(n)} $end\n")
-        fh.write("$upscope $end\n$enddefinitions $end\n")
-        last_t = None
-        for t, i, v in res.changes:
-            if t != last_t:
-                fh.write(f"#{t}\n")
-                last_t = t
-            e = kinds.get(res.names[i])
-            if isinstance(v, bool):
-                fh.write(f"{int(v)}{ids[i]}\n")
-            elif isinstance(v, float):
-                fh.write(f"r{v!r} {ids[i]}\n")
-            elif isinstance(v, str) and (e is None or e.kind != "e"):
-                fh.write(f"s{v.replace(' ', '_') or '_'} {ids[i]}\n")
-            elif isinstance(v, str):
-                fh.write(f"s{v} {ids[i]}\n")
-            else:
-                bits = e.size * 8 if e is not None else 64
-                fh.write(f"b{v & ((1 << bits) - 1):b} {ids[i]}\n")
-        fh.write(f"#{res.end_ns}\n")
-
-
-def _vcd_id(k):
-    chars = [chr(c) for c in range(33, 127)]
-    out = ""
-    k += 1
-    while k:
-        k, r = divmod(k - 1, len(chars))
-        out = chars[r] + out
-    return out
-
-
-def _vcd_name(n):
-    return n.replace("[", "(").replace("]", ")").replace(",", "_").replace("%", "")

@@ -23,14 +23,6 @@ MAX_PRIORITY = 48   # IEC 0 (most urgent) .. 48 -> SCHED_FIFO 49 .. 1
 # (0 or absent: no such limit).  Without a pragma: WATCHDOG_DEFAULT_NS and
 # no overrun limit.
 WATCHDOG_DEFAULT_NS = 5_000_000_000
-# The simulated clock (`iec2kmod sim`, both engines): a cycle takes no time
-# on the clock that releases the tasks, but for the watchdog each loop
-# iteration costs SIM_ITERATION_NS of simulated execution time (everything
-# else costs nothing).  The watchdog faults the iteration that would end
-# past the watchdog time; a cycle whose simulated time exceeds the task's
-# INTERVAL is an overrun.  Deterministic, and the same in both engines: they
-# count iterations as the loop budget does.
-SIM_ITERATION_NS = 100
 WATCHDOG_MAX_OVERRUNS = 1_000_000
 _WATCHDOG_PRAGMA = re.compile(r"\{\s*watchdog\b([^}]*)\}\s*\Z", re.I)
 _WATCHDOG_ANY = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"

@@ -131,7 +131,11 @@ def source_list(project):
 
 def generate(project, name: str | None = None, selective=None) -> GeneratedC:
     """C for every user POU of the project; *selective* is a
-    selective.SelectivePlan (None: plain code)."""
+    selective.SelectivePlan (None: plain code) whose rule 8 questions are
+    answered (iec2kmod.compilation makes it so)."""
+    if selective is not None and not selective.settled:
+        raise ValueError("a selective plan whose idempotence questions are not answered "
+                         "(make it with iec2kmod.compilation.selective_plan)")
     env = _env()
     cfg = project.configurations[0].name if project.configurations else (name or "project")
     guard = f"IEC_{cfg.upper()}_TYPES"

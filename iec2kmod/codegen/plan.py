@@ -9,14 +9,13 @@ from dataclasses import dataclass, field
 
 from .. import ast
 from ..checks.symbols import Each, POUInfo, Var
-from ..checks.types import (ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT,
+from ..checks.types import (ArrayT, EnumT, FBType, StringT, StructT, SubrangeT,
                             concrete)
+from ..execmodel import MAX_TABLE_ELEMENTS, kind_of
 from . import cnames as N
-from .body import BodyEmitter
-from .expr import BindingError, Frame
+from .body import BodyEmitter, copy_value
+from .expr import BindingError, Frame, Raw
 from .pou import InitEmitter, pointer_members
-
-MAX_TABLE_ELEMENTS = 256   # array/struct elements listed per variable
 
 
 @dataclass
@@ -39,6 +38,7 @@ class InstancePlan:
     externals: list = field(default_factory=list) # (member, global C name, is array)
     bindings: list = field(default_factory=list)  # [PointerBinding], complete (check_bindings)
     config_inits: list = field(default_factory=list)  # (member path, IEC type, init AST)
+    inst: object = None  # the checked model's ProgramInstance (checks/config.py)
 
 
 @dataclass
@@ -137,7 +137,8 @@ def build_plan(project) -> Plan:
             rtasks[t.name.upper()] = tp
         for inst in r.programs:
             ip = InstancePlan(_qual(r, inst.name), "inst_" + _c_ident(r.name, inst.name),
-                              inst.pou, r.name, inst.task.name if inst.task else None)
+                              inst.pou, r.name, inst.task.name if inst.task else None,
+                              inst=inst)
             for key, g in inst.externals.items():
                 ext = inst.pou.vars[key]
                 ip.externals.append((N.var(ext.name), by_var[id(g)].c_name,
@@ -254,20 +255,6 @@ def _direct_c_name(address: str) -> str:
     return "d_" + address[1:].replace(".", "_").replace("*", "x").lower()
 
 
-def kind_of(t) -> str | None:
-    t = concrete(t)
-    if isinstance(t, EnumT):
-        return "e"
-    if isinstance(t, SubrangeT):
-        t = t.elem
-    if isinstance(t, StringT):
-        return "w" if t.wide else "s"
-    if not isinstance(t, Elementary):
-        return None
-    return {"bool": "b", "sint": "i", "uint": "u", "bit": "u", "real": "f", "time": "t",
-            "date": "t", "tod": "t", "dt": "t"}[t.cat]
-
-
 def _size(t) -> int:
     t = concrete(t)
     if isinstance(t, SubrangeT):
@@ -353,25 +340,40 @@ class PlanEmitter:
             lines += self.ie.lines(g.c_name, g.var.type, g.var.init, f)
         return f, lines
 
-    def connection_inputs(self, ip: InstancePlan):
-        """Statements copying connected values into a program instance."""
-        be = BodyEmitter(POUInfo("PROGRAM", ip.pou.name, src=ip.pou.src))
+    def connection_inputs(self, ip: InstancePlan, image=lambda c_name: c_name, owner=None):
+        """Statements copying connected values into a program instance:
+        (Frame, lines).  *image*(C name) is where a global or a directly
+        represented variable is read (the simulator: the object itself; a
+        kernel task: its copy in the task's image); *owner* the POUInfo the
+        statements' fault sites name (default: the program's)."""
+        be = BodyEmitter(owner or POUInfo("PROGRAM", ip.pou.name, src=ip.pou.src))
         f = Frame(be)
         lines = []
         for member, t, value in ip.inputs:
             dst = f"{ip.c_name}.{member}"
             if isinstance(value, ast.Ref) and id(value.symbol) in self.by_var:
-                src = self.by_var[id(value.symbol)].c_name
-                from .expr import Raw
+                src = image(self.by_var[id(value.symbol)].c_name)
                 lines += be.assign_code(f, dst, t, Raw(src, value.symbol.type))
             elif isinstance(value, ast.Direct):
-                from .expr import Raw
-                lines += be.assign_code(f, dst, t, Raw(_direct_c_name(value.address), t))
+                lines += be.assign_code(f, dst, t, Raw(image(_direct_c_name(value.address)), t))
             else:
                 lines += be.assign_code(f, dst, t, value)
         return f, lines
 
     @staticmethod
-    def connection_outputs(ip: InstancePlan):
-        from .body import copy_value
-        return [copy_value(gname, f"{ip.c_name}.{member}", t) for gname, member, t in ip.outputs]
+    def connection_outputs(ip: InstancePlan, image=lambda c_name: c_name):
+        return [copy_value(image(gname), f"{ip.c_name}.{member}", t)
+                for gname, member, t in ip.outputs]
+
+    def task_run(self, tp: TaskPlan, call, image=lambda c_name: c_name, owner=None):
+        """The body of task *tp*'s run function: for each program instance,
+        in order, its connected inputs copied in, *call*(ip) (the lines
+        that run it and return on a fault), its outputs copied out;
+        *image* and *owner* as for connection_inputs."""
+        body = []
+        for ip in tp.instances:
+            cf, lines = self.connection_inputs(ip, image, owner)
+            block = cf.pre + lines + call(ip) + self.connection_outputs(ip, image)
+            body.append(f"/* {ip.path} : {ip.pou.name} */")
+            body += (["{"] + ["\t" + d for d in cf.decls + block] + ["}"]) if cf.decls else block
+        return body or ["(void)ctx;"]

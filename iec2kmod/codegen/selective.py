@@ -204,6 +204,20 @@ class BlockInfo:
         return self.reason is None
 
 
+@dataclass
+class SettleQuestion:
+    """Rule 8 asked of one block type: which groups of its written state
+    (``groups``: [[leaf path]], ``$self.<name>...``) must a full evaluation
+    compare so that it settles the block, given its VAR_EXTERNALs
+    (``externals``) and the POUs it uses (``closure``)?  Answered by the
+    idempotence analysis (verify/idempotent.py, run by the driver)."""
+    key: str
+    pou: object
+    externals: list
+    closure: list
+    groups: list
+
+
 class SelectivePlan:
     """The decisions of the pass for one project."""
 
@@ -226,13 +240,32 @@ class SelectivePlan:
                 self.blocks[pou.key] = self._analyse(pou)
         for b in self.blocks.values():
             b.layout = b.skippable and self._type_wanted(b.pou)
-        self._prover = None
+        # rule 8's questions, answered by an analysis the driver runs
+        # (iec2kmod/compilation.py): this module decides on data only
+        self.questions = []               # [SettleQuestion]
         for b in self.blocks.values():
             if b.layout:
                 b.written = self._written(b.pou)
                 closure, _ = self._closure(b.pou)
                 b.leaf = all(p is b.pou or p.kind == "FUNCTION" for p in closure)
                 self._settle(b)
+        self.settled = not self.questions
+
+    def settle(self, answers: dict) -> None:
+        """Rule 8's answers: {POU key: (keep, note)} for every question of
+        ``questions`` (keep: [] idempotent, the indexes of the groups to
+        compare, or None: not proved; note: why not idempotent)."""
+        for q in self.questions:
+            keep, note = answers[q.key]
+            b = self.blocks[q.key]
+            if keep == []:
+                b.idempotent = True
+                b.written = []
+                continue
+            b.idem_note = note
+            if keep is not None and q.groups:
+                b.written = [b.written[i] for i in keep]
+        self.settled = True
 
     # ------------------------------------------------------------ pragmas
     def _read_pragmas(self):
@@ -393,9 +426,6 @@ class SelectivePlan:
         if why:
             b.idem_note = why
             return
-        if self._prover is None:
-            from ..verify.idempotent import Prover
-            self._prover = Prover(self.project)
         closure, _ = self._closure(pou)
         exts = [v for _, v in b.exts if v.section == "VAR_EXTERNAL"]
         groups = []
@@ -437,14 +467,7 @@ class SelectivePlan:
                     groups.append([f"$self.${v.name}"])
                 else:
                     groups.append([])     # the edge an input saw: set by every call
-        keep, note = self._prover.settle_set(pou, exts, closure, groups)
-        if keep == []:
-            b.idempotent = True
-            b.written = []
-            return
-        b.idem_note = note
-        if keep is not None and groups:
-            b.written = [b.written[i] for i in keep]
+        self.questions.append(SettleQuestion(pou.key, pou, exts, closure, groups))
 
     def _settle_refused(self, b):
         pou = b.pou

@@ -22,24 +22,19 @@ Cycle model (IEC 61131-3 ed.3, 6.8.2 and the simulator's contract):
 
 from __future__ import annotations
 
-import csv
 import struct
 from dataclasses import dataclass, field
 
 from .. import ast
-from ..checks.types import ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, concrete
-from ..literals import LiteralError, classify, parse_duration
+from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, concrete
 from .compiler import PouCompiler
-from ..checks.config import SIM_ITERATION_NS
+from ..execmodel import LOOP_BUDGET, MAX_TABLE_ELEMENTS, SIM_ITERATION_NS, kind_of
+from ..traces import Trace, TraceError, read_trace
 from .errors import LOOP, OVERRUN, WATCHDOG, Fault, VMError
 from .fbs import body_of
 from .model import Initializer, Instance, copier, copy_of
-from .values import base_of, f32, int_range, wrap, wrap64
+from .values import base_of, f32, wrap, wrap64
 
-# the kernel's per-cycle loop budget (iec2kmod.kmod.DEFAULT_LOOP_BUDGET; a
-# test checks that both agree)
-LOOP_BUDGET = 1_000_000
-MAX_TABLE_ELEMENTS = 256
 
 
 class Runtime:
@@ -53,24 +48,8 @@ class Runtime:
         self.budget = LOOP_BUDGET
 
 
-@dataclass
-class VMResult:
-    """The same shape as the C simulator's result (iec2kmod.sim.SimResult)."""
-
-    names: list
-    changes: list
-    faults: list = field(default_factory=list)
-    cycles: dict = field(default_factory=dict)
-    end_ns: int = 0
-    stderr: str = ""
-
-    def values_at(self, t_ns=None):
-        out = {}
-        for t, i, v in self.changes:
-            if t_ns is not None and t > t_ns:
-                break
-            out[self.names[i]] = v
-        return out
+# a run, as the C simulator reports it too
+VMResult = Trace
 
 
 @dataclass
@@ -101,20 +80,6 @@ class Entry:
             if isinstance(c, Instance):
                 c = c.v
         c[self.keys[-1]] = v
-
-
-def kind_of(t):
-    t = concrete(t)
-    if isinstance(t, EnumT):
-        return "e"
-    if isinstance(t, SubrangeT):
-        t = t.elem
-    if isinstance(t, StringT):
-        return "w" if t.wide else "s"
-    if not isinstance(t, Elementary):
-        return None
-    return {"bool": "b", "sint": "i", "uint": "u", "bit": "u", "real": "f", "time": "t",
-            "date": "t", "tod": "t", "dt": "t"}[t.cat]
 
 
 def size_of(t):
@@ -416,93 +381,6 @@ def present(entry, v):
     return v
 
 
-# ------------------------------------------------------------ traces
-def parse_time(text: str) -> int:
-    s = text.strip()
-    try:
-        if "#" in s:
-            kind, value, _ = classify(s)
-            if kind != "time":
-                raise ValueError
-            return value
-        for unit in ("ms", "us", "ns", "s", "m", "h", "d"):
-            if s.lower().endswith(unit) and s[:-len(unit)].replace(".", "", 1).isdigit():
-                return parse_duration(s)
-        return round(float(s) * 1e9)
-    except (LiteralError, ValueError):
-        raise VMError(f"'{text}' is not a time (write T#100ms, 100ms or 0.1)") from None
-
-
-def value_for(entry, text: str):
-    s = text.strip()
-    try:
-        t = concrete(entry.type)
-        if isinstance(t, EnumT):
-            name = s.split("#")[-1].upper()
-            if name not in t.values:
-                raise ValueError(f"'{s}' is not a value of {t.name}")
-            return "i", t.values[name][1]
-        sign = 1
-        if s[:1] in "+-" and "#" not in s:
-            sign, s = (-1 if s[0] == "-" else 1), s[1:].strip()
-        kind, value, _ = classify(s)
-        if sign < 0 and kind in ("int", "real"):
-            value = -value
-    except (LiteralError, ValueError, IndexError) as exc:
-        raise VMError(f"invalid value '{text}' for {entry.path}: {exc}") from None
-    if entry.kind == "f":
-        if kind not in ("int", "real"):
-            raise VMError(f"{entry.path} is REAL: '{text}' is not a number")
-        return "f", float(value)
-    if entry.kind in ("s", "w"):
-        raise VMError(f"{entry.path}: string inputs are not supported by the simulator")
-    if kind == "bool" or (entry.kind == "b" and kind == "int" and value in (0, 1)):
-        return "i", int(value)
-    if kind in ("int", "time", "date", "tod", "dt"):
-        if entry.kind == "b":
-            raise VMError(f"{entry.path} is BOOL: '{text}' is not TRUE/FALSE")
-        t = concrete(entry.type)
-        rng = ((t.low, t.high) if isinstance(t, SubrangeT) else
-               int_range(t) if kind == "int" else None)
-        if kind == "int" and rng is not None and not rng[0] <= int(value) <= rng[1]:
-            raise VMError(f"invalid value '{text}' for {entry.path}: out of range "
-                          f"{rng[0]}..{rng[1]}")
-        return "i", int(value)
-    raise VMError(f"invalid value '{text}' for {entry.path}")
-
-
-def read_trace(path: str, table):
-    index = {e.path.upper(): i for i, e in enumerate(table)}
-    events = []
-    try:
-        with open(path, newline="") as fh:
-            for n, row in enumerate(csv.reader(fh), 1):
-                if not row or row[0].strip().startswith("#"):
-                    continue
-                if n == 1 and row[0].strip().lower() == "time":
-                    continue
-                if len(row) != 3:
-                    raise VMError(f"{path}:{n}: expected time,variable,value")
-                i = index.get(row[1].strip().upper())
-                if i is None:
-                    raise VMError(f"{path}:{n}: unknown variable '{row[1].strip()}'")
-                e = table[i]
-                if not e.writable:
-                    raise VMError(f"{path}:{n}: '{e.path}' cannot be written")
-                try:
-                    kind, value = value_for(e, row[2])
-                    t = parse_time(row[0])
-                except VMError as exc:
-                    raise VMError(f"{path}:{n}: {exc}") from None
-                if kind == "f" and e.kind != "f":
-                    value = int(value)
-                events.append((t, n, i, value))
-    except OSError as exc:
-        raise VMError(f"{path}: {exc.strerror}") from None
-    events.sort(key=lambda ev: (ev[0], ev[1]))
-    return [(t, i, v) for t, _, i, v in events]
-
-
 _D = struct.Struct("<d")
 
 
@@ -521,8 +399,11 @@ def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> VMResult
             idx.append(i)
     else:
         idx = [i for i, e in enumerate(table) if e.owner in ("global", "direct")]
-    events = read_trace(inputs, table) if inputs else []
-    return m.schedule(table, idx, events, end_ns)
+    try:
+        events = read_trace(inputs, table) if inputs else []
+    except TraceError as exc:
+        raise VMError(str(exc)) from None
+    return m.schedule(table, idx, [(t, i, v) for t, _, i, _, v in events], end_ns)
 
 
 def _same(kind, a, b):

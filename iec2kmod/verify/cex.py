@@ -11,14 +11,13 @@ verifier chose, over whatever the previous cycle left there)."""
 
 from __future__ import annotations
 
-import csv
 import math
-from types import SimpleNamespace
 
 import z3
 
 from ..checks.types import EnumT, concrete
 from ..interp.model import Instance
+from ..traces import write_inputs
 from .encode import const_of, kind, py_value
 
 
@@ -84,12 +83,7 @@ def write_trace(out, result, path):
                 continue    # written from outside: again, over what the cycle wrote
             last[name] = v
             rows.append((f"{t}ns", name, format_value(leaves[name], v)))
-    # csv quoting: an element of a multi-dimensional array is 'a[0,5]'
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(("time", "variable", "value"))
-        w.writerows(rows)
-    return len(rows)
+    return write_inputs(path, rows)
 
 
 def _same(a, b):
@@ -161,7 +155,7 @@ def replay(out, result, trace_path, vcd_path=None):
     error) or the property is FALSE after cycle K."""
     from .. import interp
     from ..interp.machine import Machine
-    from ..sim import write_vcd
+    from ..traces import write_vcd
     project = out.sym.project
     period = out.sym.period
     end = (result.cycle - 1) * period
@@ -170,7 +164,7 @@ def replay(out, result, trace_path, vcd_path=None):
     watch = [e.path for e in table]
     res = interp.run(project, end, watch=watch, inputs=trace_path, machine=m)
     if vcd_path:
-        write_vcd(res, vcd_path, SimpleNamespace(table=table))
+        write_vcd(res, vcd_path, table)
     if result.name == "no runtime error":
         hits = [f for f in res.faults if f[0] == end]
         if hits:

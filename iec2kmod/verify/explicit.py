@@ -66,6 +66,7 @@ from ..interp.errors import Fault
 from ..interp.machine import Machine
 from ..interp.model import Instance
 from ..interp.values import base_of, int_range
+from ..traces import write_inputs
 
 DEFAULT_MAX_STATES = 200_000
 DEFAULT_MAX_INPUTS = 4096
@@ -633,7 +634,6 @@ def write_trace(out, result, path):
     """The input trace of a violation as `sim --inputs` CSV: step k's values
     at (k-1)*step, a value written when it changes (always, for a READ_WRITE
     access path: over what the cycles wrote)."""
-    import csv
     ex = out.explorer
     kinds = {e.path: (e, outside) for e, outside in ex.inputs}
     last = {}
@@ -647,19 +647,14 @@ def write_trace(out, result, path):
                 continue
             last[name] = v
             rows.append((f"{t}ns", name, format_value(e, v)))
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(("time", "variable", "value"))
-        w.writerows(rows)
-    return len(rows)
+    return write_inputs(path, rows)
 
 
 def replay(out, result, trace_path, vcd_path=None, cli_props=(), instance=None):
     """Runs the trace with `sim --engine vm`'s interpreter to (K-1)*step;
     (confirmed, message)."""
-    from types import SimpleNamespace
     from .. import interp
-    from ..sim import write_vcd
+    from ..traces import write_vcd
     ex = out.explorer
     end = (result.cycle - 1) * out.period
     m = Machine(ex.project)
@@ -667,7 +662,7 @@ def replay(out, result, trace_path, vcd_path=None, cli_props=(), instance=None):
     res = interp.run(ex.project, end, watch=[e.path for e in table], inputs=trace_path,
                      machine=m)
     if vcd_path:
-        write_vcd(res, vcd_path, SimpleNamespace(table=table))
+        write_vcd(res, vcd_path, table)
     if result.name == "no runtime error":
         hits = [f for f in res.faults if f[0] == end]
         if hits:

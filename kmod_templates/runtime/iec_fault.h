@@ -59,8 +59,12 @@ enum iec_fault_code {
 	IEC_FAULT__COUNT
 };
 
-/* Default iteration budget per cycle when the task sets none. */
-#define IEC_LOOP_BUDGET_DEFAULT	10000000U
+/*
+ * Default iteration budget per cycle when the task sets none: the one every
+ * generated task sets (iec2kmod/execmodel.py LOOP_BUDGET, checked by
+ * tests/unit/test_execmodel.py).
+ */
+#define IEC_LOOP_BUDGET_DEFAULT	1000000U
 
 struct iec_ctx {
 	iec_s64 now_ns;			/* time the task cycle started */

@@ -35,7 +35,7 @@
 
 #include "sim.h"
 
-#define SIM_ITERATION_NS 100LL	/* iec2kmod/checks/config.py SIM_ITERATION_NS */
+#define SIM_ITERATION_NS 100LL	/* iec2kmod/execmodel.py SIM_ITERATION_NS */
 
 struct event {
 	long long t;

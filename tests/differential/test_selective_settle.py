@@ -23,7 +23,7 @@ import pytest
 
 from iec2kmod import frontend, sim
 from iec2kmod.codegen.plan import build_plan
-from iec2kmod.codegen.selective import SelectivePlan
+from iec2kmod.compilation import selective_plan
 
 pytestmark = pytest.mark.execution
 
@@ -139,7 +139,7 @@ def test_settle_rule_on_random_loop_free_blocks(tmp_path):
         res = frontend.run([str(f)], use_cache=False)
         assert res.ok, [d.format() for d in res.diags.sorted()]
         project = res.project
-        plan = SelectivePlan(project, "all")
+        plan = selective_plan(project, "all")
         for b in plan.blocks.values():
             if b.pou.kind != "FUNCTION_BLOCK":
                 continue

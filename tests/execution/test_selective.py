@@ -20,7 +20,7 @@ import pytest
 from iec2kmod import frontend, sim
 from iec2kmod.codegen import generate
 from iec2kmod.codegen.plan import build_plan
-from iec2kmod.codegen.selective import SelectivePlan
+from iec2kmod.compilation import selective_plan
 
 pytestmark = pytest.mark.execution
 
@@ -153,7 +153,7 @@ END_PROGRAM
     a, b = _both(tmp_path, text, [(100, "go", "TRUE")], 600)
     rises = [t for t, i, v in b.changes if b.names[i] == "out" and v is True]
     assert rises == [300 * MS], rises
-    plan = SelectivePlan(_project(tmp_path, text), "all")
+    plan = selective_plan(_project(tmp_path, text), "all")
     report = "\n".join(plan.report())
     assert "function_block Delay: always evaluated: depends on time (contains TON)" in report
     assert "function_block Latch: selective" in report
@@ -346,7 +346,7 @@ END_CONFIGURATION
     ev, sk = marked.selective["r.t"]
     assert ev + sk == cycles and sk >= cycles - 4, marked.selective
     project = _project(tmp_path, text)
-    plan = SelectivePlan(project, "marked")
+    plan = selective_plan(project, "marked")
     main = project.pous["MAIN"]
     kinds = {v.name: plan.call_kind(main, v) for v in main.vars.values()
              if v.section == "VAR"}
@@ -390,8 +390,8 @@ def test_generated_code_deterministic_and_plain_unchanged(tmp_path):
     """The selective C is the same bytes every time; without --selective
     nothing of it appears (the plain output is the plain output)."""
     project = _project(tmp_path, (ROOT / "examples" / "hvac" / "hvac.st").read_text())
-    one = generate(project, selective=SelectivePlan(project, "all"))
-    two = generate(project, selective=SelectivePlan(project, "all"))
+    one = generate(project, selective=selective_plan(project, "all"))
+    two = generate(project, selective=selective_plan(project, "all"))
     plain = generate(project)
     assert one.header == two.header and one.bodies == two.bodies
     assert "sel" in one.header and "_run(" in "".join(b for _, b in one.bodies.values())
@@ -477,7 +477,7 @@ out := d.st + d.w + d.latch;
 END_PROGRAM
 """ + CONFIG.format(globals="x : INT; fa, fb : BOOL; out : INT;")
     project = _project(tmp_path, text)
-    plan = SelectivePlan(project, "all")
+    plan = selective_plan(project, "all")
     dev = next(b for b in plan.blocks.values() if b.pou.name == "Dev")
     assert [m for m, _ in plan._written(dev.pou)] == ["v_latch", "v_first"]
     # rule 8 narrows it further: latch := first changes nothing a second
@@ -566,7 +566,7 @@ def test_idempotent_block_settles_in_one_evaluation(tmp_path):
     fast one, rule 4, and the one after it settles).  Without rule 8:
     24 evaluations."""
     project = _project(tmp_path, IDEMPOTENT)
-    plan = SelectivePlan(project, "all")
+    plan = selective_plan(project, "all")
     guard = next(b for b in plan.blocks.values() if b.pou.name == "Guard")
     main = next(b for b in plan.blocks.values() if b.pou.name == "Main")
     assert guard.idempotent and guard.written == [], guard.idem_note
@@ -607,7 +607,7 @@ def test_edge_detector_inside_a_block_is_not_idempotent(tmp_path):
     evaluation changes nothing when the memory stayed).
     Taking it for idempotent would leave p.t.Q TRUE in the trace."""
     project = _project(tmp_path, EDGE)
-    plan = SelectivePlan(project, "all")
+    plan = selective_plan(project, "all")
     pulse = next(b for b in plan.blocks.values() if b.pou.name == "Pulse")
     assert not pulse.idempotent and "$self.t.Q" in pulse.idem_note, pulse.idem_note
     assert [m for m, _ in pulse.written] == ["v_t.prev"], pulse.written
@@ -644,7 +644,7 @@ def test_second_evaluation_that_faults_is_not_idempotent(tmp_path):
     faults too.  Plain execution faults in the second cycle; so must the
     selective one."""
     project = _project(tmp_path, FAULT_LATER)
-    plan = SelectivePlan(project, "all")
+    plan = selective_plan(project, "all")
     arm = next(b for b in plan.blocks.values() if b.pou.name == "Arm")
     assert not arm.idempotent and arm.idem_note == "a second evaluation changes a fault", \
         arm.idem_note
@@ -684,7 +684,7 @@ f(x := r);
 p(x := 3);
 END_PROGRAM
 """ + CONFIG.format(globals="g : INT; r : REAL;")
-    plan = SelectivePlan(_project(tmp_path, text), "all")
+    plan = selective_plan(_project(tmp_path, text), "all")
     notes = {b.pou.name: b.idem_note for b in plan.blocks.values()}
     assert notes["Loopy"].startswith("a loop"), notes
     assert "REAL" in notes["Flt"], notes

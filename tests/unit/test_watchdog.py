@@ -21,7 +21,8 @@ from pathlib import Path
 import pytest
 
 from iec2kmod import frontend, interp, sim
-from iec2kmod.checks.config import SIM_ITERATION_NS, WATCHDOG_DEFAULT_NS
+from iec2kmod.checks.config import WATCHDOG_DEFAULT_NS
+from iec2kmod.execmodel import SIM_ITERATION_NS
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -1,0 +1,371 @@
+"""Writing the kbuild tree of a Compilation (`iec2kmod gen PROJECT -o OUT`):
+
+    OUT/Makefile               builds every module (config first, then the
+                               others with its Module.symvers)
+    OUT/manifest.json          what the manager needs: modules, load order,
+                               resources, tasks, GFT slots, variables
+    OUT/runtime/               the runtime C and headers, copied
+    OUT/include/               the project header and the image header
+    OUT/<module>/Kbuild        one directory per module
+
+What goes into which module is decided by kmod/split.py (the
+Compilation's ``modules``); this module renders and writes."""
+
+from __future__ import annotations
+
+import re
+import shutil
+from pathlib import Path
+
+from jinja2 import Environment, FileSystemLoader, StrictUndefined
+
+from .. import __version__
+from ..checks.types import EnumT, StringT, concrete
+from ..codegen import cnames as N
+from ..codegen.body import copy_value
+from ..codegen.expr import Frame
+from ..codegen.plan import unbound_pointer_check
+from ..codegen.pou import InitEmitter
+from ..execmodel import LOOP_BUDGET
+from .manifest import manifest_digest, manifest_of, manifest_text
+from .split import _code, _global_c_names, _globals_by_c, _sha, interface_description
+
+RUNTIME_HEADERS = ("iec_platform.h", "iec_types.h", "iec_fault.h", "iec_int.h", "iec_conv.h",
+                   "iec_time.h", "iec_string.h", "iec_std_fb.h", "iec_real.h", "iec_gen.h")
+FP_FLAGS = "-mhard-float -msse -msse2 -fno-math-errno"
+
+
+def _env():
+    from kmod_templates import ROOT
+    return Environment(loader=FileSystemLoader([str(ROOT / "kernel"), str(ROOT / "c")]),
+                       undefined=StrictUndefined, keep_trailing_newline=True,
+                       trim_blocks=True, lstrip_blocks=True)
+
+
+def generate_tree(what, out: Path, selective=None) -> dict:
+    """Writes the kbuild tree of *what* (a Compilation, or a checked
+    project with *selective* as for compilation.selective_plan); returns
+    the manifest.  The cyclic garbage collector is off meanwhile: the
+    generator allocates as it walks the checked project's millions of
+    objects and makes no garbage cycles, and the collector's rescans of
+    them were a third of the time of `gen`."""
+    import gc
+    from ..compilation import Compilation
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return write_tree(Compilation.of(what, selective), Path(out))
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
+def write_tree(comp, out: Path) -> dict:
+    """Writes the kbuild tree of Compilation *comp*; returns the manifest."""
+    from kmod_templates import ROOT
+    env = _env()
+    project, sel, plan, gen, mp = comp.project, comp.selective, comp.plan, comp.gen, comp.modules
+    cfg = project.configurations[0]
+
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "runtime").mkdir(exist_ok=True)
+    (out / "include").mkdir(exist_ok=True)
+    for f in list((ROOT / "runtime").glob("*.[ch]")) + list((ROOT / "kernel").glob("*.[ch]")):
+        shutil.copyfile(f, out / "runtime" / f.name)
+    (out / "include" / gen.header_name).write_text(gen.header)
+    for key in gen.order:
+        name, text = gen.bodies[key]
+        (out / "include" / name).write_text(text)
+
+    # ------------------------------------------------- program types
+    prog_modules = []
+    for pm in mp.programs:
+        pou, deps, fpu = pm.pou, pm.deps, pm.uses_fpu
+        prefix = N.pou_prefix(pou)
+        sel_token = None
+        if sel is not None:
+            from ..codegen.selective import token_define
+            sel_token = token_define([_code(t) for t in [gen.header] +
+                                      [gen.bodies[p.key][1] for p in deps]])
+        body = env.get_template("program_body.c.j2").render(
+            type=pou.name, header=gen.header_name, bodies=[gen.bodies[p.key][0] for p in deps],
+            prefix=prefix, uses_fpu=fpu, version=__version__, sel_token=sel_token,
+            frame_rows=pm.frame_rows, frame_need=pm.frame_need,
+            call=f"{prefix}_run(self, ctx, true)" if pm.selective else f"{prefix}_body(self, ctx)")
+        # the code only: comments name the sources and change with any edit
+        build_id = _sha(*[_code(t) for t in [body, gen.header] +
+                          [gen.bodies[p.key][1] for p in deps]])[:8]
+        mod = pm.name(build_id)
+        main = env.get_template("program_main.c.j2").render(
+            type=pou.name, type_upper=pou.name.upper(), build_id=build_id, config=cfg.name,
+            header=gen.header_name, prefix=prefix, iface_hash=pm.iface_hash, uses_fpu=fpu,
+            version=__version__, source_hash=mp.source_hash)
+        # The FPU flags exactly where the body runs between kernel_fpu_begin()
+        # and kernel_fpu_end() (.uses_fpu, iec2kmod_run_program): with them
+        # gcc copies and zeroes structures through %xmm registers, which
+        # outside such a section are the interrupted user process's
+        fp_objs = ["body.o"] if fpu else []
+        fp_runtime = [f for f in ("iec_math.c", "iec_real.c") if (ROOT / "runtime" / f).exists()]
+        runtime = _runtime_used([main, body, gen.header] + [gen.bodies[p.key][1] for p in deps],
+                                fpu)
+        if fpu:
+            fp_objs += [f[:-2] + ".o" for f in fp_runtime]
+            runtime += fp_runtime
+        _write_module(out, mod, {"main.c": main, "body.c": body},
+                      ["main.o", "body.o"] + [f[:-2] + ".o" for f in runtime], fp_objs,
+                      runtime=runtime)
+        prog_modules.append({"name": mod, "kind": "program", "program_type": pou.name,
+                             "slot": pm.slot, "build_id": build_id,
+                             "interface_hash": pm.iface_hash, "uses_fpu": fpu, "dir": mod,
+                             "interface": interface_description(pou)})
+
+    # ------------------------------------------------- configuration module
+    image_members = []
+    for g in mp.config_globals:
+        image_members.append(N.declare(g.var.type, g.c_name))
+    for c_name, t in plan.directs.values():
+        image_members.append(N.declare(t, c_name))
+    image_h = env.get_template("image.h.j2").render(config=cfg.name, version=__version__,
+                                                    members=image_members)
+    (out / "include" / "iec_image.h").write_text(image_h)
+    ie = InitEmitter(project)
+    f = Frame(ie.body_emitter())
+    init = []
+    for g in mp.config_globals:
+        init += ie.lines(f"iec2kmod_image.{g.c_name}", g.var.type, g.var.init, f)
+    cfg_enums: dict = {}
+    cfg_vars = [{"path": N.c_string(e.path.encode()), "member": e.c_lvalue, "kind": e.kind,
+                 "writable": int(e.writable), "event": event,
+                 "checks": _desc_checks(e, cfg_enums)} for e, event in mp.config_vars]
+    slots = [{"name": pm.pou.name.upper(), "hash": pm.iface_hash} for pm in mp.programs]
+    main = env.get_template("config_main.c.j2").render(
+        config=cfg.name, config_lower=cfg.name.lower(), version=__version__,
+        source_hash=mp.source_hash, iface_hash=mp.iface_hash, header=gen.header_name,
+        image_header="iec_image.h", slots=slots, vars=cfg_vars, nevents=len(mp.single_events),
+        enum_sets=_enum_sets(cfg_enums),
+        init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init)
+    runtime = ["iec_config_rt.c", "iec_ctl.c", "iec_vars.c"] + _runtime_used([main, image_h], False)
+    _write_module(out, mp.config_module, {"main.c": main},
+                  ["main.o"] + [f[:-2] + ".o" for f in runtime], [], runtime=runtime)
+
+    # ------------------------------------------------- resource modules
+    res_modules = []
+    for rm in mp.resources:
+        text = _resource_source(env, comp, rm)
+        runtime = _runtime_used([text, gen.header], False)
+        _write_module(out, rm.name, {"main.c": text}, ["main.o"] + [f[:-2] + ".o" for f in runtime],
+                      [], runtime=runtime)
+        res_modules.append({"name": rm.name, "kind": "resource", "resource": rm.resource.name,
+                            "dir": rm.name, "cpu": rm.cpu})
+
+    manifest = manifest_of(cfg, plan, mp.config_module, prog_modules, res_modules,
+                           mp.source_hash, mp.iface_hash)
+    manifest["digest"] = manifest_digest(manifest)
+    (out / "manifest.json").write_text(manifest_text(manifest))
+    modules = [mp.config_module] + [m["name"] for m in prog_modules] + \
+        [m["name"] for m in res_modules]
+    (out / "Makefile").write_text(_top_makefile())
+    (out / "Kbuild").write_text(
+        "# SPDX-License-Identifier: GPL-2.0-only OR MIT\n"
+        f"# Every module of configuration {cfg.name}; generated by iec2kmod {__version__}.\n"
+        + "".join(f"obj-m += {m}/\n" for m in modules))
+    return manifest
+
+
+# Calls into the runtime's out-of-line parts: iec_string.c (every STRING and
+# WSTRING function and conversion has str or char in its name) and
+# iec_std_fb.c (the standard function blocks' bodies; their _init functions
+# are inline).  A module links only the parts its C calls (a 10-line program
+# carried 42 KB of runtime it never called); a call this misses is an
+# undefined symbol that fails the build (modpost), never a wrong module.
+_CALLS_STRING_RT = re.compile(r"\b(?:iec_\w*(?:str|char)\w*|IEC_W?STR\w*)\s*\(")
+_CALLS_STD_FB = re.compile(r"\biec_fb_(\w+)\s*\(")
+
+
+def _runtime_used(texts, fpu: bool) -> list[str]:
+    """The runtime sources (iec_string.c, iec_std_fb.c) that C texts call;
+    REAL code (iec_real.c formats into strings) needs iec_string.c."""
+    strings = fpu or any(_CALLS_STRING_RT.search(t) for t in texts)
+    fbs = any(not m.group(1).endswith("_init") for t in texts
+              for m in _CALLS_STD_FB.finditer(t))
+    return (["iec_string.c"] if strings else []) + (["iec_std_fb.c"] if fbs else [])
+
+
+def _resource_source(env, comp, rm):
+    project, plan, sel, gen, mp = comp.project, comp.plan, comp.selective, comp.gen, comp.modules
+    cfg = project.configurations[0]
+    r = rm.resource
+    slot_of = mp.slot_of
+    single_events = mp.single_events
+    res_globals, instances = rm.globals, rm.instances
+    ie = InitEmitter(project)
+    f = Frame(ie.body_emitter())
+    init = []
+    for g in res_globals:
+        init += ie.lines(f"res_image.{g.c_name}", g.var.type, g.var.init, f)
+    for ip in instances:
+        init.append(f"{N.pou_prefix(ip.pou)}_init(&{ip.c_name});")
+        for member, t, value in ip.config_inits:   # VAR_CONFIG
+            init += ie.lines(f"{ip.c_name}.{member}", t, value, f)
+        if sel is not None and sel.has_layout(ip.pou) and not sel.instance_selective(ip.inst):
+            init.append(f"{ip.c_name}.sel.plain = 1;")
+    tasks = []
+    pe = comp.emitter
+    by_c = _globals_by_c(plan)
+    c_of = _global_c_names(plan)
+    for tp in rm.tasks:
+        used: dict[str, tuple] = {}   # global C name -> (read, write)
+
+        def use(name, read, write):
+            a, b = used.get(name, (False, False))
+            used[name] = (a or read, b or write)
+
+        for ip in tp.instances:
+            inst = ip.inst
+            for b in inst.bindings:
+                if b.in_program:
+                    continue
+                pointer = b.steps[-1]
+                use(c_of[id(b.target)], True, pointer.assigned and not b.target.constant)
+            for param, value in inst.inputs:
+                if hasattr(value, "symbol") and value.symbol is not None and \
+                        id(value.symbol) in c_of:
+                    use(c_of[id(value.symbol)], True, False)
+                elif getattr(value, "address", None):
+                    use(plan.directs[value.address][0], True, False)
+            for param, target in inst.outputs:
+                if getattr(target, "address", None):
+                    use(plan.directs[target.address][0], False, True)
+                else:
+                    use(c_of[id(target.symbol)], False, True)
+        image, copy_in, copy_out, events = [], [], [], []
+        for name, (rd, wr) in used.items():
+            g = by_c.get(name)
+            t = g.var.type if g is not None else next(
+                t for c, t in plan.directs.values() if c == name)
+            src = f"res_image.{name}" if g is not None and g.resource else \
+                f"iec2kmod_image.{name}"
+            image.append(N.declare(t, name))
+            copy_in.append(copy_value(f"task{tp.index}_image.{name}", src, t))
+            if wr:
+                if g is not None and id(g.var) in single_events:
+                    ev = single_events[id(g.var)]
+                    copy_out.append(f"if (!{src} && task{tp.index}_image.{name})")
+                    copy_out.append(f"\tevents[nevents++] = {ev};")
+                    events.append(ev)
+                copy_out.append(copy_value(src, f"task{tp.index}_image.{name}", t))
+        # a program runs in its type's module (which decides between the
+        # plain and the selective body), on the task's copy of the image;
+        # connections' fault sites name the configuration
+        run = pe.task_run(
+            tp, lambda ip: [f"if (iec2kmod_run_program({slot_of[ip.pou.key]}, &{ip.c_name}, ctx))",
+                            "\treturn;"],
+            image=lambda c, n=tp.index: f"task{n}_image.{c}", owner=pe.ie.body_emitter().pou)
+        tasks.append({"index": tp.index, "name": tp.name, "interval": tp.interval_ns or 0,
+                      "priority": tp.priority,
+                      "single_event": single_events[id(tp.single.var)] if tp.single else -1,
+                      "loop_budget": LOOP_BUDGET, "image": image,
+                      "watchdog_ns": tp.watchdog_ns, "watchdog_overruns": tp.watchdog_overruns,
+                      "copy_in": copy_in, "copy_out": copy_out, "events": events, "run": run,
+                      "slots": sorted({slot_of[ip.pou.key] for ip in tp.instances})})
+        for ip in tp.instances:
+            for b in ip.bindings:
+                init += b.lines(ip.c_name, lambda g, n=tp.index: f"task{n}_image.{g.c_name}")
+    # an instance variable belongs to the task that runs its instance (1 + index in tasks[]):
+    # the manager writes it between two cycles of that task
+    task_no = {t["name"].upper(): n + 1 for n, t in enumerate(tasks)}
+    task_of = {ip.path: task_no.get((ip.task or "").upper(), 0) for ip in instances}
+    enums: dict = {}
+    vars_out = [{"path": N.c_string(e.path.encode()), "lvalue": lv, "kind": e.kind,
+                 "writable": int(e.writable), "event": ev, "task": task_of.get(e.owner, 0),
+                 "checks": _desc_checks(e, enums)}
+                for e, lv, ev in rm.vars]
+    return env.get_template("resource_main.c.j2").render(
+        resource=r.name, resource_lower=r.name.lower(), config=cfg.name, version=__version__,
+        header=gen.header_name, image_header="iec_image.h",
+        res_globals=[N.declare(g.var.type, g.c_name) for g in res_globals],
+        instances=[f"{N.pou_struct(ip.pou)} {ip.c_name}" for ip in instances], tasks=tasks,
+        vars=vars_out, enum_sets=_enum_sets(enums), cpu=rm.cpu, init_decls=f.decls,
+        needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init,
+        source_hash=mp.source_hash, iface_hash=mp.iface_hash,
+        unbound_check=unbound_pointer_check(instances))
+
+
+def _write_module(out, mod, files, objs, fp_objs, runtime):
+    d = out / mod
+    d.mkdir(exist_ok=True)
+    for name, text in files.items():
+        (d / name).write_text(text)
+    for r in runtime:
+        # kbuild compiles sources inside the module directory: a small
+        # wrapper includes the shared runtime file
+        (d / r).write_text(f'// SPDX-License-Identifier: GPL-2.0-only OR MIT\n'
+                           f'#include "../runtime/{r}"\n')
+    lines = [
+        "# SPDX-License-Identifier: GPL-2.0-only OR MIT",
+        f"# Module {mod}: generated by iec2kmod {__version__}.  Do not edit.",
+        f"obj-m := {mod}.o",
+        f"{mod}-y := {' '.join(objs)}",
+        # the kernel's own frame-size warning (2048 bytes) applies: a POU's
+        # strings, arrays, structures and FB instances that are not state
+        # live in its frame area, not on the stack (iec_fault.h)
+        "ccflags-y := -I$(src)/../runtime -I$(src)/../include -std=gnu11",
+    ]
+    for o in fp_objs:
+        lines.append(f"CFLAGS_{o} += {FP_FLAGS}")
+    (d / "Kbuild").write_text("\n".join(lines) + "\n")
+
+
+def _top_makefile():
+    return f"""# SPDX-License-Identifier: GPL-2.0-only OR MIT
+# Generated by iec2kmod {__version__}.  Builds every module (see Kbuild) in
+# one kbuild run against KDIR:
+#   make KDIR=/usr/src/linux-headers-6.1.0-56-rt-amd64
+# A single module, e.g. a rebuilt program type for a hot swap:
+#   make -C $KDIR M=$PWD/<module> KBUILD_EXTRA_SYMBOLS=$PWD/Module.symvers modules
+KDIR ?= /lib/modules/$(shell uname -r)/build
+
+all:
+\t$(MAKE) -C $(KDIR) M=$(CURDIR) modules
+
+clean:
+\t$(MAKE) -C $(KDIR) M=$(CURDIR) clean
+
+.PHONY: all clean
+"""
+
+
+def _c_s64(v: int) -> str:
+    return "(-9223372036854775807LL - 1)" if v == -2 ** 63 else f"{v}LL"
+
+
+def _desc_checks(e, enums: dict) -> str:
+    """The designated initializers of what the kernel checks in a value
+    written to or forced into the variable of table entry *e* (struct
+    iec_var_desc in iec_kmod.h): a STRING's declared capacity, a subrange's
+    bounds, an enumeration's values (one static array per value set, named
+    in *enums*)."""
+    from ..checks.types import SubrangeT
+    t = concrete(e.type)
+    if isinstance(t, SubrangeT):
+        if e.kind == "u":
+            return f", .check = IEC_VCHK_RANGE, .range.u = {{ {t.low}ULL, {t.high}ULL }}"
+        return (f", .check = IEC_VCHK_RANGE, .range.s = {{ {_c_s64(t.low)}, "
+                f"{_c_s64(t.high)} }}")
+    if isinstance(t, EnumT):
+        bits = N.enum_base(t).bits
+        # as the C object holds them, read sign-extended by the kernel
+        values = tuple(sorted({v - 2 ** bits if v >= 2 ** (bits - 1) else v
+                               for _, v in t.values.values()}))
+        name = enums.setdefault(values, f"iec_enum_set{len(enums)}")
+        return f", .check = IEC_VCHK_ENUM, .enum_values = {name}, .nenum = {len(values)}"
+    if isinstance(t, StringT):
+        return f", .cap = {t.length}"
+    return ""
+
+
+def _enum_sets(enums: dict) -> list:
+    return [{"name": name, "set": ", ".join(map(_c_s64, values))}
+            for values, name in enums.items()]
+
+
