@@ -350,6 +350,154 @@ class Machine:
                                  owner, root,
                                  keys + (v.key,), out, budget)
 
+    # ------------------------------------------------------------ the scheduler
+    def schedule(self, table, idx, events, end):
+        tasks = self.tasks
+        ntasks = len(tasks)
+        res = VMResult([table[i].path for i in idx], [], end_ns=end)
+        next_release = [0] * ntasks
+        cycles = [0] * ntasks
+        late = [0] * ntasks                # overrunning cycles in a row
+        faulted = [False] * ntasks
+        pending = [False] * ntasks
+        prev_single = [False] * ntasks
+        for n, tk in enumerate(tasks):
+            if tk.single is not None:
+                c, k = tk.single
+                prev_single[n] = bool(c[k])
+        last = {}
+        watched = [(k, i, table[i]) for k, i in enumerate(idx)]
+        nev = len(events)
+        ev = 0
+        t = 0
+        while True:
+            while ev < nev and events[ev][0] <= t:
+                _, i, v = events[ev]
+                e = table[i]
+                e.set(_store_as(e, None, v))
+                ev += 1
+            for n, tk in enumerate(tasks):
+                if tk.interval and next_release[n] == t:
+                    pending[n] = True
+            self._instant(t, pending, faulted, prev_single, late, cycles, res.faults)
+            for k, i, e in watched:
+                v = e.get()
+                if i in last and _same(e.kind, v, last[i]):
+                    continue
+                last[i] = v
+                res.changes.append((t, k, present(e, v)))
+            for n, tk in enumerate(tasks):
+                if tk.interval and next_release[n] == t:
+                    next_release[n] += tk.interval
+            nt = end + 1
+            for n, tk in enumerate(tasks):
+                if tk.interval and next_release[n] < nt:
+                    nt = next_release[n]
+            if ev < nev and events[ev][0] < nt:
+                nt = events[ev][0]
+            if nt > end:
+                break
+            t = nt
+        for n, tk in enumerate(tasks):
+            res.cycles[tk.name] = cycles[n]
+        return res
+
+
+    def _instant(self, t, pending, faulted, prev_single, late, cycles, faults):
+        """One instant t of the scheduler, after the inputs of t are applied and
+        the periodic tasks released at t are marked pending: the event tasks'
+        edges looked for before every task run, the pending task of highest
+        priority run (declaration order on ties), until none is pending.  The
+        lists (one entry per task) are the scheduler's state, updated in place;
+        a fault appends (t, task, kind, pou, file, line) to faults and stops
+        its task (faulted).  The explicit-state verifier
+        (iec2kmod.verify.explicit) runs one instant at a time through this."""
+        tasks = self.tasks
+        ntasks = len(tasks)
+        rt = self.rt
+        while True:
+            for n, tk in enumerate(tasks):
+                if tk.single is None:
+                    continue
+                c, k = tk.single
+                s = bool(c[k])
+                if s and not prev_single[n]:
+                    pending[n] = True
+                prev_single[n] = s
+            best = -1
+            for n in range(ntasks):
+                if pending[n] and (best < 0 or tasks[n].priority < tasks[best].priority):
+                    best = n
+            if best < 0:
+                break
+            pending[best] = False
+            if faulted[best]:
+                continue
+            rt.now = t
+            tk = tasks[best]
+            # the watchdog in simulated time: iterations of SIM_ITERATION_NS
+            wd = tk.watchdog_ns // SIM_ITERATION_NS if tk.watchdog_ns else LOOP_BUDGET
+            granted = rt.budget = min(wd, LOOP_BUDGET)
+            fault = self._run_task(tk)
+            cycles[best] += 1
+            if fault is not None and fault.kind == LOOP and wd < LOOP_BUDGET:
+                fault.kind = WATCHDOG
+            if fault is None and tk.interval and tk.watchdog_overruns:
+                if (granted - rt.budget) * SIM_ITERATION_NS > tk.interval:
+                    late[best] += 1
+                    if late[best] >= tk.watchdog_overruns:
+                        self._restore_globals(self._cycle_saved)
+                        fault = Fault(OVERRUN)
+                else:
+                    late[best] = 0
+            if fault is not None:
+                faulted[best] = True
+                faults.append((t, tasks[best].name, fault.kind, fault.pou or "?",
+                                   getattr(fault, "file", None) or "?", fault.line or 0))
+
+
+    def _run_task(self, task):
+        """One cycle of *task*.  The kernel publishes a task's results at the end
+        of its cycle, and not at all when the cycle faults (the task's image is
+        not copied out): a faulting cycle leaves every global as it was."""
+        saved = self._save_globals()
+        self._cycle_saved = saved
+        for pr in task.programs:
+            iv = pr.inst.v
+            try:
+                for k, f in pr.inputs:
+                    iv[k] = f()
+                pr.body(pr.inst)
+            except Fault as f:
+                self._restore_globals(saved)
+                return f
+            for k, (c, ck), store in pr.outputs:
+                c[ck] = store(iv[k])
+        return None
+
+
+    def _save_globals(self):
+        out = []
+        for _path, v, container in self.global_paths:
+            out.append((container, v.key, copy_of(v.type)(container[v.key])))
+        # directly represented variables (%Q written through a connection) are
+        # part of the task's image too: not published from a faulting cycle
+        for address, value in self.directs.items():
+            out.append((self.directs, address, list(value) if isinstance(value, list) else value))
+        return out
+
+
+    def _restore_globals(self, saved):
+        for container, key, value in saved:
+            cur = container[key]
+            if isinstance(cur, list):
+                cur[:] = value          # in place: references to the array stay valid
+            elif isinstance(cur, dict):
+                cur.clear()
+                cur.update(value)
+            else:
+                container[key] = value
+
 
 def _store_as(entry, kind, value):
     """An input value stored the way a write through the table stores it."""
@@ -411,161 +559,3 @@ def _same(kind, a, b):
         return _D.pack(a) == _D.pack(b)
     return a == b and type(a) is type(b)
 
-
-class _Scheduler:
-    pass
-
-
-def _schedule(self, table, idx, events, end):
-    tasks = self.tasks
-    ntasks = len(tasks)
-    res = VMResult([table[i].path for i in idx], [], end_ns=end)
-    next_release = [0] * ntasks
-    cycles = [0] * ntasks
-    late = [0] * ntasks                # overrunning cycles in a row
-    faulted = [False] * ntasks
-    pending = [False] * ntasks
-    prev_single = [False] * ntasks
-    for n, tk in enumerate(tasks):
-        if tk.single is not None:
-            c, k = tk.single
-            prev_single[n] = bool(c[k])
-    last = {}
-    watched = [(k, i, table[i]) for k, i in enumerate(idx)]
-    nev = len(events)
-    ev = 0
-    t = 0
-    while True:
-        while ev < nev and events[ev][0] <= t:
-            _, i, v = events[ev]
-            e = table[i]
-            e.set(_store_as(e, None, v))
-            ev += 1
-        for n, tk in enumerate(tasks):
-            if tk.interval and next_release[n] == t:
-                pending[n] = True
-        self._instant(t, pending, faulted, prev_single, late, cycles, res.faults)
-        for k, i, e in watched:
-            v = e.get()
-            if i in last and _same(e.kind, v, last[i]):
-                continue
-            last[i] = v
-            res.changes.append((t, k, present(e, v)))
-        for n, tk in enumerate(tasks):
-            if tk.interval and next_release[n] == t:
-                next_release[n] += tk.interval
-        nt = end + 1
-        for n, tk in enumerate(tasks):
-            if tk.interval and next_release[n] < nt:
-                nt = next_release[n]
-        if ev < nev and events[ev][0] < nt:
-            nt = events[ev][0]
-        if nt > end:
-            break
-        t = nt
-    for n, tk in enumerate(tasks):
-        res.cycles[tk.name] = cycles[n]
-    return res
-
-
-def _instant(self, t, pending, faulted, prev_single, late, cycles, faults):
-    """One instant t of the scheduler, after the inputs of t are applied and
-    the periodic tasks released at t are marked pending: the event tasks'
-    edges looked for before every task run, the pending task of highest
-    priority run (declaration order on ties), until none is pending.  The
-    lists (one entry per task) are the scheduler's state, updated in place;
-    a fault appends (t, task, kind, pou, file, line) to faults and stops
-    its task (faulted).  The explicit-state verifier
-    (iec2kmod.verify.explicit) runs one instant at a time through this."""
-    tasks = self.tasks
-    ntasks = len(tasks)
-    rt = self.rt
-    while True:
-        for n, tk in enumerate(tasks):
-            if tk.single is None:
-                continue
-            c, k = tk.single
-            s = bool(c[k])
-            if s and not prev_single[n]:
-                pending[n] = True
-            prev_single[n] = s
-        best = -1
-        for n in range(ntasks):
-            if pending[n] and (best < 0 or tasks[n].priority < tasks[best].priority):
-                best = n
-        if best < 0:
-            break
-        pending[best] = False
-        if faulted[best]:
-            continue
-        rt.now = t
-        tk = tasks[best]
-        # the watchdog in simulated time: iterations of SIM_ITERATION_NS
-        wd = tk.watchdog_ns // SIM_ITERATION_NS if tk.watchdog_ns else LOOP_BUDGET
-        granted = rt.budget = min(wd, LOOP_BUDGET)
-        fault = self._run_task(tk)
-        cycles[best] += 1
-        if fault is not None and fault.kind == LOOP and wd < LOOP_BUDGET:
-            fault.kind = WATCHDOG
-        if fault is None and tk.interval and tk.watchdog_overruns:
-            if (granted - rt.budget) * SIM_ITERATION_NS > tk.interval:
-                late[best] += 1
-                if late[best] >= tk.watchdog_overruns:
-                    self._restore_globals(self._cycle_saved)
-                    fault = Fault(OVERRUN)
-            else:
-                late[best] = 0
-        if fault is not None:
-            faulted[best] = True
-            faults.append((t, tasks[best].name, fault.kind, fault.pou or "?",
-                               getattr(fault, "file", None) or "?", fault.line or 0))
-
-
-def _run_task(self, task):
-    """One cycle of *task*.  The kernel publishes a task's results at the end
-    of its cycle, and not at all when the cycle faults (the task's image is
-    not copied out): a faulting cycle leaves every global as it was."""
-    saved = self._save_globals()
-    self._cycle_saved = saved
-    for pr in task.programs:
-        iv = pr.inst.v
-        try:
-            for k, f in pr.inputs:
-                iv[k] = f()
-            pr.body(pr.inst)
-        except Fault as f:
-            self._restore_globals(saved)
-            return f
-        for k, (c, ck), store in pr.outputs:
-            c[ck] = store(iv[k])
-    return None
-
-
-def _save_globals(self):
-    out = []
-    for _path, v, container in self.global_paths:
-        out.append((container, v.key, copy_of(v.type)(container[v.key])))
-    # directly represented variables (%Q written through a connection) are
-    # part of the task's image too: not published from a faulting cycle
-    for address, value in self.directs.items():
-        out.append((self.directs, address, list(value) if isinstance(value, list) else value))
-    return out
-
-
-def _restore_globals(self, saved):
-    for container, key, value in saved:
-        cur = container[key]
-        if isinstance(cur, list):
-            cur[:] = value          # in place: references to the array stay valid
-        elif isinstance(cur, dict):
-            cur.clear()
-            cur.update(value)
-        else:
-            container[key] = value
-
-
-Machine.schedule = _schedule
-Machine._instant = _instant
-Machine._run_task = _run_task
-Machine._save_globals = _save_globals
-Machine._restore_globals = _restore_globals
