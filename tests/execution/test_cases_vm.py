@@ -47,9 +47,3 @@ def test_case_vm(case):
         pytest.xfail(XFAIL[case.name])
     problems = runner.verify(case, _area_run(case))
     assert not problems, f"{case.path}:\n  " + "\n  ".join(problems)
-
-
-def test_loop_budget_agrees_with_kernel():
-    from iec2kmod import interp
-    from iec2kmod.kmod import DEFAULT_LOOP_BUDGET
-    assert interp.LOOP_BUDGET == DEFAULT_LOOP_BUDGET

@@ -206,3 +206,23 @@ def test_one_loop_budget_and_table_limit():
         assert not re.search(r"^\s*(?:LOOP_BUDGET|DEFAULT_LOOP_BUDGET|SIM_ITERATION_NS|"
                              r"MAX_TABLE_ELEMENTS)\s*=", text, re.M), f
         assert not re.search(r"^def kind_of\b", text, re.M), f
+
+
+def test_kernel_and_simulator_tasks_get_the_execution_models_budget(tmp_path):
+    """The interpreter counts against execmodel.LOOP_BUDGET; the kernel's
+    and the simulator's tasks are given the same (this replaces the
+    comparison of two copies in tests/execution/test_cases_vm.py)."""
+    from iec2kmod import interp
+    from iec2kmod.kmod import generate_tree
+    from iec2kmod.sim import render_sim
+    comp = compilation.Compilation(_project("two_resources"))
+    generate_tree(comp, tmp_path)
+    mains = [p.read_text() for p in tmp_path.glob("*_r_*/main.c")]
+    assert len(mains) == 2
+    for text in mains:
+        budgets = re.findall(r"\.loop_budget = (\d+),", text)
+        assert budgets and set(budgets) == {str(execmodel.LOOP_BUDGET)}
+    files, _ = render_sim(comp)
+    rows = re.findall(r"task_\d+, (\d+)U, ", files["sim_project.c"])
+    assert rows and set(rows) == {str(execmodel.LOOP_BUDGET)}
+    assert interp.LOOP_BUDGET == execmodel.LOOP_BUDGET
