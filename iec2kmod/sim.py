@@ -25,7 +25,8 @@ from .codegen.plan import unbound_pointer_check
 from .codegen.pou import frame_need
 from .compilation import Compilation, CompileError
 from .execmodel import LOOP_BUDGET
-from .traces import TraceError, format_value, parse_time, read_trace, write_csv, write_vcd
+from . import traces
+from .traces import TraceError, format_value, read_trace, write_csv, write_vcd
 from .traces import Trace as SimResult
 
 # the trace functions are traces.py's; sim.<name> stays for its callers
@@ -39,6 +40,14 @@ class SimError(Exception):
 
 class InternalError(Exception):
     """The generated C did not compile: a bug of ours."""
+
+
+def parse_time(text: str) -> int:
+    """traces.parse_time; a text that is not a time is a SimError."""
+    try:
+        return traces.parse_time(text)
+    except TraceError as exc:
+        raise SimError(str(exc)) from None
 
 
 def runtime_dir() -> Path:
