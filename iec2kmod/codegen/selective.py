@@ -106,7 +106,9 @@ Rules (``BlockInfo.reason`` says which one keeps a POU type out):
    instance is marked off, or it is a VAR_TEMP, fresh at every call) runs
    the body as plain code and clears the instance's token.
 8. Settling without a confirm run (iec2kmod/verify/idempotent.py).  For
-   each selective type the compiler asks z3 about two evaluations on the
+   each selective type this pass asks (``SelectivePlan.questions``), and
+   the driver answers with z3 (iec2kmod/compilation.py, before any code
+   is generated: ``SelectivePlan.settle``), about two evaluations on the
    same arguments X (inputs, externals, in-out targets: a skip needs them
    equal to the shadows), from any state S: S1 = f(X, S), S2 = f(X, S1).
    The type is *idempotent* when an evaluation without fault leaves a
