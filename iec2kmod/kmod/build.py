@@ -128,8 +128,8 @@ def _build_in_container(tree: Path, manifest, kdir, jobs) -> TreeBuild:
 
 
 def _write_manifest(tree: Path, manifest) -> None:
-    from . import _manifest_text
-    (tree / "manifest.json").write_text(_manifest_text(manifest))
+    from .manifest import manifest_text
+    (tree / "manifest.json").write_text(manifest_text(manifest))
 
 
 def _split_debug(modules) -> None:
