@@ -226,3 +226,15 @@ def test_kernel_and_simulator_tasks_get_the_execution_models_budget(tmp_path):
     rows = re.findall(r"task_\d+, (\d+)U, ", files["sim_project.c"])
     assert rows and set(rows) == {str(execmodel.LOOP_BUDGET)}
     assert interp.LOOP_BUDGET == execmodel.LOOP_BUDGET
+
+
+def test_build_rewrites_the_manifest_as_gen_wrote_it(tmp_path):
+    """`iec2kmod build` adds kernel_release and writes the manifest with the
+    writer of kmod/manifest.py (it imported a name the split of kmod moved:
+    caught only by building)."""
+    import json
+    from iec2kmod.kmod import build, generate_tree
+    generate_tree(_project("elevator"), tmp_path)
+    before = (tmp_path / "manifest.json").read_text()
+    build._write_manifest(tmp_path, json.loads(before))
+    assert (tmp_path / "manifest.json").read_text() == before
