@@ -181,7 +181,7 @@ def main():
     ap.add_argument("--seconds", type=float, default=10.0, help="per tool and scenario")
     ap.add_argument("--hist-us", type=int, default=10000, help="cyclictest's histogram range")
     args = ap.parse_args()
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     work = Path(tempfile.mkdtemp(prefix="iec2kmod-jitter-"))
     tree = work / "tree"
     cli("gen", str(HERE / "projects" / "jitter"), "-o", str(tree))

@@ -234,7 +234,7 @@ def main() -> None:
                     help="icount (default): virtual time, one vCPU; tcg: wall-clock time, "
                          "two vCPUs (host-load dependent)")
     a = ap.parse_args()
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     work = Path(a.workdir or tempfile.mkdtemp(prefix="iec2kmod-flood-")).resolve()
     work.mkdir(parents=True, exist_ok=True)
     src = work / "src"

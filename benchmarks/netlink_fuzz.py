@@ -40,7 +40,7 @@ def main() -> int:
     ap.add_argument("--workdir", help="keep the build here (default: a temporary directory)")
     a = ap.parse_args()
     seed = a.seed if a.seed is not None else random.SystemRandom().randrange(1 << 31)
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     work = Path(a.workdir or tempfile.mkdtemp(prefix="iec2kmod-nlfuzz-")).resolve()
     work.mkdir(parents=True, exist_ok=True)
     tree = work / "tree"

@@ -98,7 +98,7 @@ def dist(xs) -> str:
 
 
 def guest(tree: Path, work: Path, runs: int) -> None:
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     print(f"\nplc-manager load / stop of {tree.name} in the icount guest ({runs} runs)",
           flush=True)
     g = Guest(str(work), icount=True, console_log=str(work / "console.log"))

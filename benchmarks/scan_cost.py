@@ -55,7 +55,9 @@ HERE = Path(__file__).resolve().parent / "scan_cost"
 
 from iec2kmod import frontend  # noqa: E402
 from iec2kmod.codegen import generate  # noqa: E402
-from kmod_templates import ROOT as TEMPLATES  # noqa: E402
+from iec2kmod.resources import templates_root  # noqa: E402
+
+TEMPLATES = templates_root()
 
 RUNTIME = TEMPLATES / "runtime"
 RUNTIME_SOURCES = ("iec_string.c", "iec_std_fb.c", "iec_math.c", "iec_real.c")

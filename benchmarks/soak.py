@@ -227,7 +227,7 @@ def main():
     args = ap.parse_args()
     only = set(args.only.split(","))
     from iec2kmod import kbuild
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     work = Path(tempfile.mkdtemp(prefix="iec2kmod-soak-"))
     failed = []
     try:

@@ -183,7 +183,7 @@ def stats(xs):
 
 def run(clock: str, work: Path, ma, ko_a: Path, ko_b: Path, loads: int, swaps: int,
         oneshot: bool = False) -> None:
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     print(f"\n[{clock}] booting the guest", flush=True)
     g = Guest(str(work), icount=(clock == "icount"),
               console_log=str(work / f"console-{clock}.log"))

@@ -22,7 +22,7 @@ encoding refuses them and a refusal hides the rest of the project):
     internal error (exit 70, any other exit status, a traceback, an
     unlocated error), timeout;
   * every violated property: its counterexample CSV re-run with
-    `iec2kmod sim --engine vm --inputs` to the violating cycle K, and the
+    `iec2kmod sim --engine interp --inputs` to the violating cycle K, and the
     property evaluated on the simulator's CSV (or the runtime error looked
     for at cycle K) -- independently of the verifier's own replay;
   * random traces (--traces, over the inputs the verifier reports, each a
@@ -189,7 +189,7 @@ def construct(msg):
 
 # ------------------------------------------------------------ the interpreter's runs
 def sim_run(path, trace, steps, step_ns, watch, cwd, timeout):
-    """Runs `sim --engine vm` over `steps` steps; returns (rows, first fault
+    """Runs `sim --engine interp` over `steps` steps; returns (rows, first fault
     step or None, error text or None).  rows[k-1]: {var: text} after step k."""
     out_csv = Path(cwd) / "sim_out.csv"
     args = ["sim", "--engine", "vm", str(path), "--duration", f"{(steps - 1) * step_ns}ns",

@@ -69,9 +69,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--sanitize", action="store_true",
                    help="build with -fsanitize=undefined,address,float-cast-overflow "
                         "(the first report ends the run)")
-    s.add_argument("--engine", choices=("c", "vm"), default="c",
-                   help="c: compile the generated C and run it (default); vm: run the "
-                        "reference interpreter (no C compiler needed)")
+    s.add_argument("--engine", choices=("c", "interp", "vm"), default="c",
+                   help="c: compile the generated C and run it (default); interp: run the "
+                        "reference interpreter (no C compiler needed; 'vm' is an alias)")
     s.add_argument("--selective", nargs="?", const="all", choices=("all", "marked"),
                    help=SELECTIVE_HELP + " (C engine)")
     v = sub.add_parser("verify", help="prove properties of a configuration for every input "
@@ -176,14 +176,16 @@ def cmd_sim(args) -> int:
     project = front_end(args.files)
     if project is None:
         return EXIT_SOURCE
+    if args.engine == "vm":                  # the interpreter's former name
+        args.engine = "interp"
     try:
-        if args.engine == "vm" and args.sanitize:
+        if args.engine == "interp" and args.sanitize:
             raise sim.SimError("--sanitize applies to the C engine only")
-        if args.engine == "vm" and args.selective:
+        if args.engine == "interp" and args.selective:
             raise sim.SimError("--selective applies to the C engine only")
         sel = selective_plan(project, args.selective)
         if args.list:
-            if args.engine == "vm":
+            if args.engine == "interp":
                 from .interp import Machine
                 table = Machine(project).table()
             else:
@@ -204,13 +206,13 @@ def cmd_sim(args) -> int:
         else:
             end = sim.parse_time(args.duration)
         watch = [w for w in args.watch.split(",") if w.strip()] if args.watch else None
-        if args.engine == "vm":
+        if args.engine == "interp":
             from . import interp
             try:
                 machine = interp.Machine(project)
                 table = machine.table()
                 res = interp.run(project, end, watch=watch, inputs=args.inputs, machine=machine)
-            except interp.VMError as exc:
+            except interp.InterpError as exc:
                 raise sim.SimError(str(exc)) from None
         else:
             res = sim.run(project, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize,
@@ -231,7 +233,7 @@ def cmd_sim(args) -> int:
     if args.csv:
         sim.write_csv(res, args.csv)
     if args.vcd:
-        if args.engine == "vm":
+        if args.engine == "interp":
             from types import SimpleNamespace
             sim.write_vcd(res, args.vcd, SimpleNamespace(table=table))
         else:

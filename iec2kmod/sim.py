@@ -62,13 +62,13 @@ class SimResult:
 
 
 def runtime_dir() -> Path:
-    from kmod_templates import ROOT
-    return ROOT / "runtime"
+    from .resources import templates_root
+    return templates_root() / "runtime"
 
 
 def sim_dir() -> Path:
-    from kmod_templates import ROOT
-    return ROOT / "sim"
+    from .resources import templates_root
+    return templates_root() / "sim"
 
 
 def render_sim(project, selective=None):

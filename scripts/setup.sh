@@ -152,7 +152,7 @@ fi
 if [ "$NO_PIP" = 1 ] && ! "$PYTHON" -c 'import iec2kmod' 2>/dev/null; then
     say "skipping the PVH kernel extraction (iec2kmod not importable, --no-pip)"
 else
-    (cd "$REPO" && "$PYTHON" -m iec2kmod.vm prepare) | sed 's/^/[setup] /' \
+    (cd "$REPO" && "$PYTHON" -m iec2kmod.testing.vm prepare) | sed 's/^/[setup] /' \
         || die "QEMU guest prerequisites are incomplete (see above)"
 fi
 

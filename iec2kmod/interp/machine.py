@@ -31,7 +31,7 @@ from ..checks.types import ArrayT, Elementary, EnumT, FBType, StringT, StructT, 
 from ..literals import LiteralError, classify, parse_duration
 from .compiler import PouCompiler
 from ..checks.config import SIM_ITERATION_NS
-from .errors import LOOP, OVERRUN, WATCHDOG, Fault, VMError
+from .errors import LOOP, OVERRUN, WATCHDOG, Fault, InterpError
 from .fbs import body_of
 from .model import Initializer, Instance, copier, copy_of
 from .values import base_of, f32, int_range, wrap, wrap64
@@ -54,7 +54,7 @@ class Runtime:
 
 
 @dataclass
-class VMResult:
+class InterpResult:
     """The same shape as the C simulator's result (iec2kmod.sim.SimResult)."""
 
     names: list
@@ -151,7 +151,7 @@ class TaskRun:
 class Machine:
     def __init__(self, project):
         if not project.configurations:
-            raise VMError("the project has no CONFIGURATION to run")
+            raise InterpError("the project has no CONFIGURATION to run")
         self.p = project
         self.rt = Runtime()
         self.init = Initializer(project)
@@ -207,7 +207,7 @@ class Machine:
         for v in pou.vars.values():
             if v.section == "VAR_EXTERNAL":
                 if v.key not in scope:
-                    raise VMError(f"VAR_EXTERNAL '{v.name}' of {pou.name} has no global")
+                    raise InterpError(f"VAR_EXTERNAL '{v.name}' of {pou.name} has no global")
                 inst.r[v.key] = scope[v.key]
                 continue
             if v.section == "VAR_IN_OUT":
@@ -430,7 +430,7 @@ def parse_time(text: str) -> int:
                 return parse_duration(s)
         return round(float(s) * 1e9)
     except (LiteralError, ValueError):
-        raise VMError(f"'{text}' is not a time (write T#100ms, 100ms or 0.1)") from None
+        raise InterpError(f"'{text}' is not a time (write T#100ms, 100ms or 0.1)") from None
 
 
 def value_for(entry, text: str):
@@ -449,26 +449,26 @@ def value_for(entry, text: str):
         if sign < 0 and kind in ("int", "real"):
             value = -value
     except (LiteralError, ValueError, IndexError) as exc:
-        raise VMError(f"invalid value '{text}' for {entry.path}: {exc}") from None
+        raise InterpError(f"invalid value '{text}' for {entry.path}: {exc}") from None
     if entry.kind == "f":
         if kind not in ("int", "real"):
-            raise VMError(f"{entry.path} is REAL: '{text}' is not a number")
+            raise InterpError(f"{entry.path} is REAL: '{text}' is not a number")
         return "f", float(value)
     if entry.kind in ("s", "w"):
-        raise VMError(f"{entry.path}: string inputs are not supported by the simulator")
+        raise InterpError(f"{entry.path}: string inputs are not supported by the simulator")
     if kind == "bool" or (entry.kind == "b" and kind == "int" and value in (0, 1)):
         return "i", int(value)
     if kind in ("int", "time", "date", "tod", "dt"):
         if entry.kind == "b":
-            raise VMError(f"{entry.path} is BOOL: '{text}' is not TRUE/FALSE")
+            raise InterpError(f"{entry.path} is BOOL: '{text}' is not TRUE/FALSE")
         t = concrete(entry.type)
         rng = ((t.low, t.high) if isinstance(t, SubrangeT) else
                int_range(t) if kind == "int" else None)
         if kind == "int" and rng is not None and not rng[0] <= int(value) <= rng[1]:
-            raise VMError(f"invalid value '{text}' for {entry.path}: out of range "
+            raise InterpError(f"invalid value '{text}' for {entry.path}: out of range "
                           f"{rng[0]}..{rng[1]}")
         return "i", int(value)
-    raise VMError(f"invalid value '{text}' for {entry.path}")
+    raise InterpError(f"invalid value '{text}' for {entry.path}")
 
 
 def read_trace(path: str, table):
@@ -482,23 +482,23 @@ def read_trace(path: str, table):
                 if n == 1 and row[0].strip().lower() == "time":
                     continue
                 if len(row) != 3:
-                    raise VMError(f"{path}:{n}: expected time,variable,value")
+                    raise InterpError(f"{path}:{n}: expected time,variable,value")
                 i = index.get(row[1].strip().upper())
                 if i is None:
-                    raise VMError(f"{path}:{n}: unknown variable '{row[1].strip()}'")
+                    raise InterpError(f"{path}:{n}: unknown variable '{row[1].strip()}'")
                 e = table[i]
                 if not e.writable:
-                    raise VMError(f"{path}:{n}: '{e.path}' cannot be written")
+                    raise InterpError(f"{path}:{n}: '{e.path}' cannot be written")
                 try:
                     kind, value = value_for(e, row[2])
                     t = parse_time(row[0])
-                except VMError as exc:
-                    raise VMError(f"{path}:{n}: {exc}") from None
+                except InterpError as exc:
+                    raise InterpError(f"{path}:{n}: {exc}") from None
                 if kind == "f" and e.kind != "f":
                     value = int(value)
                 events.append((t, n, i, value))
     except OSError as exc:
-        raise VMError(f"{path}: {exc.strerror}") from None
+        raise InterpError(f"{path}: {exc.strerror}") from None
     events.sort(key=lambda ev: (ev[0], ev[1]))
     return [(t, i, v) for t, _, i, v in events]
 
@@ -506,7 +506,7 @@ def read_trace(path: str, table):
 _D = struct.Struct("<d")
 
 
-def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> VMResult:
+def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> InterpResult:
     """Runs the configuration from 0 to end_ns (inclusive) of simulated time
     (on ``machine``, a fresh Machine of the project, when given)."""
     m = machine if machine is not None else Machine(project)
@@ -517,7 +517,7 @@ def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> VMResult
         for w in watch:
             i = index.get(w.strip().upper())
             if i is None:
-                raise VMError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
+                raise InterpError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
             idx.append(i)
     else:
         idx = [i for i, e in enumerate(table) if e.owner in ("global", "direct")]
@@ -538,7 +538,7 @@ class _Scheduler:
 def _schedule(self, table, idx, events, end):
     tasks = self.tasks
     ntasks = len(tasks)
-    res = VMResult([table[i].path for i in idx], [], end_ns=end)
+    res = InterpResult([table[i].path for i in idx], [], end_ns=end)
     next_release = [0] * ntasks
     cycles = [0] * ntasks
     late = [0] * ntasks                # overrunning cycles in a row

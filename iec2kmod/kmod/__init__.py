@@ -37,7 +37,8 @@ DEFAULT_LOOP_BUDGET = 1_000_000
 
 
 def _env():
-    from kmod_templates import ROOT
+    from ..resources import templates_root
+    ROOT = templates_root()
     return Environment(loader=FileSystemLoader([str(ROOT / "kernel"), str(ROOT / "c")]),
                        undefined=StrictUndefined, keep_trailing_newline=True,
                        trim_blocks=True, lstrip_blocks=True)
@@ -178,7 +179,8 @@ def generate_tree(project, out: Path, *args, **kwargs) -> dict:
 def _generate_tree(project, out: Path, selective=None) -> dict:
     """Writes the kbuild tree; returns the manifest.  *selective*: a
     codegen.selective.SelectivePlan (``gen --selective``) or None."""
-    from kmod_templates import ROOT
+    from ..resources import templates_root
+    ROOT = templates_root()
     env = _env()
     sel = selective
     gen = generate(project, selective=sel)

@@ -3,7 +3,7 @@ configuration over the reference interpreter, the referee of the z3 engine.
 
 It shares nothing with the z3 encoder (encode.py, model.py, engine.py,
 ranges.py): the runs are the interpreter's own (iec2kmod.interp), one
-scheduler instant at a time (Machine._instant, the code `sim --engine vm`
+scheduler instant at a time (Machine._instant, the code `sim --engine interp`
 runs), from states saved and restored canonically.
 
 The time point (the same as the z3 engine's): the configuration advances in
@@ -655,7 +655,7 @@ def write_trace(out, result, path):
 
 
 def replay(out, result, trace_path, vcd_path=None, cli_props=(), instance=None):
-    """Runs the trace with `sim --engine vm`'s interpreter to (K-1)*step;
+    """Runs the trace with `sim --engine interp`'s interpreter to (K-1)*step;
     (confirmed, message)."""
     from types import SimpleNamespace
     from .. import interp
