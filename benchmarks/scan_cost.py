@@ -55,6 +55,7 @@ HERE = Path(__file__).resolve().parent / "scan_cost"
 
 from iec2kmod import frontend  # noqa: E402
 from iec2kmod.codegen import generate  # noqa: E402
+from iec2kmod.codegen.pou import frame_need  # noqa: E402
 from iec2kmod.resources import templates_root  # noqa: E402
 
 TEMPLATES = templates_root()
@@ -171,7 +172,7 @@ def compile_c(out: Path, name: str, srcs, includes, extra=()):
     return exe
 
 
-def driver_source(name, spec, iec: bool, gen=None):
+def driver_source(name, spec, iec: bool, gen=None, pou=None):
     if iec:
         prefix = f"prog_{name}"
         field = "inst.v_{}"
@@ -179,9 +180,14 @@ def driver_source(name, spec, iec: bool, gen=None):
         includes.append(f"IEC_POU_SCOPE void {prefix}_body(struct {prefix} *self, "
                         "struct iec_ctx *ctx) __attribute__((noinline, noclone));")
         includes += [f'#include "{gen.bodies[k][0]}"' for k in gen.order]
+        # the frame area the program's body needs (iec_fault.h), sized and
+        # set up as the simulator's task function does (iec2kmod/sim.py)
         setup = (f"\tstatic struct {prefix} inst;\n\tstatic struct iec_ctx ctx;\n"
+                 f"\tstatic iec_u8 frames[IEC_FRAME_MAX({frame_need(pou)}, 16U)]\n"
+                 "\t\t__attribute__((aligned(16)));\n"
                  f"\t{prefix}_init(&inst);\n\tiec_ctx_init(&ctx, 0);\n")
         call = (f"\t\tiec_ctx_cycle_begin(&ctx, (iec_s64)k * {CYCLE_NS}LL);\n"
+                "\t\tiec_frame_area(&ctx, frames, sizeof(frames));\n"
                 f"\t\t{prefix}_body(&inst, &ctx);\n"
                 "\t\tif (ctx.fault != IEC_FAULT_NONE)\n\t\t\tbreak;")
         fault = "(int)ctx.fault"
@@ -258,7 +264,8 @@ def measure(name, cycles, out: Path, rt_objs):
     for k in gen.order:
         fname, text = gen.bodies[k]
         (d / fname).write_text(text)
-    (d / "driver_iec.c").write_text(driver_source(name, spec, True, gen))
+    (d / "driver_iec.c").write_text(driver_source(name, spec, True, gen,
+                                                  res.project.pous[name.upper()]))
     (d / "driver_hand.c").write_text(driver_source(name, spec, False))
     exe_iec = compile_c(d, "iec", [d / "driver_iec.c", *rt_objs], [d, RUNTIME])
     exe_hand = compile_c(d, "hand", [d / "driver_hand.c"], [d, HERE])
