@@ -295,6 +295,12 @@ def cmd_verify(args) -> int:
 COMMANDS = {"export": cmd_export, "verify": cmd_verify, "check": cmd_check, "sim": cmd_sim, "gen": cmd_gen, "build": cmd_build}
 
 
+# the third-party modules of the optional features: (distribution, extra of
+# pyproject.toml); check, gen, build and sim need none of them
+OPTIONAL_MODULES = {"z3": ("z3-solver", "verify"), "docker": ("docker", "container"),
+                    "requests": ("requests", "container")}
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     from .frontend import InputError
@@ -306,6 +312,11 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         return 130
     except Exception as exc:  # noqa: BLE001 - the one place that catches everything
+        extra = OPTIONAL_MODULES.get((getattr(exc, "name", None) or "").split(".")[0])
+        if isinstance(exc, ModuleNotFoundError) and extra is not None:
+            print(f"iec2kmod: error: `{args.command}` needs {extra[0]}, which is not "
+                  f"installed: pip install 'iec2kmod[{extra[1]}]'", file=sys.stderr)
+            return EXIT_USAGE
         where = ""
         tb = exc.__traceback__
         while tb is not None:

@@ -170,7 +170,7 @@ class Blocker(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path=None, target=None):
         if name.split(".")[0] in BLOCK:
             tried.append(name)
-            raise ImportError(f"blocked by the test: {name}")
+            raise ModuleNotFoundError(f"No module named {name!r} (blocked by the test)", name=name)
         return None
 sys.meta_path.insert(0, Blocker())
 import importlib
@@ -206,11 +206,14 @@ def test_check_and_gen_need_only_the_core(example, tmp_path):
     assert "wrote" in p.stdout and list((tmp_path / "out").rglob("*.c"))
 
 
-def test_blocker_blocks():
-    """verify needs z3: with z3 blocked it fails, so the blocker is effective."""
+def test_a_missing_extra_is_named():
+    """verify needs z3: with z3 blocked it stops with a usage error naming
+    the extra to install (not an internal error), so the blocker works."""
     p, tried = run_blocked(["z3"], "iec2kmod.cli", "verify", "examples/traffic_light",
                            "--depth", "1")
-    assert p.returncode != 0 and "z3" in tried
+    assert "z3" in tried
+    assert p.returncode == 2, p.stderr
+    assert "pip install 'iec2kmod[verify]'" in p.stderr and "internal error" not in p.stderr
 
 
 def test_manager_needs_only_its_extra():
@@ -240,3 +243,10 @@ def test_no_stray_files_at_the_root():
                        if "/" in f and not f.startswith(".")})   # .ci/: the CI entry
     assert top_dirs == ["benchmarks", "containers", "examples", "iec2kmod", "kmod_templates",
                         "manager", "scripts", "tests"], top_dirs
+
+
+def test_manager_without_pyroute2_says_so():
+    p, tried = run_blocked(["pyroute2"], "plc_manager.cli", "status")
+    assert "pyroute2" in tried
+    assert p.returncode == 1, p.stdout + p.stderr
+    assert "pip install 'iec2kmod[manager]'" in p.stderr and "internal error" not in p.stderr
