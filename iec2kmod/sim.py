@@ -30,7 +30,7 @@ from .literals import LiteralError, classify, parse_duration
 
 # the same per-cycle loop budget as the kernel's tasks, so that a long loop
 # faults in the simulation exactly when it would in the kernel
-from .kmod import DEFAULT_LOOP_BUDGET as LOOP_BUDGET  # noqa: E402
+from .kmod import DEFAULT_LOOP_BUDGET as LOOP_BUDGET
 
 
 class SimError(Exception):

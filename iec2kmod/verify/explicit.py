@@ -62,6 +62,9 @@ from .. import ast
 from ..checks.types import BOOL, EnumT, SubrangeT, concrete
 from ..diagnostics import Diagnostics
 from ..interp.compiler import PouCompiler
+from .cli import EXIT_BOUNDED as EXIT_UNDECIDED  # the exit statuses are the command's
+from .cli import (EXIT_INTERNAL, EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE, EXIT_VACUOUS,
+                  EXIT_VIOLATED, _fmt_time)
 from ..interp.errors import Fault
 from ..interp.machine import Machine
 from ..interp.model import Instance
@@ -683,9 +686,6 @@ def replay(out, result, trace_path, vcd_path=None, cli_props=(), instance=None):
 
 
 # ------------------------------------------------------------ the command
-from .cli import EXIT_BOUNDED as EXIT_UNDECIDED  # noqa: E402  (the exit statuses are the command's)
-from .cli import (EXIT_INTERNAL, EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE,  # noqa: E402
-                  EXIT_VACUOUS, EXIT_VIOLATED, _fmt_time)
 
 
 def _duration(ns):
