@@ -250,3 +250,22 @@ def test_manager_without_pyroute2_says_so():
     assert "pyroute2" in tried
     assert p.returncode == 1, p.stdout + p.stderr
     assert "pip install 'iec2kmod[manager]'" in p.stderr and "internal error" not in p.stderr
+
+
+def test_the_harness_is_a_testing_package(tmp_path):
+    """The QEMU harness is iec2kmod.testing.vm; `python3 -m iec2kmod.vm`
+    (named by older documents) runs it; the compiler never imports it."""
+    a = subprocess.run([sys.executable, "-m", "iec2kmod.testing.vm", "--help"], cwd=ROOT,
+                       capture_output=True, text=True, timeout=120)
+    b = subprocess.run([sys.executable, "-m", "iec2kmod.vm", "--help"], cwd=ROOT,
+                       capture_output=True, text=True, timeout=120)
+    assert a.returncode == b.returncode == 0, a.stderr + b.stderr
+    assert "prepare" in a.stdout and b.stdout == a.stdout
+    code = ("import sys; from iec2kmod.cli import main; rc = main(['gen', "
+            "'examples/traffic_light', '-o', sys.argv[1]]); "
+            "print(sorted(m for m in sys.modules if m.startswith('iec2kmod.testing') "
+            "or m == 'iec2kmod.vm')); sys.exit(rc)")
+    p = subprocess.run([sys.executable, "-c", code, str(tmp_path / "out")],
+                       cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip().splitlines()[-1] == "[]"
