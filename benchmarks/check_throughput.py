@@ -9,7 +9,7 @@ lines (issue 14: every line an assignment with 3-4 operators or an IF
 around one), whose statements the parser spreads over the cores; MatIEC
 (iec2c) takes 8.6 s on it, the target is half that.
 
-    python benchmarks/check_throughput.py [--lines 10000] [--files 8] [--dense-only]
+    python benchmarks/check_throughput.py [--lines 10000] [--files 8] [--dense-only] [--smoke]
 """
 
 from __future__ import annotations
@@ -73,7 +73,12 @@ def main():
     ap.add_argument("--files", type=int, default=8)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--dense-only", action="store_true", help="only the one dense POU")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/benchmarks): 800 lines "
+                         "in 2 files, one run")
     args = ap.parse_args()
+    if args.smoke:
+        args.lines, args.files, args.runs = 800, 2, 1
     if not args.dense_only:
         mixed(args)
     dense(args)

@@ -6,6 +6,7 @@ interpreter (`iec2kmod sim --engine vm`, when available); traces must agree.
     python3 benchmarks/fuzz_diff.py --count 300 --seed 1
     python3 benchmarks/fuzz_diff.py --count 50 --seed 7 --engines c,vm --keep /tmp/found
     python3 benchmarks/fuzz_diff.py --unit 1000003 --keep /tmp/found    (one project again)
+    python3 benchmarks/fuzz_diff.py --smoke                            (3 projects, CI)
 
 Prints one line per project (its seed and result), a summary, and for every
 failure the path of the minimised project (delta debugging over statements
@@ -41,7 +42,12 @@ def main(argv=None):
     ap.add_argument("--size", type=float, default=1.0, help="body size factor of the projects")
     ap.add_argument("--no-minimise", action="store_true")
     ap.add_argument("--budget", type=int, default=250, help="runs per minimisation")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/benchmarks): 3 "
+                         "projects of 20 cycles, one batch, no minimising")
     a = ap.parse_args(argv)
+    if a.smoke:
+        a.count, a.cycles, a.batch, a.no_minimise = 3, 20, 3, True
     engines = a.engines.split(",") if a.engines else difftest.available_engines()
     for e in engines:
         if e not in difftest.ALL_ENGINES:

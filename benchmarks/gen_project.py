@@ -1,6 +1,9 @@
 """Generates a large, realistic IEC 61131-3 project for the benchmarks:
 function blocks mixing ST statements, standard functions and timers, one IL
-function block in four, programs that use them, and a configuration."""
+function block in four, programs that use them, and a configuration.
+
+    python3 benchmarks/gen_project.py [LINES] > project.st   (default 10000)
+    python3 benchmarks/gen_project.py --smoke    (CI: small ones, checked)"""
 
 from __future__ import annotations
 
@@ -9,16 +12,16 @@ import sys
 
 def fb_st(k: int) -> str:
     return f"""FUNCTION_BLOCK FB{k}
-VAR_INPUT a, b : INT; en : BOOL; END_VAR
+VAR_INPUT a, b : INT; enable : BOOL; END_VAR
 VAR_OUTPUT y : INT; q : BOOL; END_VAR
 VAR i, acc : INT; t : TON; arr : ARRAY[0..9] OF INT; r : REAL; END_VAR
-  t(IN := en, PT := T#100ms);
+  t(IN := enable, PT := T#100ms);
   acc := 0;
   FOR i := 0 TO 9 DO
     arr[i] := a * i + b - (i MOD 3);
     acc := acc + arr[i];
   END_FOR;
-  IF acc > 100 AND en OR NOT t.Q THEN
+  IF acc > 100 AND enable OR NOT t.Q THEN
     y := acc / 2;
   ELSIF acc < -100 THEN
     y := -acc;
@@ -29,7 +32,7 @@ VAR i, acc : INT; t : TON; arr : ARRAY[0..9] OF INT; r : REAL; END_VAR
     0: q := FALSE;
     1..10: q := TRUE;
   ELSE
-    q := en XOR q;
+    q := enable XOR q;
   END_CASE;
   WHILE i > 0 DO
     i := i - 1;
@@ -51,10 +54,10 @@ END_FUNCTION_BLOCK
 
 def fb_il(k: int) -> str:
     return f"""FUNCTION_BLOCK FB{k}
-VAR_INPUT a, b : INT; en : BOOL; END_VAR
+VAR_INPUT a, b : INT; enable : BOOL; END_VAR
 VAR_OUTPUT y : INT; q : BOOL; END_VAR
 VAR acc : INT; t : TON; END_VAR
-    CAL t(IN := en, PT := T#50ms)
+    CAL t(IN := enable, PT := T#50ms)
     LD a
     ADD b
     MUL 3
@@ -72,7 +75,7 @@ big:
     LD 100
     ST y
 done:
-    LD en
+    LD enable
     AND t.Q
     OR( a
     GT b
@@ -85,7 +88,7 @@ done:
     ADD 1
     ST acc
     LD q
-    XOR en
+    XOR enable
     ST q
     LD acc
     SUB 1
@@ -102,7 +105,7 @@ END_FUNCTION_BLOCK
 
 def program(k: int, nfb: int) -> str:
     calls = "\n".join(
-        f"  f{j}(a := in{j % 4}, b := {j}, en := run);\n  out := out + f{j}.y;"
+        f"  f{j}(a := in{j % 4}, b := {j}, enable := run);\n  out := out + f{j}.y;"
         for j in range(8))
     decls = " ".join(f"f{j} : FB{(k * 8 + j) % nfb};" for j in range(8))
     return f"""PROGRAM P{k}
@@ -167,5 +170,28 @@ def dense_pou(lines: int = 10000) -> str:
     return "\n".join(out) + "\n"
 
 
+def smoke(text: str, what: str) -> int:
+    """--smoke: the generated project (small) passes `iec2kmod check`."""
+    import subprocess
+    import tempfile
+    import time
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    with tempfile.TemporaryDirectory() as tmp:
+        src = Path(tmp) / "project.st"
+        src.write_text(text)
+        t0 = time.monotonic()
+        p = subprocess.run([sys.executable, "-m", "iec2kmod", "check", "--no-cache", str(src)],
+                           cwd=root, capture_output=True, text=True)
+        dt = time.monotonic() - t0
+    print(f"{what}: {text.count(chr(10))} lines; iec2kmod check: exit {p.returncode} in "
+          f"{dt:.2f} s")
+    if p.returncode != 0:
+        print(p.stdout + p.stderr, file=sys.stderr)
+    return p.returncode
+
+
 if __name__ == "__main__":
+    if sys.argv[1:] == ["--smoke"]:       # CI: an 800-line project and a dense POU, checked
+        sys.exit(smoke(project(800), "project") or smoke(dense_pou(200), "dense POU"))
     sys.stdout.write(project(int(sys.argv[1]) if len(sys.argv) > 1 else 10000))

@@ -37,7 +37,7 @@ instruction is 1 ns of virtual time, so the figures repeat from run to run
 and do not depend on the host's load.  They are instruction-count budgets,
 not bare-metal latencies; compare ratios.
 
-    python benchmarks/jitter.py [--seconds 10] [--hist-us 10000]
+    python benchmarks/jitter.py [--seconds 10] [--hist-us 10000] [--smoke]
 """
 
 from __future__ import annotations
@@ -180,8 +180,12 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=10.0, help="per tool and scenario")
     ap.add_argument("--hist-us", type=int, default=10000, help="cyclictest's histogram range")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/qemu): 1 second per tool and scenario")
     args = ap.parse_args()
-    from iec2kmod.vm import Guest
+    if args.smoke:
+        args.seconds = 1.0
+    from iec2kmod.testing.vm import Guest
     work = Path(tempfile.mkdtemp(prefix="iec2kmod-jitter-"))
     tree = work / "tree"
     cli("gen", str(HERE / "projects" / "jitter"), "-o", str(tree))

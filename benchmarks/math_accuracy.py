@@ -11,7 +11,7 @@ cases, and prints a table: the maximum error in ULP of the reference value
 evaluated exactly, giving our error and glibc's error against the true
 value there (glibc is not always right: e.g. cos(0x1.6ac5b262ca1ffp+849)).
 
-    python benchmarks/math_accuracy.py [--samples N] [--json]
+    python benchmarks/math_accuracy.py [--samples N] [--json] [--smoke]
 """
 import argparse
 import json
@@ -125,7 +125,12 @@ def main():
     ap.add_argument("--samples", type=int, default=200000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/benchmarks): 2,000 "
+                         "samples")
     a = ap.parse_args()
+    if a.smoke:
+        a.samples = 2000
     rows = measure(a.samples, a.seed)
     if a.json:
         json.dump(rows, sys.stdout, indent=1)

@@ -22,7 +22,7 @@ distribution (min/median/p99/max, from the kernel's log-linear histogram,
 see benchmarks/jitter.py) and the command outcomes.  Target: no additional
 overruns, p99 within 10 % of idle.
 
-    python3 benchmarks/netlink_flood.py [--commands 5000] [--seed 1] [--workdir DIR]
+    python3 benchmarks/netlink_flood.py [--commands 5000] [--seed 1] [--workdir DIR] [--smoke]
 """
 
 from __future__ import annotations
@@ -233,8 +233,12 @@ def main() -> None:
     ap.add_argument("--clock", choices=("icount", "tcg"), default="icount",
                     help="icount (default): virtual time, one vCPU; tcg: wall-clock time, "
                          "two vCPUs (host-load dependent)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/qemu): 200 commands")
     a = ap.parse_args()
-    from iec2kmod.vm import Guest
+    if a.smoke:
+        a.commands = 200
+    from iec2kmod.testing.vm import Guest
     work = Path(a.workdir or tempfile.mkdtemp(prefix="iec2kmod-flood-")).resolve()
     work.mkdir(parents=True, exist_ok=True)
     src = work / "src"

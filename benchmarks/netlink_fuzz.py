@@ -3,7 +3,7 @@
 messages, in a guest of its own: the same project, oracle and checks as
 tests/qemu/test_netlink_fuzz.py (CI: 20,000 messages, seed 2323).
 
-    python3 benchmarks/netlink_fuzz.py [--messages 200000] [--seed S] [--rounds R]
+    python3 benchmarks/netlink_fuzz.py [--messages 200000] [--seed S] [--rounds R] [--smoke]
 
 Each round sends --messages messages from seed S + round number, then
 checks: no message the kernel must refuse was acknowledged, every task
@@ -38,9 +38,14 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=1)
     ap.add_argument("--icount", action="store_true", help="icount guest (one vCPU)")
     ap.add_argument("--workdir", help="keep the build here (default: a temporary directory)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/qemu): 500 messages, seed 1")
     a = ap.parse_args()
+    if a.smoke:
+        a.messages, a.rounds = 500, 1
+        a.seed = 1 if a.seed is None else a.seed
     seed = a.seed if a.seed is not None else random.SystemRandom().randrange(1 << 31)
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     work = Path(a.workdir or tempfile.mkdtemp(prefix="iec2kmod-nlfuzz-")).resolve()
     work.mkdir(parents=True, exist_ok=True)
     tree = work / "tree"

@@ -5,6 +5,7 @@ periodic tasks (1-8 ms), a block of plain INT globals and three connected
 globals per instance (two inputs, one output).
 
     python benchmarks/plant.py [INSTANCES] > plant.st     (default 1000)
+    python benchmarks/plant.py --smoke       (CI: 20 instances, checked)
 """
 
 from __future__ import annotations
@@ -61,5 +62,28 @@ def project(instances: int = 1000, types: int = TYPES, plain: int = PLAIN_GLOBAL
     return "".join(out)
 
 
+def smoke(text: str, what: str) -> int:
+    """--smoke: the generated project (small) passes `iec2kmod check`."""
+    import subprocess
+    import tempfile
+    import time
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    with tempfile.TemporaryDirectory() as tmp:
+        src = Path(tmp) / "project.st"
+        src.write_text(text)
+        t0 = time.monotonic()
+        p = subprocess.run([sys.executable, "-m", "iec2kmod", "check", "--no-cache", str(src)],
+                           cwd=root, capture_output=True, text=True)
+        dt = time.monotonic() - t0
+    print(f"{what}: {text.count(chr(10))} lines; iec2kmod check: exit {p.returncode} in "
+          f"{dt:.2f} s")
+    if p.returncode != 0:
+        print(p.stdout + p.stderr, file=sys.stderr)
+    return p.returncode
+
+
 if __name__ == "__main__":
+    if sys.argv[1:] == ["--smoke"]:       # CI: 20 instances, checked
+        sys.exit(smoke(project(20), "plant of 20 instances"))
     sys.stdout.write(project(int(sys.argv[1]) if len(sys.argv) > 1 else 1000))

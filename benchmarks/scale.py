@@ -9,7 +9,7 @@ N-instance build are timed in the icount QEMU guest (one guest, a few
 runs: it is heavy).
 
     python benchmarks/scale.py [--sizes 100,1000,10000] [--build-upto 1000]
-                               [--guest 1000 --runs 3] [--workdir DIR]
+                               [--guest 1000 --runs 3] [--workdir DIR] [--smoke]
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ def dist(xs) -> str:
 
 
 def guest(tree: Path, work: Path, runs: int) -> None:
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     print(f"\nplc-manager load / stop of {tree.name} in the icount guest ({runs} runs)",
           flush=True)
     g = Guest(str(work), icount=True, console_log=str(work / "console.log"))
@@ -131,7 +131,14 @@ def main() -> None:
     ap.add_argument("--guest", type=int, help="time load/stop of this size in the guest")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--workdir")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/benchmarks, "
+                         "tests/qemu): 4 and 8 instances, the 4 built (with --guest: "
+                         "load/stop of the 4, one run)")
     a = ap.parse_args()
+    if a.smoke:
+        a.sizes, a.build_upto, a.runs = "4,8", 4, 1
+        a.guest = 4 if a.guest else None
     work = Path(a.workdir or tempfile.mkdtemp(prefix="iec2kmod-scale-")).resolve()
     work.mkdir(parents=True, exist_ok=True)
     print(f"{os.cpu_count()} cores, load average "

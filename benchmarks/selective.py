@@ -27,7 +27,7 @@ BOOLs flip, REALs move within the loop's deadband around its setpoint),
 from a fixed seed; the plain and the selective run read the same trace and
 their traces of every global must be identical (checked).
 
-    python3 benchmarks/selective.py [--cycles 400] [--rates 0,1,10,50,100]
+    python3 benchmarks/selective.py [--cycles 400] [--rates 0,1,10,50,100] [--smoke]
                                     [--cflags=-fno-strict-aliasing]
 
 Prints the whole table: instructions per scan plain and selective, their
@@ -401,6 +401,9 @@ END_CONFIGURATION
 
 
 PROGRAMS = {"interlock": interlock, "plant": plant, "packaging": packaging}
+# --smoke: the same programs, small
+SMOKE_SIZES = {"interlock": {"stations": 2, "devices": 4}, "plant": {"loops": 6},
+               "packaging": {"sections": 10, "jam_every": 5}}
 
 
 # --------------------------------------------------------------------- trace
@@ -487,7 +490,13 @@ def main(argv=None):
     ap.add_argument("--keep", metavar="DIR", help="keep the programs, traces and builds here")
     ap.add_argument("--cflags", default=KERNEL_CFLAGS,
                     help="flags added to -O2 (default: the kernel's %(default)s; '' for none)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/benchmarks): 30 cycles "
+                         "at 0 and 100 %% of small instances of the programs; the traces "
+                         "still checked, the targets printed, not enforced")
     a = ap.parse_args(argv)
+    if a.smoke:
+        a.cycles, a.rates = 30, "0,100"
     EXTRA_CFLAGS[:] = a.cflags.split()
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind not found: apt-get install valgrind (scripts/setup.sh)")
@@ -498,7 +507,7 @@ def main(argv=None):
     print(f"{'program':10} {'change %':>8} {'plain Ir/scan':>14} {'selective Ir/scan':>18} "
           f"{'plain/sel':>9} {'blocks skipped':>15}", flush=True)
     for name in a.programs.split(","):
-        text, inputs, start = PROGRAMS[name]()
+        text, inputs, start = PROGRAMS[name](**(SMOKE_SIZES[name] if a.smoke else {}))
         work = work_root / name
         work.mkdir(parents=True, exist_ok=True)
         (work / f"{name}.st").write_text(text)
@@ -531,7 +540,7 @@ def main(argv=None):
             fail.append(f"{name} at 100 %: {100 * (isel / ip - 1):.1f} % more (target <= 10 %)")
     for f in fail:
         print("target missed: " + f)
-    return 1 if fail else 0
+    return 1 if fail and not a.smoke else 0
 
 
 if __name__ == "__main__":

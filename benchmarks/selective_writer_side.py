@@ -29,7 +29,7 @@ general implementation must also mark at ST stores, stores through
 VAR_IN_OUT pointers, the manager's set/force and other tasks' copy-out.
 The traces of every global are checked identical to the plain build's.
 
-    python3 benchmarks/selective_writer_side.py [--cycles 400] [--rates 0,1,10,100]
+    python3 benchmarks/selective_writer_side.py [--cycles 400] [--rates 0,1,10,100] [--smoke]
 
 Prints plain, selective as generated (comparison) and writer-side flags,
 callgrind instructions per scan inside the task (valgrind needed)."""
@@ -203,12 +203,18 @@ def main(argv=None):
     ap.add_argument("--rates", default="0,1,10,100")
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--keep", metavar="DIR")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/benchmarks): 30 cycles "
+                         "at 0 and 100 %% of a small interlock program")
     a = ap.parse_args(argv)
+    if a.smoke:
+        a.cycles, a.rates = 30, "0,100"
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind not found: apt-get install valgrind (scripts/setup.sh)")
     work = Path(a.keep) if a.keep else Path(tempfile.mkdtemp(prefix="selws-"))
     work.mkdir(parents=True, exist_ok=True)
-    text, inputs, start = selbench.interlock()
+    size = selbench.SMOKE_SIZES["interlock"] if a.smoke else {"stations": 10, "devices": 10}
+    text, inputs, start = selbench.interlock(**size)
     (work / "interlock.st").write_text(text)
     res = frontend.run([str(work / "interlock.st")], use_cache=False)
     if not res.ok:
@@ -218,7 +224,7 @@ def main(argv=None):
     plan = plain.plan
     plain_exe, _ = selbench._build(plain, work)
     sel_exe, _ = selbench._build(sel, work)
-    ws_exe = build_writer_side(sel_exe, work)
+    ws_exe = build_writer_side(sel_exe, work, **size)
     nvars = len(re.findall(r'^\t\{ "', (sel_exe.parent / "sim_project.c").read_text()
                            .split("sim_vars[] = {", 1)[1].split("};", 1)[0], re.M))
     print(f"interlock, {a.cycles} cycles, callgrind Ir per scan inside the task", flush=True)

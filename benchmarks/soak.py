@@ -16,7 +16,7 @@
           nothing loaded and a `load` that must work.
 
     python benchmarks/soak.py [--swaps 1000] [--cycles 100] [--kills 50] [--seed 9]
-                              [--only swaps,cycles,kills]
+                              [--only swaps,cycles,kills] [--smoke]
 
 The manager is this checkout's (a plc_manager link on the guest's
 sys.path).  Exit status 1 when a soak's condition fails.
@@ -224,10 +224,14 @@ def main():
     ap.add_argument("--kills", type=int, default=50)
     ap.add_argument("--seed", type=int, default=9)
     ap.add_argument("--only", default="swaps,cycles,kills")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/qemu): 3 swaps, 2 load/stop cycles, 2 kills")
     args = ap.parse_args()
+    if args.smoke:
+        args.swaps, args.cycles, args.kills = 3, 2, 2
     only = set(args.only.split(","))
     from iec2kmod import kbuild
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     work = Path(tempfile.mkdtemp(prefix="iec2kmod-soak-"))
     failed = []
     try:

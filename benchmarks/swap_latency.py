@@ -25,7 +25,7 @@ effect: reproducible figures of a ~1 GHz in-order machine); ``--clock tcg``
 runs the normal TCG guest on wall-clock time (slower emulation, host-load
 dependent); ``both`` runs both.
 
-    python benchmarks/swap_latency.py [--swaps 40] [--loads 3] [--clock icount|tcg|both]
+    python benchmarks/swap_latency.py [--swaps 40] [--loads 3] [--clock icount|tcg|both] [--smoke]
 """
 
 from __future__ import annotations
@@ -183,7 +183,7 @@ def stats(xs):
 
 def run(clock: str, work: Path, ma, ko_a: Path, ko_b: Path, loads: int, swaps: int,
         oneshot: bool = False) -> None:
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     print(f"\n[{clock}] booting the guest", flush=True)
     g = Guest(str(work), icount=(clock == "icount"),
               console_log=str(work / f"console-{clock}.log"))
@@ -240,7 +240,11 @@ def main() -> None:
     ap.add_argument("--oneshot", action="store_true",
                     help="plain `swap` (both halves in one command) instead of --prepare/--publish")
     ap.add_argument("--workdir", help="keep the builds here (default: a temporary directory)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/qemu): 3 swaps, 1 load")
     a = ap.parse_args()
+    if a.smoke:
+        a.swaps, a.loads = 3, 1
     work = Path(a.workdir or tempfile.mkdtemp(prefix="iec2kmod-swapbench-")).resolve()
     work.mkdir(parents=True, exist_ok=True)
     print(f"building the benchmark configuration in {work}", flush=True)

@@ -9,7 +9,7 @@ Houdini invariants, BMC and k-induction).  Per project: the time to build
 the transition system (front end excluded).  The machine is shared: the load
 average is printed with the figures.
 
-    python benchmarks/verify.py [--depth 20] [--only traffic_light,...]
+    python benchmarks/verify.py [--depth 20] [--only traffic_light,...] [--smoke]
 """
 
 from __future__ import annotations
@@ -47,7 +47,12 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--depth", type=int, default=20)
     ap.add_argument("--only", help="comma-separated project names")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/benchmarks): depth 3, "
+                         "traffic_light and one broken project")
     args = ap.parse_args(argv)
+    if args.smoke:
+        args.depth, args.only = 3, "traffic_light,crossing_latched_green"
     from iec2kmod.diagnostics import Diagnostics
     from iec2kmod.frontend import run
     from iec2kmod.verify import build

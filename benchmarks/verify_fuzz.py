@@ -7,6 +7,7 @@ is contradicted by the reference interpreter.
 
     python3 benchmarks/verify_fuzz.py --count 200 --seed 1 --size 0.2 --depth 6
     python3 benchmarks/verify_fuzz.py --unit 1000042 --keep /tmp/found   (one project again)
+    python3 benchmarks/verify_fuzz.py --smoke                            (2 projects, CI)
 
 Per project (progen seed difftest.unit_seed(SEED, i), body size --size; SFC
 bodies in about one project in ten and strings in three in ten, since the
@@ -22,12 +23,12 @@ encoding refuses them and a refusal hides the rest of the project):
     internal error (exit 70, any other exit status, a traceback, an
     unlocated error), timeout;
   * every violated property: its counterexample CSV re-run with
-    `iec2kmod sim --engine vm --inputs` to the violating cycle K, and the
+    `iec2kmod sim --engine interp --inputs` to the violating cycle K, and the
     property evaluated on the simulator's CSV (or the runtime error looked
     for at cycle K) -- independently of the verifier's own replay;
   * random traces (--traces, over the inputs the verifier reports, each a
     new value with probability 0.3 per step) run with `iec2kmod sim --engine
-    vm`; the properties evaluated after every step: a violation within N
+    interp`; the properties evaluated after every step: a violation within N
     steps contradicts "holds up to N", any violation contradicts "proved".
 
 Exit status 1 when there is an internal error or a contradicted verdict.
@@ -189,10 +190,10 @@ def construct(msg):
 
 # ------------------------------------------------------------ the interpreter's runs
 def sim_run(path, trace, steps, step_ns, watch, cwd, timeout):
-    """Runs `sim --engine vm` over `steps` steps; returns (rows, first fault
+    """Runs `sim --engine interp` over `steps` steps; returns (rows, first fault
     step or None, error text or None).  rows[k-1]: {var: text} after step k."""
     out_csv = Path(cwd) / "sim_out.csv"
-    args = ["sim", "--engine", "vm", str(path), "--duration", f"{(steps - 1) * step_ns}ns",
+    args = ["sim", "--engine", "interp", str(path), "--duration", f"{(steps - 1) * step_ns}ns",
             "--csv", str(out_csv)]
     if trace:
         args += ["--inputs", str(trace)]
@@ -455,7 +456,13 @@ def main(argv=None):
     ap.add_argument("--max-states", type=int, default=20000,
                     help="--referee explicit: states before the referee says too large")
     ap.add_argument("--jobs", type=int, default=2, help="--referee explicit: worker processes")
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few seconds' run at a small size (CI: tests/benchmarks): 2 "
+                         "projects, depth 3, one trace each (with --referee explicit: 2 "
+                         "projects, depth 3, 2,000 states)")
     a = ap.parse_args(argv)
+    if a.smoke:
+        a.count, a.depth, a.traces, a.timeout, a.max_states = 2, 3, 1, 60, 2000
     if a.referee == "explicit":
         return referee_main(a)
     if a.inputs_of:

@@ -69,9 +69,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--sanitize", action="store_true",
                    help="build with -fsanitize=undefined,address,float-cast-overflow "
                         "(the first report ends the run)")
-    s.add_argument("--engine", choices=("c", "vm"), default="c",
-                   help="c: compile the generated C and run it (default); vm: run the "
-                        "reference interpreter (no C compiler needed)")
+    s.add_argument("--engine", choices=("c", "interp", "vm"), default="c",
+                   help="c: compile the generated C and run it (default); interp: run the "
+                        "reference interpreter (no C compiler needed; 'vm' is an alias)")
     s.add_argument("--selective", nargs="?", const="all", choices=("all", "marked"),
                    help=SELECTIVE_HELP + " (C engine)")
     v = sub.add_parser("verify", help="prove properties of a configuration for every input "
@@ -178,17 +178,19 @@ def cmd_sim(args) -> int:
     project = front_end(args.files)
     if project is None:
         return EXIT_SOURCE
+    if args.engine == "vm":                  # the interpreter's former name
+        args.engine = "interp"
     try:
-        if args.engine == "vm" and args.sanitize:
+        if args.engine == "interp" and args.sanitize:
             raise sim.SimError("--sanitize applies to the C engine only")
-        if args.engine == "vm" and args.selective:
+        if args.engine == "interp" and args.selective:
             raise sim.SimError("--selective applies to the C engine only")
-        if args.engine == "vm":
+        if args.engine == "interp":
             from . import interp
             try:
                 machine = interp.Machine(project)
                 table = machine.table()
-            except interp.VMError as exc:
+            except interp.InterpError as exc:
                 raise sim.SimError(str(exc)) from None
         else:
             comp = compile_project(project, args.selective)
@@ -209,10 +211,10 @@ def cmd_sim(args) -> int:
         else:
             end = sim.parse_time(args.duration)
         watch = [w for w in args.watch.split(",") if w.strip()] if args.watch else None
-        if args.engine == "vm":
+        if args.engine == "interp":
             try:
                 res = interp.run(project, end, watch=watch, inputs=args.inputs, machine=machine)
-            except interp.VMError as exc:
+            except interp.InterpError as exc:
                 raise sim.SimError(str(exc)) from None
         else:
             res = sim.run(comp, end, watch=watch, inputs=args.inputs, sanitize=args.sanitize)
@@ -295,6 +297,12 @@ def cmd_verify(args) -> int:
 COMMANDS = {"export": cmd_export, "verify": cmd_verify, "check": cmd_check, "sim": cmd_sim, "gen": cmd_gen, "build": cmd_build}
 
 
+# the third-party modules of the optional features: (distribution, extra of
+# pyproject.toml); check, gen, build and sim need none of them
+OPTIONAL_MODULES = {"z3": ("z3-solver", "verify"), "docker": ("docker", "container"),
+                    "requests": ("requests", "container")}
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     from .frontend import InputError
@@ -306,6 +314,11 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         return 130
     except Exception as exc:  # noqa: BLE001 - the one place that catches everything
+        extra = OPTIONAL_MODULES.get((getattr(exc, "name", None) or "").split(".")[0])
+        if isinstance(exc, ModuleNotFoundError) and extra is not None:
+            print(f"iec2kmod: error: `{args.command}` needs {extra[0]}, which is not "
+                  f"installed: pip install 'iec2kmod[{extra[1]}]'", file=sys.stderr)
+            return EXIT_USAGE
         where = ""
         tb = exc.__traceback__
         while tb is not None:

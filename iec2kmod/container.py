@@ -63,9 +63,9 @@ def recipe_dir() -> str:
         os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "containers")
     if not os.path.isfile(os.path.join(d, "build-rootfs.sh")):
         try:  # an installed (non-editable) copy ships it as package data
-            from iec2kmod_containers import ROOT
-            d = str(ROOT)
-        except ImportError:
+            from .resources import containers_root
+            d = str(containers_root())
+        except FileNotFoundError:
             pass
     if not os.path.isfile(os.path.join(d, "build-rootfs.sh")):
         raise ContainerError(f"container recipe not found ({d}/build-rootfs.sh)")

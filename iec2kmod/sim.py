@@ -51,13 +51,13 @@ def parse_time(text: str) -> int:
 
 
 def runtime_dir() -> Path:
-    from kmod_templates import ROOT
-    return ROOT / "runtime"
+    from .resources import templates_root
+    return templates_root() / "runtime"
 
 
 def sim_dir() -> Path:
-    from kmod_templates import ROOT
-    return ROOT / "sim"
+    from .resources import templates_root
+    return templates_root() / "sim"
 
 
 def render_sim(what, selective=None):

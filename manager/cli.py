@@ -479,6 +479,10 @@ def main(argv: Optional[List[str]] = None) -> int:
               file=sys.stderr, flush=True)
         return 1
     except Exception as e:          # a bug: say so in one line, details on request
+        if isinstance(e, ModuleNotFoundError) and (e.name or "").startswith("pyroute2"):
+            print(f"{PROG}: pyroute2 is not installed: pip install 'iec2kmod[manager]'",
+                  file=sys.stderr, flush=True)
+            return 1
         if os.environ.get("PLC_MANAGER_DEBUG"):
             raise
         print(f"{PROG}: internal error: {e.__class__.__name__}: {e} "

@@ -12,7 +12,7 @@ import shlex
 import sys
 import time
 
-from iec2kmod.vm import Guest, GuestError
+from iec2kmod.testing.vm import Guest, GuestError
 
 T0 = time.monotonic()
 

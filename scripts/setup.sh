@@ -12,8 +12,9 @@
 #   2. download the RT kernel image that matches the installed headers and
 #      extract it (NOT install it) into $IEC2KMOD_CACHE/kernel/<kver>/, which is
 #      what the QEMU test guest boots (vmlinuz + lib/modules/<kver>/kernel/...);
-#   3. pip install -e .[test] of this repository (re-run when pyproject.toml changes;
-#      it brings z3-solver and pyuppaal, which `iec2kmod verify` / `export --uppaal` use);
+#   3. pip install -e .[all,test] of this repository (re-run when pyproject.toml
+#      changes): the compiler, every extra (z3-solver for verify/export, docker,
+#      pyroute2 for plc-manager) and the test dependencies (pytest, pyuppaal, ...);
 #      and extract the PVH-bootable kernel for fast QEMU boots;
 #   4. start dockerd if it is not running and build the project's module-build
 #      container image if it is missing (skipped with --no-container).
@@ -140,8 +141,8 @@ EOF
     if [ -f "$STAMP" ] && editable_ok; then
         say "iec2kmod installed in editable mode for $PY_REAL"
     else
-        say "pip install -e '$REPO[test]' with $PY_REAL"
-        "$PYTHON" -m pip install -q --root-user-action=ignore -e "$REPO[test]" || die "pip install -e $REPO[test] failed"
+        say "pip install -e '$REPO[all,test]' with $PY_REAL"
+        "$PYTHON" -m pip install -q --root-user-action=ignore -e "$REPO[all,test]" || die "pip install -e $REPO[all,test] failed"
         mkdir -p "$CACHE"
         rm -f "$CACHE"/pip-"$(echo "$PY_REAL" | md5sum | cut -c1-8)"-*.stamp
         touch "$STAMP"
@@ -152,7 +153,7 @@ fi
 if [ "$NO_PIP" = 1 ] && ! "$PYTHON" -c 'import iec2kmod' 2>/dev/null; then
     say "skipping the PVH kernel extraction (iec2kmod not importable, --no-pip)"
 else
-    (cd "$REPO" && "$PYTHON" -m iec2kmod.vm prepare) | sed 's/^/[setup] /' \
+    (cd "$REPO" && "$PYTHON" -m iec2kmod.testing.vm prepare) | sed 's/^/[setup] /' \
         || die "QEMU guest prerequisites are incomplete (see above)"
 fi
 

@@ -38,7 +38,8 @@ class GeneratedC:
 
 
 def _env():
-    from kmod_templates import ROOT
+    from ..resources import templates_root
+    ROOT = templates_root()
     return Environment(loader=FileSystemLoader(str(ROOT / "c")), undefined=StrictUndefined,
                        keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
                        autoescape=False)

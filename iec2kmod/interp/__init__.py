@@ -1,5 +1,5 @@
 """The reference interpreter: a second, independent execution of IEC
-61131-3 semantics (`iec2kmod sim --engine vm`).
+61131-3 semantics (`iec2kmod sim --engine interp`).
 
 It runs the checked AST of the front end directly, in Python, and shares
 nothing with the C code generator (not its plan, not its naming, not its
@@ -61,7 +61,7 @@ oracle is explicit about what it checks):
     the bodies of the actions whose Q is TRUE; the cycle model is written
     out in iec2kmod/codegen/sfc.py and implemented here on its own."""
 
-from .errors import Fault, VMError
-from .machine import LOOP_BUDGET, Machine, VMResult, run
+from .errors import Fault, InterpError
+from .machine import LOOP_BUDGET, Machine, InterpResult, run
 
-__all__ = ["run", "Machine", "VMResult", "VMError", "Fault", "LOOP_BUDGET"]
+__all__ = ["run", "Machine", "InterpResult", "InterpError", "Fault", "LOOP_BUDGET"]

@@ -19,6 +19,7 @@ from ..checks.il import _CR
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
                             StructT, SubrangeT, common, concrete)
+from ..checks.types import LREAL as LREAL_T
 from . import std
 from .conv import converter, int_to_f32, int_to_f64
 from .errors import ENUM, INDEX, LOOP, RANGE, Fault
@@ -1246,6 +1247,3 @@ def _fold(op, fs):
             acc = op(acc, f(env))
         return acc
     return fold
-
-
-from ..checks.types import LREAL as LREAL_T  # noqa: E402

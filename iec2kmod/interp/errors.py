@@ -25,5 +25,5 @@ class Fault(Exception):
         self.line = 0
 
 
-class VMError(Exception):
+class InterpError(Exception):
     """A usage error (unknown variable, bad trace): exit code 2."""

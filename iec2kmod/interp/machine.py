@@ -30,7 +30,7 @@ from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, c
 from .compiler import PouCompiler
 from ..execmodel import LOOP_BUDGET, MAX_TABLE_ELEMENTS, SIM_ITERATION_NS, kind_of
 from ..traces import Trace, TraceError, read_trace
-from .errors import LOOP, OVERRUN, WATCHDOG, Fault, VMError
+from .errors import LOOP, OVERRUN, WATCHDOG, Fault, InterpError
 from .fbs import body_of
 from .model import Initializer, Instance, copier, copy_of
 from .values import base_of, f32, wrap, wrap64
@@ -49,7 +49,7 @@ class Runtime:
 
 
 # a run, as the C simulator reports it too
-VMResult = Trace
+InterpResult = Trace
 
 
 @dataclass
@@ -116,7 +116,7 @@ class TaskRun:
 class Machine:
     def __init__(self, project):
         if not project.configurations:
-            raise VMError("the project has no CONFIGURATION to run")
+            raise InterpError("the project has no CONFIGURATION to run")
         self.p = project
         self.rt = Runtime()
         self.init = Initializer(project)
@@ -172,7 +172,7 @@ class Machine:
         for v in pou.vars.values():
             if v.section == "VAR_EXTERNAL":
                 if v.key not in scope:
-                    raise VMError(f"VAR_EXTERNAL '{v.name}' of {pou.name} has no global")
+                    raise InterpError(f"VAR_EXTERNAL '{v.name}' of {pou.name} has no global")
                 inst.r[v.key] = scope[v.key]
                 continue
             if v.section == "VAR_IN_OUT":
@@ -354,7 +354,7 @@ class Machine:
     def schedule(self, table, idx, events, end):
         tasks = self.tasks
         ntasks = len(tasks)
-        res = VMResult([table[i].path for i in idx], [], end_ns=end)
+        res = InterpResult([table[i].path for i in idx], [], end_ns=end)
         next_release = [0] * ntasks
         cycles = [0] * ntasks
         late = [0] * ntasks                # overrunning cycles in a row
@@ -532,7 +532,7 @@ def present(entry, v):
 _D = struct.Struct("<d")
 
 
-def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> VMResult:
+def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> InterpResult:
     """Runs the configuration from 0 to end_ns (inclusive) of simulated time
     (on ``machine``, a fresh Machine of the project, when given)."""
     m = machine if machine is not None else Machine(project)
@@ -543,14 +543,14 @@ def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> VMResult
         for w in watch:
             i = index.get(w.strip().upper())
             if i is None:
-                raise VMError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
+                raise InterpError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
             idx.append(i)
     else:
         idx = [i for i, e in enumerate(table) if e.owner in ("global", "direct")]
     try:
         events = read_trace(inputs, table) if inputs else []
     except TraceError as exc:
-        raise VMError(str(exc)) from None
+        raise InterpError(str(exc)) from None
     return m.schedule(table, idx, [(t, i, v) for t, _, i, _, v in events], end_ns)
 
 

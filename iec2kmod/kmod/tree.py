@@ -36,7 +36,8 @@ FP_FLAGS = "-mhard-float -msse -msse2 -fno-math-errno"
 
 
 def _env():
-    from kmod_templates import ROOT
+    from ..resources import templates_root
+    ROOT = templates_root()
     return Environment(loader=FileSystemLoader([str(ROOT / "kernel"), str(ROOT / "c")]),
                        undefined=StrictUndefined, keep_trailing_newline=True,
                        trim_blocks=True, lstrip_blocks=True)
@@ -62,7 +63,8 @@ def generate_tree(what, out: Path, selective=None) -> dict:
 
 def write_tree(comp, out: Path) -> dict:
     """Writes the kbuild tree of Compilation *comp*; returns the manifest."""
-    from kmod_templates import ROOT
+    from ..resources import templates_root
+    ROOT = templates_root()
     env = _env()
     project, sel, plan, gen, mp = comp.project, comp.selective, comp.plan, comp.gen, comp.modules
     cfg = project.configurations[0]

@@ -115,6 +115,7 @@ from dataclasses import dataclass, field
 
 import z3
 
+from ..checks.types import BOOL as _BOOL, StringT, concrete
 from ..diagnostics import Diagnostics
 from .encode import FALSE, TRUE, Encoder, Frame, Refuse, const_of, land
 from .engine import System, check
@@ -396,6 +397,3 @@ def verify(project, cli_props=(), cli_assumes=(), depth=20, instance=None, diags
     out.runs = info.get("runs")
     out.seconds = time.perf_counter() - t0
     return out
-
-
-from ..checks.types import BOOL as _BOOL, StringT, concrete  # noqa: E402

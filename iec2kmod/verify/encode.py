@@ -32,6 +32,7 @@ from ..checks.body import EnumValue, _CR
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
                             StructT, SubrangeT, common, concrete)
+from ..checks.types import ELEMENTARY as _E
 from ..interp.compiler import ARITH, PouCompiler, implicit
 from ..interp.errors import DIV_ZERO, ENUM, INDEX, LOOP, MUX, RANGE
 from ..interp.machine import LOOP_BUDGET
@@ -1761,6 +1762,5 @@ _TIME_FAMILIES = {"ADD_TIME", "SUB_TIME", "MUL_TIME", "DIV_TIME", "ADD_TOD_TIME"
                   "SUB_TOD_TIME", "SUB_DT_TIME", "SUB_DATE_DATE", "SUB_TOD_TOD", "SUB_DT_DT",
                   "CONCAT_DATE_TOD"}
 
-from ..checks.types import ELEMENTARY as _E  # noqa: E402
 
 ELEM_LINT = _E["LINT"]

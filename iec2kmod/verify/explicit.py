@@ -3,7 +3,7 @@ configuration over the reference interpreter, the referee of the z3 engine.
 
 It shares nothing with the z3 encoder (encode.py, model.py, engine.py,
 ranges.py): the runs are the interpreter's own (iec2kmod.interp), one
-scheduler instant at a time (Machine._instant, the code `sim --engine vm`
+scheduler instant at a time (Machine._instant, the code `sim --engine interp`
 runs), from states saved and restored canonically.
 
 The time point (the same as the z3 engine's): the configuration advances in
@@ -62,6 +62,9 @@ from .. import ast
 from ..checks.types import BOOL, EnumT, SubrangeT, concrete
 from ..diagnostics import Diagnostics
 from ..interp.compiler import PouCompiler
+from .cli import EXIT_BOUNDED as EXIT_UNDECIDED  # the exit statuses are the command's
+from .cli import (EXIT_INTERNAL, EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE, EXIT_VACUOUS,
+                  EXIT_VIOLATED, _fmt_time)
 from ..interp.errors import Fault
 from ..interp.machine import Machine
 from ..interp.model import Instance
@@ -651,7 +654,7 @@ def write_trace(out, result, path):
 
 
 def replay(out, result, trace_path, vcd_path=None, cli_props=(), instance=None):
-    """Runs the trace with `sim --engine vm`'s interpreter to (K-1)*step;
+    """Runs the trace with `sim --engine interp`'s interpreter to (K-1)*step;
     (confirmed, message)."""
     from .. import interp
     from ..traces import write_vcd
@@ -678,9 +681,6 @@ def replay(out, result, trace_path, vcd_path=None, cli_props=(), instance=None):
 
 
 # ------------------------------------------------------------ the command
-from .cli import EXIT_BOUNDED as EXIT_UNDECIDED  # noqa: E402  (the exit statuses are the command's)
-from .cli import (EXIT_INTERNAL, EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE,  # noqa: E402
-                  EXIT_VACUOUS, EXIT_VIOLATED, _fmt_time)
 
 
 def _duration(ns):

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import z3
 
 from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, concrete
+from ..checks.types import BOOL as _BOOL, TIME as _TIME, Elementary
 from ..interp.machine import Machine
 from ..interp.model import Instance
 from .encode import (FALSE, Opaque, store_into, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
@@ -495,6 +496,5 @@ class SymbolicMachine:
         return out
 
 
-from ..checks.types import BOOL as _BOOL, TIME as _TIME, Elementary  # noqa: E402
 
 STATE2 = Elementary("$STATE", "uint", 2, None)   # a timer's automaton location

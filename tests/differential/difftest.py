@@ -176,8 +176,8 @@ def run_vm_inproc(project, plan, end_ns, trace):
             return EngineRun("vm", "error", f"the interpreter's variable table lacks "
                              f"{len(missing)} of the simulator's: {missing[:5]}")
         res = interp.run(project, end_ns, watch=watch, inputs=str(trace), machine=machine)
-    except interp.VMError as exc:
-        return EngineRun("vm", "error", f"VMError: {exc}")
+    except interp.InterpError as exc:
+        return EngineRun("vm", "error", f"InterpError: {exc}")
     except RecursionError as exc:
         return EngineRun("vm", "crash", f"RecursionError: {exc}")
     except Exception as exc:  # noqa: BLE001 - an interpreter crash is a finding

@@ -1,7 +1,7 @@
 """Differential tier: random valid projects (progen.py) run in every engine
 available -- the C simulator, the C simulator under ASan+UBSan, the C
 simulator with selective execution (`sim --selective`: skipping blocks
-must be invisible) and, once `iec2kmod sim --engine vm` exists, the
+must be invisible) and, once `iec2kmod sim --engine interp` exists, the
 reference interpreter -- must give identical traces (faults included).  300 projects on a fixed seed, 100
 cycles each, in batches of 20 projects per simulator build on 2 processes
 (bodies 0.6 of the benchmark's default size, to stay within the CI budget).

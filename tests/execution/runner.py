@@ -85,7 +85,8 @@ class CaseError(Exception):
 
 def _fault_names() -> tuple:
     """The runtime's fault names (iec_fault_name() in iec_fault.h)."""
-    from kmod_templates import ROOT as KT
+    from iec2kmod.resources import templates_root
+    KT = templates_root()
     text = (KT / "runtime" / "iec_fault.h").read_text()
     body = text[text.index("iec_fault_name("):]
     body = body[:body.index("\n}\n")]
@@ -474,7 +475,7 @@ def simulate(project, end, watch=None, inputs=None, sanitize=False, engine="c"):
         from iec2kmod import interp
         try:
             return interp.run(project, end, watch=watch, inputs=inputs)
-        except interp.VMError as exc:
+        except interp.InterpError as exc:
             raise sim.SimError(str(exc)) from None
     return sim.run(project, end, watch=watch, inputs=inputs, sanitize=sanitize,
                    build_dir=build_root() / "sim")

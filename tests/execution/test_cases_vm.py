@@ -1,5 +1,5 @@
 """Every case under cases/ runs in the reference interpreter
-(`iec2kmod sim --engine vm`, iec2kmod/interp) and must show the values and
+(`iec2kmod sim --engine interp`, iec2kmod/interp) and must show the values and
 faults written in its EXPECT blocks -- the same expectations the compiled C
 simulator meets (test_cases.py).  No C compiler is involved."""
 

@@ -25,7 +25,7 @@ MS = 1_000_000
 # engine name -> extra arguments of `iec2kmod sim`; a new engine is one line
 ENGINES = {
     "c": [],
-    "vm": ["--engine", "vm"],
+    "vm": ["--engine", "interp"],
 }
 
 

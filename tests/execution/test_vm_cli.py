@@ -1,4 +1,4 @@
-"""`iec2kmod sim --engine vm` is a drop-in for the C engine on the command
+"""`iec2kmod sim --engine interp` is a drop-in for the C engine on the command
 line: the same stdout, --csv, --vcd and --list bytes, the same runtime fault
 message and exit code, the same usage errors."""
 
@@ -21,7 +21,7 @@ def sim(tmp_path, engine, *args):
     out.mkdir(exist_ok=True)
     p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "sim", *args,
                         "--csv", str(out / "o.csv"), "--vcd", str(out / "o.vcd"),
-                        *(["--engine", "vm"] if engine == "vm" else [])],
+                        *(["--engine", engine] if engine != "c" else [])],
                        cwd=ROOT, capture_output=True, text=True, timeout=600)
     return p, (out / "o.csv"), (out / "o.vcd")
 
@@ -40,7 +40,7 @@ def test_same_output_files(example, tmp_path):
     trace.write_text("time,variable,value\n" + TRACES[example])
     args = [f"examples/{example}", "--duration", "3s", "--inputs", str(trace)]
     c, c_csv, c_vcd = sim(tmp_path, "c", *args)
-    v, v_csv, v_vcd = sim(tmp_path, "vm", *args)
+    v, v_csv, v_vcd = sim(tmp_path, "interp", *args)
     assert c.returncode == 0, c.stderr
     assert (v.returncode, v.stdout, v.stderr) == (c.returncode, c.stdout, c.stderr)
     assert v_csv.read_bytes() == c_csv.read_bytes()
@@ -48,11 +48,24 @@ def test_same_output_files(example, tmp_path):
     assert c_csv.read_text().count("\n") > 5
 
 
+def test_vm_is_an_alias_of_interp(tmp_path):
+    """`--engine vm`, the interpreter's former name, still selects it."""
+    args = ["examples/traffic_light", "--cycles", "5"]
+    i, i_csv, _ = sim(tmp_path, "interp", *args)
+    v, v_csv, _ = sim(tmp_path, "vm", *args)
+    assert i.returncode == 0, i.stderr
+    assert (v.returncode, v.stdout, v.stderr) == (i.returncode, i.stdout, i.stderr)
+    assert v_csv.read_bytes() == i_csv.read_bytes()
+    s = subprocess.run([sys.executable, "-m", "iec2kmod.cli", "sim", *args, "--engine", "vm",
+                        "--sanitize"], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert s.returncode == 2 and "--sanitize applies to the C engine only" in s.stderr
+
+
 def test_same_list(tmp_path):
     run = [sys.executable, "-m", "iec2kmod.cli", "sim", "examples/batch_mixer", "--list",
            "--cycles", "1"]
     c = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=600)
-    v = subprocess.run(run + ["--engine", "vm"], cwd=ROOT, capture_output=True, text=True,
+    v = subprocess.run(run + ["--engine", "interp"], cwd=ROOT, capture_output=True, text=True,
                        timeout=600)
     assert c.returncode == v.returncode == 0
     assert v.stdout == c.stdout and len(c.stdout.splitlines()) > 10
@@ -61,7 +74,7 @@ def test_same_list(tmp_path):
 def test_same_fault_report(tmp_path):
     case = CASES / "faults" / "fault_other_task.st"
     c, _, _ = sim(tmp_path, "c", str(case), "--cycles", "6")
-    v, _, _ = sim(tmp_path, "vm", str(case), "--cycles", "6")
+    v, _, _ = sim(tmp_path, "interp", str(case), "--cycles", "6")
     assert c.returncode == 1 and "runtime error:" in c.stderr
     assert (v.returncode, v.stdout, v.stderr) == (c.returncode, c.stdout, c.stderr)
 
@@ -70,7 +83,7 @@ def test_same_usage_errors(tmp_path):
     for args in (["examples/traffic_light", "--cycles", "3", "--watch", "no_such_var"],
                  ["examples/traffic_light", "--duration", "forever"]):
         c, _, _ = sim(tmp_path, "c", *args)
-        v, _, _ = sim(tmp_path, "vm", *args)
+        v, _, _ = sim(tmp_path, "interp", *args)
         assert c.returncode == 2
         assert (v.returncode, v.stderr) == (c.returncode, c.stderr)
 
@@ -104,7 +117,7 @@ def test_input_trace_values_out_of_range_are_refused(tmp_path, var, value, ok):
     trace = tmp_path / "in.csv"
     trace.write_text(f"time,variable,value\n0,{var},{value}\n")
     c, _, _ = sim(tmp_path, "c", str(src), "--cycles", "1", "--inputs", str(trace))
-    v, _, _ = sim(tmp_path, "vm", str(src), "--cycles", "1", "--inputs", str(trace))
+    v, _, _ = sim(tmp_path, "interp", str(src), "--cycles", "1", "--inputs", str(trace))
     assert (v.returncode, v.stderr) == (c.returncode, c.stderr)
     if ok:
         assert c.returncode == 0, c.stderr
@@ -116,7 +129,7 @@ def test_input_trace_values_out_of_range_are_refused(tmp_path, var, value, ok):
 def test_vm_needs_no_c_compiler():
     env = {**__import__("os").environ, "CC": "no-such-compiler"}
     run = [sys.executable, "-m", "iec2kmod.cli", "sim", "examples/traffic_light", "--cycles", "3"]
-    v = subprocess.run(run + ["--engine", "vm"], cwd=ROOT, capture_output=True, text=True,
+    v = subprocess.run(run + ["--engine", "interp"], cwd=ROOT, capture_output=True, text=True,
                        timeout=600, env=env)
     assert v.returncode == 0 and "simulated" in v.stdout, v.stderr
     c = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=600, env=env)

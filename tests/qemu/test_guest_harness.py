@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from iec2kmod import kbuild
-from iec2kmod.vm import pytest_fixtures as fx
-from iec2kmod.vm import (GuestCommandTimeout, GuestDied, GuestTimeout, KernelLogError,
+from iec2kmod.testing.vm import pytest_fixtures as fx
+from iec2kmod.testing.vm import (GuestCommandTimeout, GuestDied, GuestTimeout, KernelLogError,
                          CommandFailed)
 
 HELLO_SRC = Path(__file__).parent / "hello_module"

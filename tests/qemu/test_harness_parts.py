@@ -9,9 +9,9 @@ import subprocess
 import pytest
 
 from iec2kmod import kbuild
-from iec2kmod.vm import kernel_log_problems
-from iec2kmod.vm.initramfs import CpioWriter, ModuleIndex
-from iec2kmod.vm.kernel import find_kernel, VMSetupError
+from iec2kmod.testing.vm import kernel_log_problems
+from iec2kmod.testing.vm.initramfs import CpioWriter, ModuleIndex
+from iec2kmod.testing.vm.kernel import find_kernel, VMSetupError
 
 
 def test_cpio_newc_archive_is_read_by_gnu_cpio(tmp_path):
@@ -103,7 +103,7 @@ def test_kbuild_clean(tmp_path):
 
 FAKE_GUEST = r'''
 import re
-from iec2kmod.vm.guest import CommandResult, Guest
+from iec2kmod.testing.vm.guest import CommandResult, Guest
 
 
 class FakeProc:
@@ -176,7 +176,7 @@ class FakeGuest(Guest):
 
 FAKE_CONFTEST = r'''
 import os
-import iec2kmod.vm.pytest_fixtures as fx
+import iec2kmod.testing.vm.pytest_fixtures as fx
 from fakeguest import FakeGuest
 
 
@@ -192,13 +192,13 @@ def _boot(workdir, logdir, **kw):
 fx._boot = _boot
 fx._fail_if_missing = lambda: None
 fx.SETTLE_SECONDS = 0
-from iec2kmod.vm.pytest_fixtures import guest, guest_factory, guest_session, guest_workdir  # noqa
+from iec2kmod.testing.vm.pytest_fixtures import guest, guest_factory, guest_session, guest_workdir  # noqa
 '''
 
 FAKE_TESTS = r'''
 import pytest
-import iec2kmod.vm.pytest_fixtures as fx
-from iec2kmod.vm import GuestDied
+import iec2kmod.testing.vm.pytest_fixtures as fx
+from iec2kmod.testing.vm import GuestDied
 
 W = "WARNING: CPU: 0 PID: 9 at fake.c:1 "
 
@@ -262,7 +262,7 @@ def test_k_factory_guest_warns(guest_factory):
 
 
 def test_l_provoked_and_consumed(guest):
-    from iec2kmod.vm import KernelLogError
+    from iec2kmod.testing.vm import KernelLogError
     guest.emit(W + "provoked")
     with pytest.raises(KernelLogError):
         guest.check_kernel_log()
@@ -345,13 +345,13 @@ def test_fixtures_fail_every_blind_spot_of_the_kernel_log(tmp_path):
 
 
 def _reader_guest(tmp_path):
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     g = Guest(str(tmp_path), console_log=str(tmp_path / "console.log"))
     return g
 
 
 def test_kernel_log_cursor_reads_every_record_exactly_once(tmp_path):
-    from iec2kmod.vm.guest import _KLOG_SYNC
+    from iec2kmod.testing.vm.guest import _KLOG_SYNC
     g = _reader_guest(tmp_path)
     f = ("6,0,1000,-;Linux version x\n"
          " SUBSYSTEM=virtio\n"

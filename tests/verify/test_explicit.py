@@ -1,6 +1,6 @@
 """`iec2kmod verify --engine explicit`: the explicit-state referee on small
 hand-written programs -- proved, violated at the shortest cycle (its
-counterexample replayed by `iec2kmod sim --engine vm`), vacuous, too large,
+counterexample replayed by `iec2kmod sim --engine interp`), vacuous, too large,
 a fault that stops only its task, and the PRESS of issue 22."""
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ def verdict(out, name):
 
 def sim_final(capsys, proj, trace, duration, watch, tmp_path):
     out_csv = tmp_path / "sim.csv"
-    cli.main(["sim", "--engine", "vm", str(proj), "--inputs", str(trace), "--duration",
+    cli.main(["sim", "--engine", "interp", str(proj), "--inputs", str(trace), "--duration",
               duration, "--watch", ",".join(watch), "--csv", str(out_csv)])
     err = capsys.readouterr().err
     last = {}

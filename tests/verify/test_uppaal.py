@@ -1,7 +1,7 @@
 """`iec2kmod export --uppaal`: the model parses with pyuppaal, its queries
 are the properties, and random input traces replayed through the exported
 automata (uppaal_net.py) give, after every scan, the values the simulator
-gives (the reference interpreter, `sim --engine vm`)."""
+gives (the reference interpreter, `sim --engine interp`)."""
 
 from __future__ import annotations
 

@@ -9,7 +9,7 @@ import os
 import stat
 from typing import Dict, Iterable, List, Optional
 
-from ..kbuild import modinfo
+from ...kbuild import modinfo
 
 __all__ = ["CpioWriter", "ModuleIndex"]
 

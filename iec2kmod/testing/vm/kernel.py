@@ -10,7 +10,7 @@ import shutil
 import struct
 from typing import List, Optional
 
-from .. import kbuild
+from ... import kbuild
 
 SETUP_HINT = "run scripts/setup.sh"
 

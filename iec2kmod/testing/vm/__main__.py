@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""``python -m iec2kmod.vm check | prepare | run | shell``
+"""``python -m iec2kmod.testing.vm check | prepare | run | shell``
 
 check    list missing prerequisites of the QEMU guest (exit 1 if any)
 prepare  check, then extract the PVH-bootable kernel once (used by setup.sh)
@@ -31,7 +31,7 @@ def _guest(a) -> Guest:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m iec2kmod.vm", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m iec2kmod.testing.vm", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
     sub.add_parser("check")

@@ -3,7 +3,7 @@
 
 Use them from a conftest.py::
 
-    from iec2kmod.vm.pytest_fixtures import (   # noqa: F401
+    from iec2kmod.testing.vm.pytest_fixtures import (   # noqa: F401
         guest, guest_session, guest_workdir, guest_tmp_path, guest_factory, kdir)
 
 * ``guest`` (per test): the session's running guest.  One guest boots for the
@@ -63,7 +63,7 @@ from typing import Any, Dict, List, Optional
 
 import pytest
 
-from .. import kbuild
+from ... import kbuild
 from .guest import Guest, GuestError, KernelLogError
 from .kernel import check_prerequisites
 

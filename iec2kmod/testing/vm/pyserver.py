@@ -12,7 +12,7 @@ virtio-serial port ``iec2kmod.py`` with length-prefixed JSON frames:
     reply   = {"id": n, "rc": int, "out": base64, "timed_out": bool}
 
 plus one {"id": 0, "ready": true, "preloaded": [...], "failed": {...}} at start.
-Started by :meth:`iec2kmod.vm.Guest.pyrun`; stdlib only (besides preloads).
+Started by :meth:`iec2kmod.testing.vm.Guest.pyrun`; stdlib only (besides preloads).
 """
 
 from __future__ import annotations

@@ -695,7 +695,7 @@ class Guest:
     # -------------------------------------------------- warm Python server ----
     def start_pyserver(self, preload: Optional[Sequence[str]] = None,
                        timeout: float = 300.0) -> dict:
-        """Start the guest's Python fork server (see :mod:`iec2kmod.vm.pyserver`)
+        """Start the guest's Python fork server (see :mod:`iec2kmod.testing.vm.pyserver`)
         with *preload* (default: the constructor's) imported once; :meth:`pyrun`
         starts it on first use.  Returns its ready message (``preloaded``,
         ``failed`` modules)."""

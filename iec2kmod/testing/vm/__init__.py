@@ -2,7 +2,7 @@
 """QEMU (TCG) guest harness: boot Debian's PREEMPT_RT kernel once, run commands
 in it, insert modules built on the host, run the host's Python in it.
 
-See :mod:`iec2kmod.vm.guest` and, for pytest, :mod:`iec2kmod.vm.pytest_fixtures`.
+See :mod:`iec2kmod.testing.vm.guest` and, for pytest, :mod:`iec2kmod.testing.vm.pytest_fixtures`.
 """
 
 from .guest import (KERNEL_LOG_PATTERNS, CommandFailed, CommandResult, Guest,
