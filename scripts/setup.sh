@@ -12,7 +12,7 @@
 #   2. download the RT kernel image that matches the installed headers and
 #      extract it (NOT install it) into $IEC2KMOD_CACHE/kernel/<kver>/, which is
 #      what the QEMU test guest boots (vmlinuz + lib/modules/<kver>/kernel/...);
-#   3. pip install -e .[test] of this repository (re-run when pyproject.toml changes;
+#   3. pip install -e .[test,serve] of this repository (re-run when pyproject.toml changes;
 #      it brings z3-solver and pyuppaal, which `iec2kmod verify` / `export --uppaal` use);
 #      and extract the PVH-bootable kernel for fast QEMU boots;
 #   4. start dockerd if it is not running and build the project's module-build
@@ -140,8 +140,8 @@ EOF
     if [ -f "$STAMP" ] && editable_ok; then
         say "iec2kmod installed in editable mode for $PY_REAL"
     else
-        say "pip install -e '$REPO[test]' with $PY_REAL"
-        "$PYTHON" -m pip install -q --root-user-action=ignore -e "$REPO[test]" || die "pip install -e $REPO[test] failed"
+        say "pip install -e '$REPO[test,serve]' with $PY_REAL"
+        "$PYTHON" -m pip install -q --root-user-action=ignore -e "$REPO[test,serve]" || die "pip install -e $REPO[test,serve] failed"
         mkdir -p "$CACHE"
         rm -f "$CACHE"/pip-"$(echo "$PY_REAL" | md5sum | cut -c1-8)"-*.stamp
         touch "$STAMP"

@@ -15,7 +15,7 @@ from __future__ import annotations
 import asyncio
 import errno
 import threading
-from typing import Dict, List, Sequence, Tuple
+from typing import Dict, Sequence, Tuple
 
 from .. import values
 from ..netlink import Client, KernelError, Status
@@ -115,7 +115,3 @@ class Kernel:
     async def status(self) -> Status:
         return await self._run(self.status_now)
 
-
-def chunks(seq: List, n: int):
-    for i in range(0, len(seq), n):
-        yield seq[i:i + n]

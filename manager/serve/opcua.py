@@ -26,7 +26,6 @@ import hmac
 import logging
 import os
 import secrets
-import time
 from pathlib import Path
 from typing import Dict, List, Optional
 
@@ -297,7 +296,6 @@ class OpcUaServer:
         async def write(params, user=None):
             ours, others = [], []
             for i, wv in enumerate(params.NodesToWrite):
-                sid = wv.NodeId.to_string()
                 if wv.NodeId.NamespaceIndex == srv.ns and \
                         wv.AttributeId == ua.AttributeIds.Value:
                     ours.append((i, wv))
@@ -408,5 +406,4 @@ def now():
     return datetime.datetime.now(datetime.timezone.utc)
 
 
-__all__ = ["OpcUaServer", "add_user", "hash_password", "check_password", "read_users",
-           "time"]
+__all__ = ["OpcUaServer", "add_user", "hash_password", "check_password", "read_users"]
