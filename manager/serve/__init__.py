@@ -90,8 +90,16 @@ async def serve(a) -> int:
                              "serve-user`) and anonymous access is off (--allow-anonymous)")
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
+    me = asyncio.current_task()
+    serving = [False]
+
+    def on_signal():
+        stop.set()
+        if not serving[0]:          # still starting: give up at once
+            me.cancel()
+
     for sig in (signal.SIGTERM, signal.SIGINT):
-        loop.add_signal_handler(sig, stop.set)
+        loop.add_signal_handler(sig, on_signal)
     mb = ua = None
     lines = []
     try:
@@ -110,6 +118,7 @@ async def serve(a) -> int:
             ua = OpcUaServer(model, kernel, a.opcua, writable_all=a.writable, users=users,
                              allow_anonymous=a.allow_anonymous, security=a.security,
                              cert_dir=Path(a.cert_dir))
+            print(f"starting opc ua {a.opcua} ({len(model.order)} variables)", flush=True)
             await ua.start()
             lines.append(f"opc ua {a.opcua}: {len(model.order)} variables, "
                          f"{len(model.access)} access paths, security "
@@ -119,7 +128,10 @@ async def serve(a) -> int:
         period = max((fastest or 0) / 1e9, a.period_min / 1000.0)
         lines.append(f"serving {model.configuration}: polling every {period * 1000:.0f} ms")
         print("\n".join(lines), flush=True)
+        serving[0] = True
         await _poll(kernel, model, ua, period, stop)
+    except asyncio.CancelledError:
+        print("serve: stopped while starting", flush=True)
     finally:
         if ua is not None:
             await ua.stop()

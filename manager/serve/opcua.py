@@ -117,6 +117,33 @@ def ensure_certificate(cert: Path, key: Path, app_uri: str, host: str) -> None:
     cert.write_bytes(c.public_bytes(Encoding.DER))
 
 
+def ensure_shelf(directory: Path) -> Path:
+    """asyncua's standard address space as a shelf file in *directory*
+    (built once: building it costs seconds on a PC, minutes on a small
+    CPU; loading it a fraction of a second).  asyncua looks for the file
+    itself (or NAME.db); the dbm module may write NAME.dat/NAME.dir, so an
+    empty NAME marks a complete shelf."""
+    import asyncio
+    import asyncua
+    shelf = directory / f"asyncua-{getattr(asyncua, '__version__', 'x')}-aspace"
+    if shelf.is_file() or shelf.with_suffix(".db").is_file():
+        return shelf
+
+    async def build():
+        from asyncua import Server
+        await Server().init(shelf)
+
+    directory.mkdir(parents=True, exist_ok=True)
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        asyncio.run(build())
+    else:
+        raise RuntimeError("ensure_shelf: call it outside the event loop")
+    shelf.touch()
+    return shelf
+
+
 # ---------------------------------------------------------------------------
 
 class Users:
@@ -186,11 +213,17 @@ class OpcUaServer:
 
     # -- address space -------------------------------------------------
     async def start(self) -> None:
+        import asyncua
         from asyncua import Server, ua
         from urllib.parse import urlparse
         host = urlparse(self.url).hostname or "localhost"
         s = Server(user_manager=self.users)
-        await s.init()
+        self.cert_dir.mkdir(parents=True, exist_ok=True)
+        shelf = self.cert_dir / f"asyncua-{getattr(asyncua, '__version__', 'x')}-aspace"
+        fresh = not (shelf.is_file() or shelf.with_suffix(".db").is_file())
+        await s.init(shelf)
+        if fresh:
+            shelf.touch()
         s.set_endpoint(self.url)
         s.set_server_name(f"iec2kmod {self.model.configuration}")
         app_uri = f"urn:iec2kmod:{self.model.configuration}"
@@ -212,6 +245,7 @@ class OpcUaServer:
         await self._build()
         self._hook_writes()
         await s.start()
+        self.started = True
 
     async def _build(self) -> None:
         from asyncua import ua
@@ -384,7 +418,7 @@ class OpcUaServer:
         return n
 
     async def stop(self) -> None:
-        if self.server is not None:
+        if self.server is not None and getattr(self, "started", False):
             await self.server.stop()
 
 
