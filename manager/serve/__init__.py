@@ -102,6 +102,7 @@ async def serve(a) -> int:
         loop.add_signal_handler(sig, on_signal)
     mb = ua = None
     lines = []
+    stats = PollStats()
     try:
         if a.modbus:
             from . import modbus
@@ -129,7 +130,7 @@ async def serve(a) -> int:
         lines.append(f"serving {model.configuration}: polling every {period * 1000:.0f} ms")
         print("\n".join(lines), flush=True)
         serving[0] = True
-        await _poll(kernel, model, ua, period, stop)
+        await _poll(kernel, model, ua, period, stop, stats)
     except asyncio.CancelledError:
         print("serve: stopped while starting", flush=True)
     finally:
@@ -141,35 +142,55 @@ async def serve(a) -> int:
     print(f"stopped: {kernel.requests} kernel requests"
           + (f", modbus {mb.plc_context.requests} requests ({mb.plc_context.refused} refused)"
              if mb else "")
-          + (f", opc ua {ua.writes} writes ({ua.refused} refused)" if ua else ""), flush=True)
+          + (f", opc ua {ua.writes} writes ({ua.refused} refused); poller: {stats.text()}"
+             if ua else ""), flush=True)
     return 0
 
 
-async def _poll(kernel, model, ua, period: float, stop: asyncio.Event) -> None:
+class PollStats:
+    def __init__(self) -> None:
+        self.polls = 0
+        self.total = 0.0
+        self.max = 0.0
+        self.late = 0
+
+    def text(self) -> str:
+        if not self.polls:
+            return "no polls"
+        return (f"{self.polls} polls, {1000 * self.total / self.polls:.1f} ms mean, "
+                f"{1000 * self.max:.1f} ms max, {self.late} longer than the period")
+
+
+async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
+                stats: PollStats) -> None:
+    """Reads every variable and the status each *period*; a poll that takes
+    longer than the period is followed by a pause as long as itself (at
+    most half the server's time goes to polling, the clients get the
+    rest)."""
     from .opcua import now
     paths = list(model.order)
-    late = 0
     failing = False
-    next_t = time.monotonic()
     while not stop.is_set():
+        t0 = time.monotonic()
         if ua is not None:
             try:
                 snap = await kernel.read(paths)
                 st = await kernel.status()
                 await ua.update(snap, st, now())
                 if failing:
-                    log.warning("serve: the kernel answers again")
+                    print("serve: the kernel answers again", file=sys.stderr, flush=True)
                 failing = False
             except PLCError as e:
                 if not failing:
                     print(f"serve: cannot read the kernel: {e}", file=sys.stderr, flush=True)
                 failing = True
-        next_t += period
-        delay = next_t - time.monotonic()
-        if delay < 0:
-            late += 1
-            next_t = time.monotonic()
-            delay = 0
+        took = time.monotonic() - t0
+        stats.polls += 1
+        stats.total += took
+        stats.max = max(stats.max, took)
+        if took > period:
+            stats.late += 1
+        delay = max(period - took, min(took, 1.0)) if took > period else period - took
         try:
             await asyncio.wait_for(stop.wait(), timeout=delay if ua is not None else None)
         except asyncio.TimeoutError:
@@ -178,8 +199,10 @@ async def _poll(kernel, model, ua, period: float, stop: asyncio.Event) -> None:
 
 def main_serve(a) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(name)s: %(message)s")
-    for noisy in ("asyncua", "pymodbus"):
-        logging.getLogger(noisy).setLevel(logging.ERROR)
+    logging.getLogger("asyncua").setLevel(logging.ERROR)
+    # pymodbus logs a client that leaves mid-request as an error with a dump
+    # of its last frames: the server counts requests and refusals itself
+    logging.getLogger("pymodbus").setLevel(logging.CRITICAL)
     return asyncio.run(serve(a))
 
 

@@ -42,9 +42,9 @@ log = logging.getLogger("plc_manager.serve.opcua")
 SCRYPT = (2 ** 14, 8, 1)
 
 
-def hash_password(password: str, salt: Optional[bytes] = None) -> str:
+def hash_password(password: str, salt: Optional[bytes] = None, n: int = SCRYPT[0]) -> str:
     salt = salt or secrets.token_bytes(16)
-    n, r, p = SCRYPT
+    _, r, p = SCRYPT
     h = hashlib.scrypt(password.encode(), salt=salt, n=n, r=r, p=p, dklen=32)
     return f"scrypt${n}${r}${p}${salt.hex()}${h.hex()}"
 
@@ -80,7 +80,7 @@ def read_users(path: str) -> Dict[str, tuple]:
     return users
 
 
-def add_user(path: str, name: str, role: str, password: str) -> None:
+def add_user(path: str, name: str, role: str, password: str, n: int = SCRYPT[0]) -> None:
     if not name or ":" in name or role not in ("read", "write"):
         raise UsageError("a user name without ':' and a role read or write")
     lines = []
@@ -88,7 +88,7 @@ def add_user(path: str, name: str, role: str, password: str) -> None:
     if p.exists():
         lines = [ln for ln in p.read_text().splitlines()
                  if ln.strip() and ln.split(":")[0] != name]
-    lines.append(f"{name}:{role}:{hash_password(password)}")
+    lines.append(f"{name}:{role}:{hash_password(password, n=n)}")
     p.write_text("\n".join(lines) + "\n")
     os.chmod(p, 0o600)
 
@@ -154,16 +154,25 @@ class Users:
         self.users = users
         self.anonymous = anonymous
         self.refused = 0
+        # passwords verified once (scrypt is slow by design, and asyncua
+        # asks in its event loop): user -> a keyed digest of the password
+        self._key = secrets.token_bytes(32)
+        self._verified: Dict[str, bytes] = {}
 
     def get_user(self, iserver, username=None, password=None, certificate=None):
         from asyncua.crypto.permission_rules import User, UserRole
         if username is None:
             return User(role=UserRole.Anonymous, name=None) if self.anonymous else None
         u = self.users.get(username)
+        if u is not None and password is not None:
+            mac = hmac.new(self._key, password.encode(), "sha256").digest()
+            if hmac.compare_digest(self._verified.get(username, b""), mac):
+                return User(role=UserRole.User, name=username)
         if u is None or password is None or not check_password(password, u[1]):
             self.refused += 1
             log.warning("opcua: login of %r refused", username)
             return None
+        self._verified[username] = mac
         return User(role=UserRole.User, name=username)
 
     def may_write(self, user) -> bool:

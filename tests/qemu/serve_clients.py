@@ -96,7 +96,9 @@ async def opcua(url: str, cert: str, key: str) -> dict:
     out = {}
 
     async def client(user=None, password=None, secure=True):
-        c = Client(url, timeout=30)
+        # under TCG a request can take seconds: the client's health probe
+        # (1 s by default) would call the connection lost
+        c = Client(url, timeout=60, watchdog_intervall=30)
         c.session_timeout = 60000
         if secure:
             await c.set_security(SecurityPolicyBasic256Sha256, cert, key,
@@ -114,11 +116,15 @@ async def opcua(url: str, cert: str, key: str) -> dict:
         await c.disconnect()
         return None
 
+    t = time.monotonic()
     out["wrong_password"] = await refused(await client("op", "not-the-password"))
     out["anonymous"] = await refused(await client())
     out["unencrypted"] = await refused(await client("op", "operator-pw", secure=False))
+    out["t_refusals"] = round(time.monotonic() - t, 1)
+    t = time.monotonic()
     c = await client("op", "operator-pw")
     await c.connect()
+    out["t_connect"] = round(time.monotonic() - t, 1)
     try:
         ns = await c.get_namespace_index("urn:iec2kmod:Station")
         root = c.get_node(ua.NodeId("Station", ns))
@@ -185,8 +191,11 @@ async def opcua(url: str, cert: str, key: str) -> dict:
 
 def main() -> None:
     port, url, cert, key = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
+    t0 = time.monotonic()
     res = {"modbus": modbus(port)}
+    t1 = time.monotonic()
     res["opcua"] = asyncio.run(opcua(url, cert, key))
+    res["seconds"] = {"modbus": round(t1 - t0, 1), "opcua": round(time.monotonic() - t1, 1)}
     print(json.dumps(res))
 
 
