@@ -390,16 +390,44 @@ class OpcUaServer:
         return ua.StatusCode()
 
     # -- updates ----------------------------------------------------------
+    def _task_of(self, path: str) -> Optional[str]:
+        """'res.task' running the program instance *path* belongs to."""
+        parts = path.split(".")
+        if len(parts) < 3:
+            return None
+        inst = self.model.instances.get(f"{parts[0]}.{parts[1]}".lower())
+        if inst is None or not inst.get("task"):
+            return None
+        return f"{inst['resource']}.{inst['task']}".lower()
+
     async def update(self, snapshot: Dict[str, object], status, stamp) -> int:
-        """New values of the variables that changed; returns how many."""
+        """New values of the variables that changed; returns how many.  The
+        variables of a program instance whose task is stopped on a fault
+        keep their last value with status UncertainLastUsableValue (a Bad
+        status would void the value: OPC UA part 4, 7.7.1), Good again once
+        the task runs."""
         from asyncua import ua
+        faulted = set()
+        if status is not None:
+            faulted = {t.path.lower() for t in status.tasks() if t.state == "fault"}
+        if not hasattr(self, "flagged"):
+            self.flagged = set()
         n = 0
         for path, val in snapshot.items():
-            if val is None or self.last.get(path) == val:
+            if val is None:
+                continue
+            bad = bool(faulted) and self._task_of(path) in faulted
+            if bad == (path in self.flagged) and self.last.get(path) == val:
                 continue
             self.last[path] = val
             t = self.model.var(path)
-            dv = ua.DataValue(ua.Variant(to_ua(t, val), _vtype(t)),
+            code = ua.StatusCode(ua.StatusCodes.UncertainLastUsableValue if bad
+                                 else ua.StatusCodes.Good)
+            if bad:
+                self.flagged.add(path)
+            else:
+                self.flagged.discard(path)
+            dv = ua.DataValue(ua.Variant(to_ua(t, val), _vtype(t)), StatusCode=code,
                               SourceTimestamp=stamp, ServerTimestamp=stamp)
             for node in self.nodes.get(path.lower(), ()):
                 await self.server.write_attribute_value(node.nodeid, dv)

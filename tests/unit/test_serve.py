@@ -210,6 +210,7 @@ class FakeClient:
                                          (False if t.kind == "b" else 0))
         self.sets = []
         self.manifest = manifest
+        self.fault = None           # 'res.task' stopped on a fault
 
     def var_get(self, paths):
         out = []
@@ -232,7 +233,8 @@ class FakeClient:
         res = []
         for r in self.manifest["resources"]:
             res.append(Resource(name=r["name"], module=r["module"], cpu=r["cpu"], tasks=[
-                Task(name=t["name"], resource=r["name"], state="running",
+                Task(name=t["name"], resource=r["name"],
+                     state="fault" if f"{r['name']}.{t['name']}" == self.fault else "running",
                      interval_ns=t["interval_ns"] or 0, priority=t["priority"], last_cpu=0,
                      cycles=7, overruns=0, faults=0, exec_min_ns=0, exec_avg_ns=0,
                      exec_max_ns=0, latency_avg_ns=0, latency_max_ns=0, histogram=[])
@@ -409,6 +411,22 @@ def test_opcua_server(manifests, tmp_path):
                 assert e.value.code == ua.StatusCodes.BadTypeMismatch
                 state = c.get_node(ua.NodeId("cpu0.fast0/State", ns))
                 assert await state.read_value() == "running"
+                # a task stopped on a fault: its instances' values frozen, flagged
+                fake.fault = "cpu1.slow1"
+                fake.set("cpu1.monitor.in_transit", 5)
+                await srv.update(kernel.read_now(mo.order), fake.status(), now())
+                transit = c.get_node(ua.NodeId("cpu1.monitor.in_transit", ns))
+                dv = await transit.read_data_value(raise_on_bad_status=False)
+                assert dv.StatusCode.value == ua.StatusCodes.UncertainLastUsableValue
+                assert dv.Value.Value == 5
+                assert await c.get_node(ua.NodeId("cpu1.slow1/State", ns)).read_value() \
+                    == "fault"
+                dv = await rate.read_data_value()
+                assert dv.StatusCode.is_good()                # another task's variable
+                fake.fault = None
+                await srv.update(kernel.read_now(mo.order), fake.status(), now())
+                dv = await transit.read_data_value()
+                assert dv.StatusCode.is_good() and dv.Value.Value == 5
                 # subscription: a change in the kernel reaches the client
                 got = asyncio.Queue()
 
