@@ -73,6 +73,7 @@ async def serve(a) -> int:
     if not a.opcua and not a.modbus:
         raise UsageError("serve: give --opcua opc.tcp://HOST:PORT and/or --modbus HOST:PORT")
     from concurrent.futures import ThreadPoolExecutor
+    t_start = time.monotonic()
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="netlink")
     try:
         kernel = Kernel.open(pool, lambda: load_model(a.project, a.sources))
@@ -80,6 +81,7 @@ async def serve(a) -> int:
         pool.shutdown()
         raise
     model = kernel.model
+    t_model = time.monotonic() - t_start
     users = {}
     if a.opcua:
         from .opcua import read_users
@@ -103,6 +105,7 @@ async def serve(a) -> int:
     mb = ua = None
     lines = []
     stats = PollStats()
+    gone = None
     try:
         if a.modbus:
             from . import modbus
@@ -127,10 +130,12 @@ async def serve(a) -> int:
                          f", {len(users)} users{', anonymous read' if a.allow_anonymous else ''}")
         fastest = model.fastest_interval_ns()
         period = max((fastest or 0) / 1e9, a.period_min / 1000.0)
-        lines.append(f"serving {model.configuration}: polling every {period * 1000:.0f} ms")
+        lines.append(f"serving {model.configuration}: polling every {period * 1000:.0f} ms "
+                     f"(started in {time.monotonic() - t_start:.1f} s, the model "
+                     f"{t_model:.1f} s)")
         print("\n".join(lines), flush=True)
         serving[0] = True
-        await _poll(kernel, model, ua, period, stop, stats)
+        gone = await _poll(kernel, model, ua, period, stop, stats)
     except asyncio.CancelledError:
         print("serve: stopped while starting", flush=True)
     finally:
@@ -144,6 +149,10 @@ async def serve(a) -> int:
              if mb else "")
           + (f", opc ua {ua.writes} writes ({ua.refused} refused); poller: {stats.text()}"
              if ua else ""), flush=True)
+    if gone:
+        print(f"serve: {gone}: stopping (exit {EXIT_RELOAD}; start it again to serve what "
+              f"runs now)", file=sys.stderr, flush=True)
+        return EXIT_RELOAD
     return 0
 
 
@@ -161,29 +170,47 @@ class PollStats:
                 f"{1000 * self.max:.1f} ms max, {self.late} longer than the period")
 
 
+GONE_AFTER = 3.0      # seconds without an answer from the kernel: the configuration is gone
+EXIT_RELOAD = 75      # EX_TEMPFAIL: the configuration changed; start serve again
+
+
 async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
-                stats: PollStats) -> None:
-    """Reads every variable and the status each *period*; a poll that takes
-    longer than the period is followed by a pause as long as itself (at
-    most half the server's time goes to polling, the clients get the
-    rest)."""
+                stats: PollStats) -> Optional[str]:
+    """Reads every variable (when OPC UA is served) and the status each
+    *period* (Modbus only: each second); a poll that takes longer than
+    the period is followed by a pause as long as itself (at most half the
+    server's time goes to polling, the clients get the rest).
+
+    Returns why it ended other than by *stop*: the kernel runs another
+    configuration or another interface (a load, a swap that changed the
+    interface: the address space and the map no longer fit), or it has
+    not answered for GONE_AFTER seconds (stopped)."""
     from .opcua import now
     paths = list(model.order)
-    failing = False
+    failing_since = None
+    if ua is None:
+        period = max(period, 1.0)
     while not stop.is_set():
         t0 = time.monotonic()
-        if ua is not None:
-            try:
+        try:
+            st = await kernel.status()
+            if st.configuration.lower() != model.configuration.lower() or \
+                    (model.interface_hash and st.interface_hash != model.interface_hash):
+                return (f"the kernel runs {st.configuration} (interface {st.interface_hash}), "
+                        f"not what is served ({model.configuration}, interface "
+                        f"{model.interface_hash})")
+            if ua is not None:
                 snap = await kernel.read(paths)
-                st = await kernel.status()
                 await ua.update(snap, st, now())
-                if failing:
-                    print("serve: the kernel answers again", file=sys.stderr, flush=True)
-                failing = False
-            except PLCError as e:
-                if not failing:
-                    print(f"serve: cannot read the kernel: {e}", file=sys.stderr, flush=True)
-                failing = True
+            if failing_since is not None:
+                print("serve: the kernel answers again", file=sys.stderr, flush=True)
+            failing_since = None
+        except PLCError as e:
+            if failing_since is None:
+                print(f"serve: cannot read the kernel: {e}", file=sys.stderr, flush=True)
+                failing_since = t0
+            elif t0 - failing_since >= GONE_AFTER:
+                return f"no answer from the kernel for {GONE_AFTER:.0f} s: {e}"
         took = time.monotonic() - t0
         stats.polls += 1
         stats.total += took
@@ -192,9 +219,10 @@ async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
             stats.late += 1
         delay = max(period - took, min(took, 1.0)) if took > period else period - took
         try:
-            await asyncio.wait_for(stop.wait(), timeout=delay if ua is not None else None)
+            await asyncio.wait_for(stop.wait(), timeout=delay)
         except asyncio.TimeoutError:
             pass
+    return None
 
 
 def main_serve(a) -> int:

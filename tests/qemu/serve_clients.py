@@ -160,7 +160,9 @@ async def opcua(url: str, cert: str, key: str) -> dict:
 
         sub = await c.create_subscription(10, H())
         await sub.subscribe_data_change(count)
-        await asyncio.sleep(2.0)
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and len({v for _, v in got}) < 4:
+            await asyncio.sleep(0.2)
         await sub.delete()
         out["notifications"] = len(got)
         out["distinct"] = len({v for _, v in got})

@@ -9,6 +9,7 @@ the kernel in tests/qemu/test_serve.py."""
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import errno
 import json
 import socket
@@ -470,3 +471,33 @@ def test_kernel_thread(manifests):
     fake.set("%MW102", 9)
     assert asyncio.run(k.read(["%MW102"])) == {"%MW102": 9}
     k.close()
+
+
+def test_poller_ends_when_the_configuration_changes(manifests, monkeypatch):
+    """A load of another configuration, a swap that changed the interface,
+    or a stopped configuration (no answer for GONE_AFTER s) ends the
+    poller with the reason (serve then exits 75 for a restart)."""
+    import plc_manager.serve as serve
+    mo = _model(manifests, "conveyor_counter")
+    mo.interface_hash = "aaaa"
+    fake = FakeClient(manifests["conveyor_counter"])
+    kernel = Kernel(mo, fake)
+
+    def run():
+        return asyncio.run(serve._poll(kernel, mo, None, 0.01, asyncio.Event(),
+                                       serve.PollStats()))
+
+    st = fake.status
+    fake.status = lambda: dataclasses.replace(st(), interface_hash="bbbb")
+    assert "interface bbbb" in run()
+    fake.status = lambda: dataclasses.replace(st(), interface_hash="aaaa",
+                                              configuration="Other")
+    assert "runs Other" in run()
+
+    def gone():
+        raise KernelError(errno.ENOENT, "no such family")
+
+    fake.status = gone
+    monkeypatch.setattr(serve, "GONE_AFTER", 0.05)
+    assert "no answer from the kernel" in run()
+
