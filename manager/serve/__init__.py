@@ -29,8 +29,11 @@ log = logging.getLogger("plc_manager.serve")
 
 def _hostport(text: str, default_port: int):
     if text.startswith("opc.tcp://"):
-        u = urlparse(text)
-        return u.hostname or "0.0.0.0", u.port or default_port
+        try:
+            u = urlparse(text)
+            return u.hostname or "0.0.0.0", u.port or default_port
+        except ValueError:
+            raise UsageError(f"{text}: not opc.tcp://HOST:PORT") from None
     host, _, port = text.rpartition(":")
     if not host:
         host, port = text, str(default_port)
@@ -72,6 +75,20 @@ async def serve(a) -> int:
     from .model import modbus_map
     if not a.opcua and not a.modbus:
         raise UsageError("serve: give --opcua opc.tcp://HOST:PORT and/or --modbus HOST:PORT")
+    # the arguments first, then the kernel
+    users = {}
+    if a.opcua:
+        if not a.opcua.startswith("opc.tcp://"):
+            raise UsageError(f"--opcua {a.opcua}: an endpoint URL opc.tcp://HOST:PORT")
+        _hostport(a.opcua, 4840)
+        from .opcua import read_users
+        if a.users:
+            users = read_users(a.users)
+        if not users and not a.allow_anonymous:
+            raise UsageError("serve --opcua: no users (--users FILE, written by `plc-manager "
+                             "serve-user`) and anonymous access is off (--allow-anonymous)")
+    if a.modbus:
+        _hostport(a.modbus, 502)
     from concurrent.futures import ThreadPoolExecutor
     t_start = time.monotonic()
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="netlink")
@@ -82,14 +99,6 @@ async def serve(a) -> int:
         raise
     model = kernel.model
     t_model = time.monotonic() - t_start
-    users = {}
-    if a.opcua:
-        from .opcua import read_users
-        if a.users:
-            users = read_users(a.users)
-        if not users and not a.allow_anonymous:
-            raise UsageError("serve --opcua: no users (--users FILE, written by `plc-manager "
-                             "serve-user`) and anonymous access is off (--allow-anonymous)")
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     me = asyncio.current_task()

@@ -136,7 +136,11 @@ async def start(kernel: Kernel, mmap: ModbusMap, host: str, port: int):
     from pymodbus.server import ModbusTcpServer
     ctx = PlcContext(kernel, mmap)
     server = ModbusTcpServer(ctx, address=(host, port))
-    await server.serve_forever(background=True)
+    try:
+        await server.serve_forever(background=True)
+    except (RuntimeError, OSError) as e:
+        raise PLCError(f"modbus {host}:{port}: cannot listen ({e}): the port is taken, "
+                       f"or below 1024 without CAP_NET_BIND_SERVICE") from None
     server.plc_context = ctx
     return server
 

@@ -253,7 +253,11 @@ class OpcUaServer:
         self.server = s
         await self._build()
         self._hook_writes()
-        await s.start()
+        try:
+            await s.start()
+        except OSError as e:
+            raise PLCError(f"opc ua {self.url}: cannot listen ({e.strerror or e}): the port "
+                           f"is taken, or below 1024 without CAP_NET_BIND_SERVICE") from None
         self.started = True
 
     async def _build(self) -> None:

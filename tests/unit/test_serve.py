@@ -41,6 +41,15 @@ def manifests(tmp_path_factory):
     return out
 
 
+@pytest.fixture(scope="module")
+def pki(tmp_path_factory):
+    """The server's certificate and asyncua's address space shelf, made once."""
+    from plc_manager.serve.opcua import ensure_shelf
+    d = tmp_path_factory.mktemp("pki")
+    ensure_shelf(d)
+    return d
+
+
 def _model(manifests, ex):
     m = manifests[ex]
     acc, loc = S.read(str(ROOT / "examples" / ex), m)
@@ -356,7 +365,7 @@ def test_modbus_value_refused(manifests):
     asyncio.run(go())
 
 
-def test_opcua_server(manifests, tmp_path):
+def test_opcua_server(manifests, tmp_path, pki):
     from asyncua import Client, ua
     from plc_manager.serve.opcua import OpcUaServer, add_user, now, read_users
     mo = _model(manifests, "two_resources")
@@ -370,7 +379,7 @@ def test_opcua_server(manifests, tmp_path):
 
     async def go():
         srv = OpcUaServer(mo, kernel, url, writable_all=False, users=read_users(str(users)),
-                          allow_anonymous=False, security="none", cert_dir=tmp_path / "pki")
+                          allow_anonymous=False, security="none", cert_dir=pki)
         await srv.start()
         try:
             fake.set("bottles_filled", 42)
@@ -501,3 +510,26 @@ def test_poller_ends_when_the_configuration_changes(manifests, monkeypatch):
     monkeypatch.setattr(serve, "GONE_AFTER", 0.05)
     assert "no answer from the kernel" in run()
 
+
+
+def test_ports_taken(manifests, pki):
+    """A port in use: one line, no traceback."""
+    from plc_manager.errors import PLCError
+    from plc_manager.serve import modbus
+    from plc_manager.serve.opcua import OpcUaServer
+    mo = _model(manifests, "conveyor_counter")
+    kernel = Kernel(mo, FakeClient(manifests["conveyor_counter"]))
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    s.listen()
+    port = s.getsockname()[1]
+    try:
+        with pytest.raises(PLCError, match="cannot listen"):
+            asyncio.run(modbus.start(kernel, M.modbus_map(mo), "127.0.0.1", port))
+        srv = OpcUaServer(mo, kernel, f"opc.tcp://127.0.0.1:{port}", writable_all=False,
+                          users={}, allow_anonymous=True, security="none",
+                          cert_dir=pki)
+        with pytest.raises(PLCError, match="cannot listen"):
+            asyncio.run(srv.start())
+    finally:
+        s.close()
