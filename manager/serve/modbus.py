@@ -40,7 +40,8 @@ TABLE = {1: "co", 5: "co", 15: "co", 2: "di", 4: "ir",
 class PlcContext(ModbusServerContext):
     """The datastore of every unit id: the kernel, through the map."""
 
-    def __init__(self, kernel: Kernel, mmap: ModbusMap) -> None:     # noqa: no super().__init__
+    def __init__(self, kernel: Kernel, mmap: ModbusMap) -> None:
+        # not super().__init__: pymodbus would build a simulated device
         self._devices = {}
         self.simdevices = []
         self.old_simulator = True      # pymodbus then calls async_getValues/async_setValues
