@@ -116,6 +116,13 @@ async def opcua(url: str, cert: str, key: str) -> dict:
         await c.disconnect()
         return None
 
+    # clients that go away mid-message or send garbage: the server goes on
+    from urllib.parse import urlparse
+    u = urlparse(url)
+    for junk in (b"HELF\x40\x00\x00\x00\x00\x00", b"HELF\x08\x00\x00\x00" + b"x" * 64):
+        s = socket.create_connection((u.hostname, u.port), timeout=5)
+        s.sendall(junk)
+        s.close()
     t = time.monotonic()
     out["wrong_password"] = await refused(await client("op", "not-the-password"))
     out["anonymous"] = await refused(await client())
