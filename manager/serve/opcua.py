@@ -202,6 +202,30 @@ def _ruleset():
     return Rules()
 
 
+def _cheap_monitored_copies() -> None:
+    """asyncua deep-copies every value it hands to each monitored item
+    (MonitoredItemValues.set_current_datavalue), 'to prevent referencing
+    the inner value': two thirds of the server's time when 1,000
+    subscribed variables change (measured: 0.67 -> 0.2 s per poll on the
+    host).  The server's values are never changed in place here (each
+    update is a new DataValue of a new Variant of an immutable Python
+    value), so a shallow copy is enough."""
+    import copy
+    try:
+        from asyncua.server.monitored_item_service import MonitoredItemValues
+    except ImportError:
+        return
+    if getattr(MonitoredItemValues, "_iec2kmod_shallow", False):
+        return
+
+    def set_current_datavalue(self, cur_val):
+        self.old_dvalue = self.current_dvalue
+        self.current_dvalue = copy.copy(cur_val)
+
+    MonitoredItemValues.set_current_datavalue = set_current_datavalue
+    MonitoredItemValues._iec2kmod_shallow = True
+
+
 class OpcUaServer:
     def __init__(self, model: Model, kernel: Kernel, url: str, *, writable_all: bool,
                  users: Dict[str, tuple], allow_anonymous: bool, security: str,
@@ -226,6 +250,7 @@ class OpcUaServer:
         from asyncua import Server, ua
         from urllib.parse import urlparse
         host = urlparse(self.url).hostname or "localhost"
+        _cheap_monitored_copies()
         s = Server(user_manager=self.users)
         self.cert_dir.mkdir(parents=True, exist_ok=True)
         shelf = self.cert_dir / f"asyncua-{getattr(asyncua, '__version__', 'x')}-aspace"
