@@ -164,7 +164,7 @@ try:
         await asyncio.sleep(3)
         lat.clear(); count[0] = 0
         wnode = cl.get_node(ua.NodeId("access:W", ns))
-        c0, o0 = task(); u0 = cpu(); t0 = time.monotonic()
+        c0, o0 = await asyncio.to_thread(task); u0 = cpu(); t0 = time.monotonic()
         k = 1
         next_t = time.monotonic()
         late_writes = 0
@@ -179,16 +179,18 @@ try:
             else:
                 late_writes += 1
         dt = time.monotonic() - t0
-        u1 = cpu(); c1, o1 = task()
+        u1 = cpu(); c1, o1 = await asyncio.to_thread(task)
         await asyncio.sleep(1)
         await cl.disconnect()
         return {"seconds": dt, "cpu_s": u1 - u0, "notifications": count[0], "lat": lat,
                 "echo_lat": echo_lat, "writes": k - 1, "late_writes": late_writes,
                 "cycles": c1 - c0, "overruns": o1 - o0, "unanswered_echo": len(sent)}
 
-    res["served"] = asyncio.run(client())
-    p.send_signal(signal.SIGTERM)
-    p.wait(60)
+    try:
+        res["served"] = asyncio.run(client())
+    finally:
+        p.send_signal(signal.SIGTERM)
+        p.wait(120)
     res["serve_log"] = open(logp).read()
 finally:
     ops.stop()
