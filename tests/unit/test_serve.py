@@ -533,3 +533,45 @@ def test_ports_taken(manifests, pki):
             asyncio.run(srv.start())
     finally:
         s.close()
+
+
+def test_opcua_50_clients(manifests, pki):
+    """50 concurrent anonymous sessions read a variable; one that drops its
+    connection mid-session does not disturb the others."""
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer, now
+    mo = _model(manifests, "two_resources")
+    fake = FakeClient(manifests["two_resources"])
+    kernel = Kernel(mo, fake)
+    port = _port()
+    url = f"opc.tcp://127.0.0.1:{port}"
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=False, users={}, allow_anonymous=True,
+                          security="none", cert_dir=pki)
+        await srv.start()
+        try:
+            fake.set("bottles_filled", 7)
+            await srv.update(kernel.read_now(mo.order), fake.status(), now())
+
+            async def one(i):
+                c = Client(url, timeout=30)
+                await c.connect()
+                try:
+                    v = await c.get_node(ua.NodeId("access:FILLED", srv.ns)).read_value()
+                    if i == 0:                      # gone without closing its session
+                        c.uaclient.protocol.transport.abort()
+                        return v
+                finally:
+                    if i != 0:
+                        await c.disconnect()
+                return v
+
+            got = await asyncio.gather(*(one(i) for i in range(50)), return_exceptions=True)
+            assert got == [7] * 50, [g for g in got if g != 7][:3]
+            async with Client(url) as c:
+                assert await c.get_node(ua.NodeId("access:FILLED", srv.ns)).read_value() == 7
+        finally:
+            await srv.stop()
+
+    asyncio.run(go())
