@@ -459,6 +459,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("pattern", nargs="?", help="glob, e.g. 'main.c1.*'")
     s.add_argument("--json", action="store_true")
     s.set_defaults(func=cmd_vars)
+
+    from .serve import add_parsers as _serve_parsers
+    _serve_parsers(sub)
     return p
 
 

@@ -14,7 +14,7 @@
 #      what the QEMU test guest boots (vmlinuz + lib/modules/<kver>/kernel/...);
 #   3. pip install -e .[all,test] of this repository (re-run when pyproject.toml
 #      changes): the compiler, every extra (z3-solver for verify/export, docker,
-#      pyroute2 for plc-manager) and the test dependencies (pytest, pyuppaal, ...);
+#      pyroute2 for plc-manager, asyncua and pymodbus for plc-manager serve) and the test dependencies (pytest, pyuppaal, ...);
 #      and extract the PVH-bootable kernel for fast QEMU boots;
 #   4. start dockerd if it is not running and build the project's module-build
 #      container image if it is missing (skipped with --no-container).

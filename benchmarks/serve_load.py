@@ -1,0 +1,263 @@
+# SPDX-License-Identifier: MIT
+"""Load of `plc-manager serve` on the PLC, in the PREEMPT_RT guest.
+
+A configuration with N (default 1,000) DINT variables (arrays of 250 DINT,
+published one node each) and a 10 ms task that changes N/10 of them each
+cycle (every variable changes once per 100 ms) and copies `w` into
+`echo`, built on the host, run in a QEMU guest:
+
+  1. the tasks alone for --seconds: cycles and overruns;
+  2. `plc-manager serve --opcua ... --period-min 100` and one asyncua
+     client (Basic256Sha256 SignAndEncrypt, a `write` user) subscribed to
+     the N variables and to `echo` with a 100 ms publishing interval,
+     writing `w` (a sequence number) --writes times per second, for
+     --seconds: the server's CPU (utime+stime from /proc, % of one CPU),
+     notifications per second, latency poll -> client (the value's
+     SourceTimestamp, stamped when the poller read it, to its arrival,
+     same clock), latency write -> the program's echo notified (a write
+     call started -> the notification of echo = that number: one cycle,
+     one poll, one publishing interval), p50/p99/max, and the tasks'
+     overruns beside run 1.
+
+The client runs in the same guest as the server (they share its CPUs):
+figures of the whole, not of the server alone.
+
+    python benchmarks/serve_load.py [--vars 1000] [--writes 100] [--seconds 20]
+        [--clock tcg|icount]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+def arrays(n: int):
+    """(name, size) of the arrays holding the n variables: the variable
+    table lists at most 256 elements of an array."""
+    out, k = [], 0
+    while n > 0:
+        out.append((f"a{k}", min(250, n)))
+        n -= 250
+        k += 1
+    return out
+
+
+def project(n: int) -> str:
+    arrs = arrays(n)
+    ext = "".join(f"{a} : ARRAY[1..{m}] OF DINT; " for a, m in arrs)
+    body = "".join(f"""FOR i := 1 TO {max(1, m // 10)} DO
+    IF base * {max(1, m // 10)} + i <= {m} THEN
+        {a}[base * {max(1, m // 10)} + i] := {a}[base * {max(1, m // 10)} + i] + 1;
+    END_IF;
+END_FOR;
+""" for a, m in arrs)
+    glob = "".join(f"        {a} : ARRAY[1..{m}] OF DINT;\n" for a, m in arrs)
+    return f"""PROGRAM Churn
+VAR_EXTERNAL {ext}w : DINT; echo : DINT; END_VAR
+VAR i : DINT; k : DINT; base : DINT; END_VAR
+base := k MOD 10;
+{body}k := k + 1;
+echo := w;
+END_PROGRAM
+
+CONFIGURATION Load
+    VAR_GLOBAL
+{glob}        w : DINT;
+        echo : DINT;
+    END_VAR
+    RESOURCE r ON CPU0
+        TASK t10 (INTERVAL := T#10ms, PRIORITY := 5);
+        PROGRAM p WITH t10 : Churn;
+    END_RESOURCE
+    VAR_ACCESS
+        W : w : DINT READ_WRITE;
+    END_VAR
+END_CONFIGURATION
+"""
+
+
+GUEST_CODE = r'''
+import asyncio, json, os, signal, subprocess, sys, time
+build, src, pki, users, n, writes, seconds = sys.argv[1:8]
+n, writes, seconds = int(n), int(writes), float(seconds)
+from plc_manager import ops
+from plc_manager.netlink import Client
+
+def task():
+    with Client() as c:
+        t = c.status().tasks()[0]
+        return t.cycles, t.overruns
+
+ops.load(build)
+res = {}
+try:
+    time.sleep(1)
+    c0, o0 = task(); time.sleep(seconds); c1, o1 = task()
+    res["alone"] = {"cycles": c1 - c0, "overruns": o1 - o0}
+    log = open(os.path.join(os.path.dirname(build), "serve.log"), "w")
+    p = subprocess.Popen([sys.executable, "-m", "plc_manager.cli", "serve", "--opcua",
+                          "opc.tcp://127.0.0.1:4850", "--sources", src, "--users", users,
+                          "--cert-dir", pki, "--period-min", "100"], stdout=log,
+                         stderr=subprocess.STDOUT)
+    logp = os.path.join(os.path.dirname(build), "serve.log")
+    deadline = time.monotonic() + 300
+    while "serving" not in open(logp).read():
+        assert p.poll() is None and time.monotonic() < deadline, open(logp).read()
+        time.sleep(0.2)
+    res["serve_log"] = open(logp).read()
+
+    def cpu():
+        f = open(f"/proc/{p.pid}/stat").read().rsplit(")", 1)[1].split()
+        return (int(f[11]) + int(f[12])) / os.sysconf("SC_CLK_TCK")
+
+    async def client():
+        from asyncua import Client as UaClient, ua
+        from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+        cl = UaClient("opc.tcp://127.0.0.1:4850", timeout=60, watchdog_intervall=30)
+        await cl.set_security(SecurityPolicyBasic256Sha256, os.path.join(pki, "client-cert.der"),
+                              os.path.join(pki, "client-key.pem"),
+                              mode=ua.MessageSecurityMode.SignAndEncrypt)
+        cl.set_user("op"); cl.set_password("operator-pw")
+        await cl.connect()
+        ns = await cl.get_namespace_index("urn:iec2kmod:Load")
+        lat, echo_lat, count = [], [], [0]
+        sent = {}
+        from datetime import datetime, timezone
+        echo_id = ua.NodeId("echo", ns).to_string()
+
+        class H:
+            def datachange_notification(self, node, val, data):
+                now = time.monotonic()
+                count[0] += 1
+                if node.nodeid.to_string() == echo_id:
+                    t = sent.pop(val, None)
+                    if t is not None:
+                        echo_lat.append((now - t) * 1000)
+                    return
+                st = data.monitored_item.Value.SourceTimestamp
+                if st is not None:
+                    lat.append((datetime.now(timezone.utc) - st.replace(tzinfo=timezone.utc)
+                                if st.tzinfo is None else datetime.now(timezone.utc) - st)
+                               .total_seconds() * 1000)
+
+        sub = await cl.create_subscription(100, H())
+        names = []
+        k_, left = 0, n
+        while left > 0:
+            names += [f"a{k_}[{i}]" for i in range(1, min(250, left) + 1)]
+            left -= 250
+            k_ += 1
+        nodes = [cl.get_node(ua.NodeId(nm, ns)) for nm in names]
+        for i in range(0, n, 200):
+            await sub.subscribe_data_change(nodes[i:i + 200], queuesize=1)
+        await sub.subscribe_data_change(cl.get_node(ua.NodeId("echo", ns)))
+        await asyncio.sleep(3)
+        lat.clear(); count[0] = 0
+        wnode = cl.get_node(ua.NodeId("access:W", ns))
+        c0, o0 = await asyncio.to_thread(task); u0 = cpu(); t0 = time.monotonic()
+        k = 1
+        next_t = time.monotonic()
+        late_writes = 0
+        while time.monotonic() - t0 < seconds:
+            sent[k] = time.monotonic()
+            await wnode.write_value(ua.Variant(k, ua.VariantType.Int32))
+            k += 1
+            next_t += 1.0 / writes
+            d = next_t - time.monotonic()
+            if d > 0:
+                await asyncio.sleep(d)
+            else:
+                late_writes += 1
+        dt = time.monotonic() - t0
+        u1 = cpu(); c1, o1 = await asyncio.to_thread(task)
+        await asyncio.sleep(1)
+        await cl.disconnect()
+        return {"seconds": dt, "cpu_s": u1 - u0, "notifications": count[0], "lat": lat,
+                "echo_lat": echo_lat, "writes": k - 1, "late_writes": late_writes,
+                "cycles": c1 - c0, "overruns": o1 - o0, "unanswered_echo": len(sent)}
+
+    try:
+        res["served"] = asyncio.run(client())
+    finally:
+        p.send_signal(signal.SIGTERM)
+        p.wait(120)
+    res["serve_log"] = open(logp).read()
+finally:
+    ops.stop()
+print("RESULT " + json.dumps(res))
+'''
+
+
+def pct(xs, q):
+    xs = sorted(xs)
+    if not xs:
+        return float("nan")
+    return xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--vars", type=int, default=1000)
+    ap.add_argument("--writes", type=int, default=100)
+    ap.add_argument("--seconds", type=float, default=20.0)
+    ap.add_argument("--clock", choices=("tcg", "icount"), default="tcg")
+    a = ap.parse_args()
+    from iec2kmod.vm import Guest
+    from plc_manager.serve.opcua import add_user, ensure_certificate, ensure_shelf
+    work = Path(tempfile.mkdtemp(prefix="serve_load-"))
+    src = work / "src"
+    src.mkdir()
+    (src / "load.st").write_text(project(a.vars))
+    build = work / "build"
+    for cmd in (["gen", str(src), "-o", str(build)], ["build", str(build)]):
+        subprocess.run([sys.executable, "-m", "iec2kmod.cli", *cmd], cwd=ROOT, check=True,
+                       capture_output=True, text=True)
+    pki = work / "pki"
+    ensure_shelf(pki)
+    ensure_certificate(pki / "server-cert.der", pki / "server-key.pem", "urn:iec2kmod:Load",
+                       "127.0.0.1")
+    ensure_certificate(pki / "client-cert.der", pki / "client-key.pem", "urn:bench", "localhost")
+    users = work / "users"
+    add_user(str(users), "op", "write", "operator-pw")
+    g = Guest(str(work), icount=(a.clock == "icount"), console_log=str(work / "console.log"))
+    try:
+        g.start()
+        g.run("ip link set lo up 2>/dev/null || ifconfig lo 127.0.0.1 up", 30)
+        r = g.pyrun(GUEST_CODE, argv=[str(build), str(src), str(pki), str(users), str(a.vars),
+                                      str(a.writes), str(a.seconds)], timeout=3600)
+        if r.exit_code != 0 or "RESULT " not in r.output:
+            sys.exit(f"the benchmark failed in the guest:\n{r.output[-4000:]}")
+        res = json.loads(r.output.split("RESULT ", 1)[1])
+        g.check_kernel_log()
+    finally:
+        g.close()
+    s, al = res["served"], res["alone"]
+    print(f"{a.vars} variables subscribed (100 ms), {a.writes} writes/s asked, "
+          f"{s['seconds']:.1f} s, guest clock {a.clock}")
+    print(res["serve_log"].strip())
+    print(f"server CPU: {100 * s['cpu_s'] / s['seconds']:.0f}% of one CPU")
+    print(f"notifications: {s['notifications'] / s['seconds']:.0f}/s; writes done "
+          f"{s['writes'] / s['seconds']:.0f}/s ({s['late_writes']} behind schedule)")
+    for name, xs in (("poll -> client (ms)", s["lat"]), ("write -> echo notified (ms)",
+                                                        s["echo_lat"])):
+        if xs:
+            print(f"{name:30} p50 {statistics.median(xs):8.1f}  p99 {pct(xs, 0.99):8.1f}  "
+                  f"max {max(xs):8.1f}  (n={len(xs)})")
+    print(f"task t10: alone {al['cycles']} cycles, {al['overruns']} overruns; "
+          f"with the server {s['cycles']} cycles, {s['overruns']} overruns")
+    print(f"work directory: {work}")
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("PYTHONPATH", f"{ROOT}/.pypath:{ROOT}")
+    main()

@@ -1,0 +1,577 @@
+# SPDX-License-Identifier: MIT
+"""plc-manager serve on the host, no kernel: the Modbus and OPC UA type and
+address mappings, then both servers against real clients (pymodbus,
+asyncua) with a fake netlink client holding the variables of
+examples/two_resources and examples/conveyor_counter as the kernel would
+(read-only flags, out-of-range refusals).  The same servers run against
+the kernel in tests/qemu/test_serve.py."""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import errno
+import json
+import socket
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from plc_manager import values
+from plc_manager.netlink import KernelError, Resource, Status, Task, VarValue
+from plc_manager.serve import model as M
+from plc_manager.serve import sources as S
+from plc_manager.serve.kernel import Kernel
+
+pytestmark = pytest.mark.unit
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def manifests(tmp_path_factory):
+    out = {}
+    for ex in ("two_resources", "conveyor_counter"):
+        d = tmp_path_factory.mktemp(ex)
+        subprocess.run([sys.executable, "-m", "iec2kmod", "gen", str(ROOT / "examples" / ex),
+                        "-o", str(d / "b")], check=True, capture_output=True)
+        out[ex] = json.loads((d / "b" / "manifest.json").read_text())
+    return out
+
+
+@pytest.fixture(scope="module")
+def pki(tmp_path_factory):
+    """The server's certificate and asyncua's address space shelf, made once."""
+    from plc_manager.serve.opcua import ensure_shelf
+    d = tmp_path_factory.mktemp("pki")
+    ensure_shelf(d)
+    return d
+
+
+def _model(manifests, ex):
+    m = manifests[ex]
+    acc, loc = S.read(str(ROOT / "examples" / ex), m)
+    return M.Model.from_manifest(m, acc, loc)
+
+
+# ---------------------------------------------------------------------------
+# mappings
+
+@pytest.mark.parametrize("addr,place", [
+    ("%IX0.0", ("di", 0, 1)), ("%IX4.3", ("di", 35, 1)), ("%QX0.7", ("co", 7, 1)),
+    ("%QX1.0", ("co", 8, 1)), ("%IW10", ("ir", 10, 1)), ("%QW3", ("hr", 3, 1)),
+    ("%MW0", ("hr", 1024, 1)), ("%MW100", ("hr", 1124, 1)), ("%MD8", ("hr", 2064, 2)),
+    ("%ML1", ("hr", 4100, 4)), ("%QX0.8", None), ("%MX0.0", None), ("%MW1024", None),
+    ("%IW1.2", None), ("x", None)])
+def test_openplc_places(addr, place):
+    assert M.openplc_cell(addr) == place
+
+
+def test_modbus_map_of_two_resources(manifests):
+    mo = _model(manifests, "two_resources")
+    mm = M.modbus_map(mo)
+    # named located variables come from the sources
+    assert mm.discrete[7].path == "cpu0.estop_filler"
+    assert mm.discrete[32].path == "cpu1.guard_door_open"
+    assert mm.inputs[10].path == "%IW10"
+    assert (mm.holding[2064].path, mm.holding[2065].word) == ("%MD8", 1)
+    # access paths from 8192 in declaration order, 2 registers a DINT/REAL
+    ap = [(a, mm.holding[a].path, mm.holding[a].writable) for a in range(8192, 8204)]
+    assert ap[0] == (8192, "bottles_filled", False)
+    assert ap[4] == (8196, "target_weight", True)          # READ_WRITE
+    assert ap[5][1] == "cpu0.fill_rate" and ap[6][1] == "cpu0.fill_rate"
+    assert 8204 not in mm.holding
+    # outputs the program drives are not writable; the project declares
+    # access paths, so only READ_WRITE paths and %M memory are
+    assert not mm.coils[0].writable and mm.holding[2064].writable
+    assert not mm.discrete[0].writable
+
+
+def test_modbus_map_named_located(manifests):
+    mo = _model(manifests, "conveyor_counter")
+    mm = M.modbus_map(mo)
+    assert mm.holding[1124].path == "plc.belt_count"        # belt_count AT %MW100
+    assert mm.holding[1126].path == "%MW102"
+    assert [mm.coils[i].path for i in range(6)] == [f"%QX0.{i}" for i in range(6)]
+
+
+def _vt(kind, size, base=None, **kw):
+    return values.VarType(path="v", kind=kind, size=size, base=base, **kw)
+
+
+@pytest.mark.parametrize("var,value,regs", [
+    (_vt("i", 2, "INT"), -2, [0xFFFE]),
+    (_vt("u", 2, "UINT"), 65535, [0xFFFF]),
+    (_vt("i", 1, "SINT"), -5, [0xFFFB]),
+    (_vt("i", 4, "DINT"), 0x12345678, [0x1234, 0x5678]),
+    (_vt("i", 4, "DINT"), -1, [0xFFFF, 0xFFFF]),
+    (_vt("f", 4, "REAL"), 1.5, [0x3FC0, 0x0000]),
+    (_vt("f", 8, "LREAL"), -2.0, [0xC000, 0, 0, 0]),
+    (_vt("i", 8, "LINT"), 1 << 40, [0, 0x100, 0, 0]),
+    (_vt("b", 1, "BOOL"), True, [1]),
+])
+def test_registers_round_trip(var, value, regs):
+    assert M.to_registers(var, value) == regs
+    assert M.from_registers(var, regs) == value
+
+
+@pytest.mark.parametrize("var,value,why", [
+    (_vt("i", 2, "INT", range=(0, 100)), 101, "range"),
+    (_vt("u", 1, "USINT"), 256, "range"),
+    (_vt("i", 1, "SINT"), 200, "range"),
+    (_vt("b", 1, "BOOL"), 2, "type"),
+    (_vt("i", 2, "INT"), 1.5, "type"),
+    (_vt("i", 2, "INT"), "7", "type"),
+    (_vt("f", 4, "REAL"), 1e39, "range"),
+    (_vt("f", 4, "REAL"), float("nan"), "range"),
+    (_vt("s", 0, "STRING", length=4), "abcde", "range"),
+    (_vt("s", 0, "STRING", length=4), 5, "type"),
+    (_vt("e", 4, "DINT", enum={"A": 0, "B": 1}), 7, "range"),
+])
+def test_check_refuses(var, value, why):
+    with pytest.raises(M.Refused) as e:
+        M.check(var, value)
+    assert e.value.why == why
+
+
+def test_from_registers_refuses():
+    with pytest.raises(M.Refused):
+        M.from_registers(_vt("b", 1, "BOOL"), [2])
+    with pytest.raises(M.Refused):
+        M.from_registers(_vt("f", 4, "REAL"), [0x7FC0, 0])     # NaN
+    # an 8-bit value in one register: the register must fit the type
+    with pytest.raises(M.Refused):
+        M.check(_vt("u", 1, "USINT"), M.from_registers(_vt("u", 1, "USINT"), [300]))
+
+
+@pytest.mark.parametrize("var,ua,kernel,uav", [
+    (_vt("b", 1, "BOOL"), "Boolean", True, True),
+    (_vt("i", 1, "SINT"), "SByte", -3, -3),
+    (_vt("u", 8, "ULINT"), "UInt64", 5, 5),
+    (_vt("u", 2, "WORD"), "UInt16", 5, 5),
+    (_vt("f", 8, "LREAL"), "Double", 0.5, 0.5),
+    (_vt("t", 8, "TIME"), "Duration", 1_500_000, 1.5),
+    (_vt("e", 4, "DINT", enum={"A": 0, "B": 1}), "Int32", 1, 1),
+    (_vt("s", 0, "STRING", length=8), "String", "ab", "ab"),
+])
+def test_ua_types(var, ua, kernel, uav):
+    assert M.ua_type(var) == ua
+    assert M.to_ua(var, kernel) == uav
+    assert M.from_ua(var, uav) == kernel
+
+
+def test_ua_dates():
+    import datetime as dt
+    d = _vt("t", 8, "DT")
+    assert M.ua_type(d) == "DateTime"
+    ns = 86_400 * 10**9 + 5 * 10**9
+    assert M.to_ua(d, ns) == dt.datetime(1970, 1, 2, 0, 0, 5)
+    assert M.from_ua(d, dt.datetime(1970, 1, 2, 0, 0, 5)) == ns
+    with pytest.raises(M.Refused):
+        M.from_ua(_vt("t", 8, "TIME"), "1s")
+
+
+def test_placement(manifests):
+    mo = _model(manifests, "two_resources")
+    assert M.placement(mo, "cpu1.monitor.in_transit") == (["cpu1", "slow1", "monitor"],
+                                                          ["in_transit"])
+    assert M.placement(mo, "cpu0.fill_rate") == (["cpu0", "Globals"], ["fill_rate"])
+    assert M.placement(mo, "bottles_filled") == (["Globals"], ["bottles_filled"])
+    assert M.placement(mo, "%IX0.0") == (["DirectVariables"], ["%IX0.0"])
+    assert M.split_path("recipes[1].steps[2].kind") == ["recipes", "[1]", "steps", "[2]",
+                                                        "kind"]
+
+
+def test_client_writable(manifests):
+    mo = _model(manifests, "two_resources")
+    assert mo.client_writable("target_weight", False)            # READ_WRITE path
+    assert not mo.client_writable("bottles_filled", True)         # READ_ONLY path
+    assert not mo.client_writable("line_enable", True)            # not an access path
+    m = manifests["conveyor_counter"]
+    bare = M.Model.from_manifest(m)                                # no access paths
+    assert not bare.client_writable("plc.line1.preset", False)
+    assert bare.client_writable("plc.line1.preset", True)
+    assert not bare.client_writable("%QX0.0", True)                # the kernel's read-only
+
+
+def test_passwords():
+    from plc_manager.serve.opcua import check_password, hash_password
+    h = hash_password("correct horse")
+    assert h.startswith("scrypt$") and "correct" not in h
+    assert check_password("correct horse", h)
+    assert not check_password("correct hors", h)
+    assert not check_password("x", "garbage")
+
+
+# ---------------------------------------------------------------------------
+# servers with real clients and a fake kernel
+
+class FakeClient:
+    """The configuration module's variable commands, on the manifest."""
+
+    def __init__(self, manifest):
+        self.types = {v["path"].lower(): values.VarType.from_manifest(v)
+                      for v in manifest["variables"]}
+        self.data = {}
+        for k, t in self.types.items():
+            self.data[k] = values.encode(t, "" if t.kind in "sw" else
+                                         (False if t.kind == "b" else 0))
+        self.sets = []
+        self.manifest = manifest
+        self.fault = None           # 'res.task' stopped on a fault
+
+    def var_get(self, paths):
+        out = []
+        for p in paths:
+            t = self.types[p.lower()]
+            out.append(VarValue(path=t.path, table="", index=0, kind=t.kind, size=t.size,
+                                writable=t.writable, forced=False, event=0, task=0,
+                                value=self.data[p.lower()]))
+        return out
+
+    def var_set(self, items):
+        for p, _ in items:
+            if not self.types[p.lower()].writable:
+                raise KernelError(errno.EACCES, "the variable is read-only")
+        for p, v in items:
+            self.data[p.lower()] = v
+        self.sets.append(items)
+
+    def status(self):
+        res = []
+        for r in self.manifest["resources"]:
+            res.append(Resource(name=r["name"], module=r["module"], cpu=r["cpu"], tasks=[
+                Task(name=t["name"], resource=r["name"],
+                     state="fault" if f"{r['name']}.{t['name']}" == self.fault else "running",
+                     interval_ns=t["interval_ns"] or 0, priority=t["priority"], last_cpu=0,
+                     cycles=7, overruns=0, faults=0, exec_min_ns=0, exec_avg_ns=0,
+                     exec_max_ns=0, latency_avg_ns=0, latency_max_ns=0, histogram=[])
+                for t in r["tasks"]]))
+        return Status(abi=1, configuration=self.manifest["configuration"], module="m",
+                      source_hash="", interface_hash="", now_ns=0, forced=0,
+                      resources=res, slots=[])
+
+    def set(self, path, value):
+        t = self.types[path.lower()]
+        self.data[path.lower()] = values.encode(t, value)
+
+    def get(self, path):
+        t = self.types[path.lower()]
+        return values.decode(t, self.data[path.lower()])
+
+    def close(self):
+        pass
+
+
+def _port():
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    p = s.getsockname()[1]
+    s.close()
+    return p
+
+
+def test_modbus_server(manifests):
+    from pymodbus.client import AsyncModbusTcpClient
+    from plc_manager.serve import modbus
+    mo = _model(manifests, "two_resources")
+    fake = FakeClient(manifests["two_resources"])
+    kernel = Kernel(mo, fake)
+    port = _port()
+
+    async def go():
+        srv = await modbus.start(kernel, M.modbus_map(mo), "127.0.0.1", port)
+        cl = AsyncModbusTcpClient("127.0.0.1", port=port)
+        await cl.connect()
+        try:
+            fake.set("%QX4.1", True)
+            fake.set("%IX4.3", True)
+            fake.set("%IW10", -7)
+            fake.set("bottles_filled", 70000)
+            fake.set("cpu0.fill_rate", 1.5)
+            r = await cl.read_coils(32, count=3)
+            assert r.bits[:3] == [False, True, False]
+            r = await cl.read_discrete_inputs(32, count=8)
+            assert r.bits[:6] == [False, False, False, True, False, False]
+            r = await cl.read_input_registers(10, count=1)
+            assert r.registers == [0xFFF9]
+            r = await cl.read_holding_registers(8192, count=2)
+            assert r.registers == [1, 70000 - 65536]
+            r = await cl.read_holding_registers(2048, count=2)
+            assert r.registers == [0x3FC0, 0]
+            # FC6 / FC16 / FC23 on the READ_WRITE access path and %MD8
+            r = await cl.write_register(8196, 250)
+            assert not r.isError() and fake.get("target_weight") == 250
+            r = await cl.write_registers(2064, [0x0001, 0x0002])
+            assert not r.isError() and fake.get("%MD8") == 0x10002
+            r = await cl.write_register(2065, 5)        # one of two registers: the other kept
+            assert not r.isError() and fake.get("%MD8") == 0x10005
+            r = await cl.readwrite_registers(read_address=8196, read_count=1,
+                                             write_address=8196, values=[300])
+            assert not r.isError() and r.registers == [300]
+            # refusals: nothing mapped (02), read-only (04), value out of range (03)
+            r = await cl.read_holding_registers(60000, count=4)
+            assert r.isError() and r.exception_code == 2
+            r = await cl.write_register(9000, 1)
+            assert r.isError() and r.exception_code == 2
+            r = await cl.write_register(8192, 1)        # FILLED is READ_ONLY
+            assert r.isError() and r.exception_code == 4
+            r = await cl.write_coil(0, True)            # %QX0.0: the program's output
+            assert r.isError() and r.exception_code == 4
+            r = await cl.write_register(8196, 0x8000)   # INT -32768: fine
+            assert not r.isError()
+            n = len(fake.sets)
+            r = await cl.write_registers(8195, [1, 2])  # half of CAPPED: read-only
+            assert r.isError() and r.exception_code == 4 and len(fake.sets) == n
+            # FC15 multiple coils: none writable here -> 04, nothing written
+            r = await cl.write_coils(32, [True, True])
+            assert r.isError() and r.exception_code == 4 and len(fake.sets) == n
+        finally:
+            cl.close()
+            await srv.shutdown()
+
+    asyncio.run(go())
+
+
+def test_modbus_value_refused(manifests):
+    """A register value outside the variable's type: exception 03, not
+    written (conveyor_counter without access paths, --writable)."""
+    from pymodbus.client import AsyncModbusTcpClient
+    from plc_manager.serve import modbus
+    m = json.loads(json.dumps(manifests["conveyor_counter"]))
+    for v in m["variables"]:
+        if v["path"] == "%MW102":
+            v.update(type="Pct", range=[0, 100])
+    mo = M.Model.from_manifest(m)
+    fake = FakeClient(m)
+    kernel = Kernel(mo, fake)
+    port = _port()
+
+    async def go():
+        srv = await modbus.start(kernel, M.modbus_map(mo, writable_all=True), "127.0.0.1", port)
+        cl = AsyncModbusTcpClient("127.0.0.1", port=port)
+        await cl.connect()
+        try:
+            r = await cl.write_register(1126, 101)
+            assert r.isError() and r.exception_code == 3 and fake.get("%MW102") == 0
+            r = await cl.write_register(1126, 100)
+            assert not r.isError() and fake.get("%MW102") == 100
+        finally:
+            cl.close()
+            await srv.shutdown()
+
+    asyncio.run(go())
+
+
+def test_opcua_server(manifests, tmp_path, pki):
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer, add_user, now, read_users
+    mo = _model(manifests, "two_resources")
+    fake = FakeClient(manifests["two_resources"])
+    kernel = Kernel(mo, fake)
+    port = _port()
+    users = tmp_path / "users"
+    add_user(str(users), "op", "write", "operator-pw")
+    add_user(str(users), "viewer", "read", "viewer-pw")
+    url = f"opc.tcp://127.0.0.1:{port}"
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=False, users=read_users(str(users)),
+                          allow_anonymous=False, security="none", cert_dir=pki)
+        await srv.start()
+        try:
+            fake.set("bottles_filled", 42)
+            fake.set("cpu0.fill_rate", 2.5)
+            await srv.update(kernel.read_now(mo.order), fake.status(), now())
+            ns = srv.ns
+            async with Client(url) as c:          # anonymous: refused
+                pytest.fail("anonymous session accepted")
+        except ua.UaError:
+            pass
+        try:
+            c = Client(url)
+            c.set_user("op")
+            c.set_password("wrong-password")
+            with pytest.raises(Exception):
+                await c.connect()
+            c = Client(url)
+            c.set_user("op")
+            c.set_password("operator-pw")
+            await c.connect()
+            try:
+                ap = c.get_node(ua.NodeId("access:FILLED", ns))
+                assert await ap.read_value() == 42
+                rate = c.get_node(ua.NodeId("cpu0.fill_rate", ns))
+                assert await rate.read_value() == 2.5
+                # browse: configuration -> resources -> tasks -> instances
+                root = c.get_node(ua.NodeId("BottlingLine", ns))
+                names = {(await n.read_browse_name()).Name for n in await root.get_children()}
+                assert {"cpu0", "cpu1", "Globals", "AccessPaths", "Build",
+                        "DirectVariables"} <= names
+                tgt = c.get_node(ua.NodeId("access:FILL_TARGET", ns))
+                await tgt.write_value(ua.Variant(300, ua.VariantType.Int16))
+                assert fake.get("target_weight") == 300
+                with pytest.raises(ua.UaStatusCodeError) as e:
+                    await ap.write_value(ua.Variant(1, ua.VariantType.Int32))
+                assert e.value.code == ua.StatusCodes.BadNotWritable
+                with pytest.raises(ua.UaStatusCodeError) as e:
+                    await tgt.write_value(ua.Variant(1.5, ua.VariantType.Double))
+                assert e.value.code == ua.StatusCodes.BadTypeMismatch
+                state = c.get_node(ua.NodeId("cpu0.fast0/State", ns))
+                assert await state.read_value() == "running"
+                # a task stopped on a fault: its instances' values frozen, flagged
+                fake.fault = "cpu1.slow1"
+                fake.set("cpu1.monitor.in_transit", 5)
+                await srv.update(kernel.read_now(mo.order), fake.status(), now())
+                transit = c.get_node(ua.NodeId("cpu1.monitor.in_transit", ns))
+                dv = await transit.read_data_value(raise_on_bad_status=False)
+                assert dv.StatusCode.value == ua.StatusCodes.UncertainLastUsableValue
+                assert dv.Value.Value == 5
+                assert await c.get_node(ua.NodeId("cpu1.slow1/State", ns)).read_value() \
+                    == "fault"
+                dv = await rate.read_data_value()
+                assert dv.StatusCode.is_good()                # another task's variable
+                fake.fault = None
+                await srv.update(kernel.read_now(mo.order), fake.status(), now())
+                dv = await transit.read_data_value()
+                assert dv.StatusCode.is_good() and dv.Value.Value == 5
+                # subscription: a change in the kernel reaches the client
+                got = asyncio.Queue()
+
+                class H:
+                    def datachange_notification(self, node, val, data):
+                        got.put_nowait(val)
+
+                sub = await c.create_subscription(20, H())
+                await sub.subscribe_data_change(ap)
+                assert await asyncio.wait_for(got.get(), 5) == 42
+                fake.set("bottles_filled", 43)
+                await srv.update(kernel.read_now(mo.order), None, now())
+                assert await asyncio.wait_for(got.get(), 5) == 43
+            finally:
+                await c.disconnect()
+            c = Client(url)
+            c.set_user("viewer")
+            c.set_password("viewer-pw")
+            await c.connect()
+            try:
+                tgt = c.get_node(ua.NodeId("access:FILL_TARGET", ns))
+                assert await tgt.read_value() == 300
+                with pytest.raises(ua.UaStatusCodeError) as e:
+                    await tgt.write_value(ua.Variant(5, ua.VariantType.Int16))
+                assert e.value.code == ua.StatusCodes.BadUserAccessDenied
+                assert fake.get("target_weight") == 300
+            finally:
+                await c.disconnect()
+        finally:
+            await srv.stop()
+
+    asyncio.run(go())
+
+
+def test_kernel_thread(manifests):
+    """The netlink client is used in its own thread, never in the loop's."""
+    mo = _model(manifests, "conveyor_counter")
+    fake = FakeClient(manifests["conveyor_counter"])
+    pool = ThreadPoolExecutor(max_workers=1)
+    k = Kernel.open(pool, lambda: (fake, mo))
+    fake.set("%MW102", 9)
+    assert asyncio.run(k.read(["%MW102"])) == {"%MW102": 9}
+    k.close()
+
+
+def test_poller_ends_when_the_configuration_changes(manifests, monkeypatch):
+    """A load of another configuration, a swap that changed the interface,
+    or a stopped configuration (no answer for GONE_AFTER s) ends the
+    poller with the reason (serve then exits 75 for a restart)."""
+    import plc_manager.serve as serve
+    mo = _model(manifests, "conveyor_counter")
+    mo.interface_hash = "aaaa"
+    fake = FakeClient(manifests["conveyor_counter"])
+    kernel = Kernel(mo, fake)
+
+    def run():
+        return asyncio.run(serve._poll(kernel, mo, None, 0.01, asyncio.Event(),
+                                       serve.PollStats()))
+
+    st = fake.status
+    fake.status = lambda: dataclasses.replace(st(), interface_hash="bbbb")
+    assert "interface bbbb" in run()
+    fake.status = lambda: dataclasses.replace(st(), interface_hash="aaaa",
+                                              configuration="Other")
+    assert "runs Other" in run()
+
+    def gone():
+        raise KernelError(errno.ENOENT, "no such family")
+
+    fake.status = gone
+    monkeypatch.setattr(serve, "GONE_AFTER", 0.05)
+    assert "no answer from the kernel" in run()
+
+
+
+def test_ports_taken(manifests, pki):
+    """A port in use: one line, no traceback."""
+    from plc_manager.errors import PLCError
+    from plc_manager.serve import modbus
+    from plc_manager.serve.opcua import OpcUaServer
+    mo = _model(manifests, "conveyor_counter")
+    kernel = Kernel(mo, FakeClient(manifests["conveyor_counter"]))
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    s.listen()
+    port = s.getsockname()[1]
+    try:
+        with pytest.raises(PLCError, match="cannot listen"):
+            asyncio.run(modbus.start(kernel, M.modbus_map(mo), "127.0.0.1", port))
+        srv = OpcUaServer(mo, kernel, f"opc.tcp://127.0.0.1:{port}", writable_all=False,
+                          users={}, allow_anonymous=True, security="none",
+                          cert_dir=pki)
+        with pytest.raises(PLCError, match="cannot listen"):
+            asyncio.run(srv.start())
+    finally:
+        s.close()
+
+
+def test_opcua_50_clients(manifests, pki):
+    """50 concurrent anonymous sessions read a variable; one that drops its
+    connection mid-session does not disturb the others."""
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer, now
+    mo = _model(manifests, "two_resources")
+    fake = FakeClient(manifests["two_resources"])
+    kernel = Kernel(mo, fake)
+    port = _port()
+    url = f"opc.tcp://127.0.0.1:{port}"
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=False, users={}, allow_anonymous=True,
+                          security="none", cert_dir=pki)
+        await srv.start()
+        try:
+            fake.set("bottles_filled", 7)
+            await srv.update(kernel.read_now(mo.order), fake.status(), now())
+
+            async def one(i):
+                c = Client(url, timeout=30)
+                await c.connect()
+                try:
+                    v = await c.get_node(ua.NodeId("access:FILLED", srv.ns)).read_value()
+                    if i == 0:                      # gone without closing its session
+                        c.uaclient.protocol.transport.abort()
+                        return v
+                finally:
+                    if i != 0:
+                        await c.disconnect()
+                return v
+
+            got = await asyncio.gather(*(one(i) for i in range(50)), return_exceptions=True)
+            assert got == [7] * 50, [g for g in got if g != 7][:3]
+            async with Client(url) as c:
+                assert await c.get_node(ua.NodeId("access:FILLED", srv.ns)).read_value() == 7
+        finally:
+            await srv.stop()
+
+    asyncio.run(go())
