@@ -123,11 +123,13 @@ def test_every_third_party_import_is_declared():
 @pytest.mark.parametrize("user", sorted(PRODUCT))
 def test_product_needs_nothing_from_the_test_extra(user):
     """The compiler may use core and the feature extras (it imports them
-    lazily, where the feature is used); plc-manager only core and manager;
+    lazily, where the feature is used); plc-manager only core, manager and serve;
     the container recipe only core and container.  iec2kmod/testing is the
     test harness and is left out."""
     groups = declared()
     allowed = groups["core"] | (groups["all"] if user == "core" else groups[user])
+    if user == "manager":                    # plc-manager serve (manager/serve/)
+        allowed |= groups["serve"]
     imports = third_party_imports(PRODUCT[user])
     imports = {m: {f for f in fs if not f.startswith("iec2kmod/testing/")}
                for m, fs in imports.items()}
@@ -151,7 +153,9 @@ def test_extras():
     assert groups["core"] & {"z3-solver", "docker", "pyroute2", "pyuppaal", "pytest"} == set()
     assert groups["verify"] == {"z3-solver"}
     assert "docker" in groups["container"] and groups["manager"] == {"pyroute2"}
-    assert groups["all"] == groups["verify"] | groups["container"] | groups["manager"]
+    assert groups["all"] == (groups["verify"] | groups["container"] | groups["manager"] |
+                             groups["serve"])
+    assert {"asyncua", "pymodbus"} <= groups["serve"]
     assert {"pytest", "hypothesis", "ruff", "pyuppaal"} <= groups["test"]
     reqs = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     z3 = [r for r in reqs["optional-dependencies"]["verify"] if _req_name(r) == "z3-solver"]
