@@ -85,7 +85,7 @@ def key(moddir: str, toolchain: Iterable[str], args: Iterable[str]) -> str:
     for part in toolchain:
         h.update(b"T" + part.encode() + b"\0")
     for a in args:
-        h.update(b"A" + a.encode() + b"\0")
+        h.update(b"A" + _arg_identity(a).encode() + b"\0")
     for rel in _walk(moddir):
         if _is_product(rel) or rel in _NOT_INPUTS:
             continue
@@ -93,6 +93,17 @@ def key(moddir: str, toolchain: Iterable[str], args: Iterable[str]) -> str:
             data = f.read()
         h.update(b"F" + rel.encode() + b"\0" + str(len(data)).encode() + b"\0" + data)
     return h.hexdigest()
+
+
+def _arg_identity(arg: str) -> str:
+    """A make argument as an input of the build: ``VAR=/abs/file`` (such as
+    KBUILD_EXTRA_SYMBOLS=/tmp/xyz/Module.symvers) stands for the file's
+    content, not its path, so the same build under another temporary
+    directory hits."""
+    name, eq, value = arg.partition("=")
+    if eq and os.path.isabs(value) and os.path.isfile(value):
+        return f"{name}=@content:{file_digest(value)}"
+    return arg
 
 
 def file_digest(path: str) -> str:

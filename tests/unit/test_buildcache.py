@@ -113,3 +113,18 @@ def test_generated_trees_do_not_depend_on_where_the_project_lies(tmp_path):
         a, b = (trees[0] / rel).read_bytes(), (trees[1] / rel).read_bytes()
         assert a == b, rel
         assert str(tmp_path).encode() not in a, rel
+
+
+def test_a_file_named_by_a_make_argument_counts_by_its_content(tmp_path, cache):
+    """KBUILD_EXTRA_SYMBOLS=/tmp/<random>/Module.symvers (benchmarks/soak.py's
+    second build): the same symbols in another directory give the same key,
+    other symbols another key."""
+    a = _tree(tmp_path / "a")
+    s1, s2 = tmp_path / "x" / "Module.symvers", tmp_path / "y" / "Module.symvers"
+    for s in (s1, s2):
+        s.parent.mkdir()
+        s.write_text("0x1234\tiec_sym\tiec_cfg\tEXPORT_SYMBOL_GPL\t\n")
+    k1 = buildcache.key(str(a), ["gcc=1"], [f"KBUILD_EXTRA_SYMBOLS={s1}", "modules"])
+    assert k1 == buildcache.key(str(a), ["gcc=1"], [f"KBUILD_EXTRA_SYMBOLS={s2}", "modules"])
+    s2.write_text("0x9999\tiec_sym\tiec_cfg\tEXPORT_SYMBOL_GPL\t\n")
+    assert k1 != buildcache.key(str(a), ["gcc=1"], [f"KBUILD_EXTRA_SYMBOLS={s2}", "modules"])
