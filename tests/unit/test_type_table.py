@@ -347,3 +347,22 @@ def test_untyped_literal_conversions(t, ok, bad):
         assert not es, (t, lit, es)
     for lit, es in zip(bad, errs[len(ok):]):
         assert es, f"{t} := {lit} accepted"
+
+
+# ------------------------------------------------------------ through the CLI
+@pytest.mark.parametrize("body,message", [
+    ("d := r;", "3:6: error: cannot assign REAL to 'd' of type DINT: convert explicitly "
+                "with REAL_TO_DINT"),
+    ("e := d + r;", "3:6: error: operator +: incompatible operands DINT and REAL"),
+    ("tbl[2] := 99;", "3:1: error: cannot assign to constant 'tbl'"),
+])
+def test_cli_refuses_issue_29_programs(tmp_path, capsys, body, message):
+    """Issue 29's M10/M11 programs through `iec2kmod check`: exit 1 and the
+    error at file:line:col, no traceback."""
+    from iec2kmod import cli
+    f = tmp_path / "p.st"
+    f.write_text("PROGRAM p\nVAR r : REAL; d, e : DINT; END_VAR VAR CONSTANT tbl : "
+                 f"ARRAY[1..3] OF INT := [1, 2, 3]; END_VAR\n{body}\nEND_PROGRAM\n")
+    rc = cli.main(["check", str(f)])
+    err = capsys.readouterr().err
+    assert rc == 1 and f"{f}:{message}" in err and "Traceback" not in err, err
