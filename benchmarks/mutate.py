@@ -271,8 +271,11 @@ def main(argv=None):
         return 0
     chosen = choose(all_sites, areas, a.count, a.seed)
     if a.only:
-        want = set(a.only.split(","))
-        chosen = [m for m in all_sites if f"{m.path}:{m.line}:{m.old}>{m.new}" in want]
+        # the first site of each key (a line may hold the same operator twice)
+        first = {}
+        for m in all_sites:
+            first.setdefault(f"{m.path}:{m.line}:{m.old}>{m.new}", m)
+        chosen = [first[k] for k in a.only.split(",") if k in first]
     print(f"{len(all_sites)} sites in {', '.join(areas)}; {len(chosen)} mutants (seed {a.seed})",
           flush=True)
     res = {x: {"killed": 0, "survived": 0, "equivalent": 0} for x in areas}
