@@ -69,6 +69,8 @@ AREAS = {
 EQUIVALENT: dict = {
     ("iec2kmod/checks/body.py", "if len(hits) > 1:", ">", ">="):
         "len(hits) == 1 returned just before: > 1 and >= 1 agree on what reaches it",
+    ("iec2kmod/interp/conv.py", "return lo if v < lo else hi if v > hi else v", ">", ">="):
+        "at v == hi both forms return hi, which is v",
 }
 
 _PY_CMP = {ast.Lt: ("<", "<="), ast.LtE: ("<=", "<"), ast.Gt: (">", ">="),
