@@ -741,3 +741,31 @@ END_CONFIGURATION
     ev, sk = marked.selective["r.t"]
     # m and the program instance q are counted (2 x 51 runs), most skipped
     assert ev + sk == 2 * 51 and sk > 51, marked.selective
+
+
+def test_settle_refused_for_inout_beside_a_written_input(tmp_path):
+    """Rule 8 refuses a block with an in-out whose body writes one of its
+    inputs.  Today the checker refuses every write to a VAR_INPUT, so the
+    clause is unreachable (the mutation benchmark's survivor
+    selective.py `pou.node.body or []` -> `and []` is equivalent for that
+    reason); once a write to an input is only a warning (the real-users'
+    branch), this pins the clause."""
+    text = """
+FUNCTION_BLOCK F
+VAR_INPUT a : INT; END_VAR
+VAR_IN_OUT io : INT; END_VAR
+VAR_OUTPUT o : INT; END_VAR
+a := a + io;
+o := a;
+END_FUNCTION_BLOCK
+"""
+    f = tmp_path / "w.st"
+    f.write_text(text)
+    res = frontend.run([str(f)], use_cache=False)
+    if not res.ok:
+        assert any("input 'a'" in d.message for d in res.diags.errors), \
+            [d.format() for d in res.diags.sorted()]
+        pytest.skip("a write to a VAR_INPUT is an error: the clause cannot be reached")
+    plan = SelectivePlan(res.project, "all")
+    b = plan.blocks[res.project.pous["F"].key]
+    assert plan._settle_refused(b) == "an in-out beside a body that writes its inputs"
