@@ -247,6 +247,13 @@ class Gen:
         # condition reads only the loop's variable
         self.ct_r = random.Random(f"ct{seed}")
         self.cont = True
+        # boundary values (issue 29): type limits and their neighbours in
+        # literals, input traces and comparisons of unsigned types, decided
+        # by a generator of their own (boundary_lit, boundary_input,
+        # boundary_compare_type); with them off a seed gives the project it
+        # gave before
+        self.bd_r = random.Random(f"bd{seed}")
+        self.bd = True
         self.cur_pou = None
         # strings=False (generate_unit): no STRING type, value or function,
         # for engines that have none (the verifier); True leaves every seed's
@@ -346,6 +353,9 @@ class Gen:
 
     def _lit(self, t, small=True):
         r = self.r
+        b = self.boundary_lit(t)
+        if b is not None:
+            return b
         if t.kind == "bool":
             return self.pick(["TRUE", "FALSE"])
         if t.kind == "sub":
@@ -376,6 +386,75 @@ class Gen:
             w = self.pick(WORDS)
             return f"'{w}'"
         raise AssertionError(t)
+
+    # ------------------------------------------------ boundary values (issue 29)
+    def bd_chance(self, p):
+        return self.bd and self.bd_r.random() < p
+
+    def boundary_ints(self, t):
+        """The limits of an integer or bit string type and their neighbours:
+        0, 1, -1, MIN, MIN+1, MAX, MAX-1, 2^(n-1) and its neighbours."""
+        lo, hi = rng_of(t)
+        h = 1 << (t.bits - 1)
+        return sorted(v for v in {0, 1, -1, 2, lo, lo + 1, hi, hi - 1, h, h - 1, h + 1}
+                      if lo <= v <= hi)
+
+    def boundary_lit(self, t, p=0.2):
+        """A boundary literal of an elementary or string type with
+        probability p, or None (the ordinary literal then)."""
+        if t.kind not in ("int", "bit", "real", "time", "string") or not self.bd_chance(p):
+            return None
+        r = self.bd_r
+        if t.kind in ("int", "bit"):
+            self.feat("boundary_" + t.kind)
+            v = r.choice(self.boundary_ints(t))
+            if v < 0:
+                return f"{t.name}#{v}"
+            if t.kind == "bit" and r.random() < 0.5:
+                return f"{t.name}#16#{v:X}"
+            return f"{t.name}#{v}"
+        if t.kind == "real":
+            self.feat("boundary_real")
+            big = ["3.4E38", "-3.4E38", "1.0E-38", "1.4E-45"] if t.bits == 32 else \
+                ["1.7E308", "-1.7E308", "2.2E-308", "4.9E-324"]
+            return f"{t.name}#" + r.choice(["0.0", "-0.0", "1.0", "-1.0",
+                                             "9.2233720368547758E18", "1.8446744073709552E19",
+                                             "2147483647.5", "-2147483648.5"] + big)
+        if t.kind == "time":
+            self.feat("boundary_time")
+            return r.choice(["T#0ms", "T#1ms", "T#-1ms", "T#24d20h31m23s647ms",
+                             "T#-24d20h31m23s648ms"])
+        if not self.strings:
+            return None
+        self.feat("boundary_string")
+        n = min(t.length, 254)
+        return "''" if r.random() < 0.4 else "'" + ("abcdefghij" * 26)[:n] + "'"
+
+    def boundary_input(self, t, p=0.3):
+        """A boundary value for an input trace (integers, bit strings, reals
+        and times) with probability p, or None."""
+        if not self.bd_chance(p):
+            return None
+        r = self.bd_r
+        if t.kind in ("int", "bit"):
+            self.feat("boundary_input")
+            return str(r.choice(self.boundary_ints(t)))
+        if t.kind == "real":
+            big = ["3.4E38", "-3.4E38", "1.4E-45"] if t.bits == 32 else \
+                ["1.7E308", "-1.7E308", "4.9E-324"]
+            return r.choice(["0.0", "-0.0", "9.2233720368547758E18"] + big)
+        if t.kind == "time":
+            return r.choice(["T#0ms", "T#24d20h31m23s647ms"])
+        return None
+
+    def boundary_compare_type(self, ct, p=0.25):
+        """The operand type of a comparison: with probability p an unsigned
+        integer or a wide bit string instead (the ordinary choice has none:
+        issue 29's M21 compared them as signed)."""
+        if ct.kind in ("int", "bit") and self.bd_chance(p):
+            self.feat("boundary_compare_unsigned")
+            return self.bd_r.choice([*INTS[4:], *BITS[2:]])
+        return ct
 
     # --------------------------------------------------------------- types
     def make_types(self):
@@ -960,6 +1039,7 @@ class Gen:
                            + self.enums)
             if ct.kind == "string" and not self.strings:
                 ct = INT
+            ct = self.boundary_compare_type(ct)
             a, b = self.expr(ct, scope, d), self.expr(ct, scope, d)
             while clash(a, b, ct):
                 a, b = self.expr(ct, scope, d), self.lit(ct, bare=False)
@@ -1886,6 +1966,9 @@ class Gen:
 
     def trace_value(self, t):
         r = self.r
+        b = self.boundary_input(t)
+        if b is not None:
+            return b
         if t.kind == "bool":
             return self.pick(["TRUE", "FALSE"])
         if t.kind == "sub":
@@ -1910,7 +1993,8 @@ class Gen:
 
 def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
                   sfc: bool = True, fidelity: bool = True, strings: bool = True,
-                  named_constants: bool = True, continue_stmt: bool = True) -> Unit:
+                  named_constants: bool = True, continue_stmt: bool = True,
+                  boundary: bool = True) -> Unit:
     """``sfc=False``: no SFC bodies -- the same project the seed gave before
     the generator knew SFC (SFC is decided by a random generator of its own).
     ``fidelity=False``: none of the constructs of issue 10 (function forms,
@@ -1920,13 +2004,15 @@ def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
     refuses them); True gives every seed's project as before.
     ``named_constants=False``: no VAR CONSTANT naming an array bound or a
     CASE label (decided by a generator of its own as well).
-    ``continue_stmt=False``: no CONTINUE (ed.3) in loops (likewise)."""
+    ``continue_stmt=False``: no CONTINUE (ed.3) in loops (likewise).
+    ``boundary=False``: no boundary values (Gen.boundary_lit, issue 29)."""
     g = Gen(seed, k, size)
     g.sfc = sfc
     g.fid = fidelity
     g.strings = strings
     g.nc = named_constants
     g.cont = continue_stmt
+    g.bd = boundary
     g._dims = {}
     g.for_ranges = []
     return g.unit(cycles)

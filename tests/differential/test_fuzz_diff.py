@@ -44,6 +44,10 @@ MUST_REACH = {
     "function_eno", "function_eno_out",
     "named_const_bound", "named_const_case", "named_const_from_const",
     "named_const_external_bound", "continue_for", "continue_while", "continue_case",
+    # boundary values (issue 29): type limits and neighbours in literals and
+    # input traces, comparisons of unsigned types
+    "boundary_int", "boundary_bit", "boundary_real", "boundary_time", "boundary_string",
+    "boundary_input", "boundary_compare_unsigned",
 }
 
 

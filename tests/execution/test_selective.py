@@ -690,3 +690,82 @@ END_PROGRAM
     assert "REAL" in notes["Flt"], notes
     assert notes["Put"] == "writes g", notes
     assert not any(b.idempotent for b in plan.blocks.values())
+
+
+def test_marked_mode_takes_instance_marks_on_unmarked_types(tmp_path):
+    """--selective=marked with {selective on} on an instance (its type not
+    marked) and on a program instance: those are skipped, the unmarked ones
+    not (issue 29's mutation benchmark: `inst.pou is pou` flipped to `is
+    not` in SelectivePlan._type_wanted gave the selective layout to the
+    types of the other program instances instead of the marked one's, and
+    passed every test)."""
+    text = """
+FUNCTION_BLOCK F
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT y : INT; END_VAR
+y := x * 3;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL x, y1, y2 : INT; END_VAR
+VAR
+  {selective on} m : F;
+  n : F;
+END_VAR
+m(x := x); y1 := m.y;
+n(x := x); y2 := n.y;
+END_PROGRAM
+
+PROGRAM Other
+VAR_EXTERNAL x, y3 : INT; END_VAR
+y3 := x + 1;
+END_PROGRAM
+
+CONFIGURATION c
+VAR_GLOBAL x, y1, y2, y3 : INT; END_VAR
+RESOURCE r ON CPU0
+  TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+  PROGRAM p WITH t : Main;
+  {selective on} PROGRAM q WITH t : Other;
+END_RESOURCE
+END_CONFIGURATION
+"""
+    project = _project(tmp_path, text)
+    plan = SelectivePlan(project, "marked")
+    main = project.pous["MAIN"]
+    kinds = {v.name: plan.call_kind(main, v) for v in main.vars.values()
+             if v.section == "VAR"}
+    assert kinds == {"m": "sel", "n": "plain"}, kinds
+    rows = [(0, "x", 2), (300, "x", 5)]
+    _, marked = _both(tmp_path, text, rows, 500, mode="marked")
+    ev, sk = marked.selective["r.t"]
+    # m and the program instance q are counted (2 x 51 runs), most skipped
+    assert ev + sk == 2 * 51 and sk > 51, marked.selective
+
+
+def test_settle_refused_for_inout_beside_a_written_input(tmp_path):
+    """Rule 8 refuses a block with an in-out whose body writes one of its
+    inputs.  Today the checker refuses every write to a VAR_INPUT, so the
+    clause is unreachable (the mutation benchmark's survivor
+    selective.py `pou.node.body or []` -> `and []` is equivalent for that
+    reason); once a write to an input is only a warning (the real-users'
+    branch), this pins the clause."""
+    text = """
+FUNCTION_BLOCK F
+VAR_INPUT a : INT; END_VAR
+VAR_IN_OUT io : INT; END_VAR
+VAR_OUTPUT o : INT; END_VAR
+a := a + io;
+o := a;
+END_FUNCTION_BLOCK
+"""
+    f = tmp_path / "w.st"
+    f.write_text(text)
+    res = frontend.run([str(f)], use_cache=False)
+    if not res.ok:
+        assert any("input 'a'" in d.message for d in res.diags.errors), \
+            [d.format() for d in res.diags.sorted()]
+        pytest.skip("a write to a VAR_INPUT is an error: the clause cannot be reached")
+    plan = SelectivePlan(res.project, "all")
+    b = plan.blocks[res.project.pous["F"].key]
+    assert plan._settle_refused(b) == "an in-out beside a body that writes its inputs"

@@ -68,9 +68,10 @@ def _model(pairs):
     return s.model()
 
 
-def run(project, cycles, seed):
+def run(project, cycles, seed, values=None):
     """Returns a list of differences (empty when the engines agree) and
-    the number of cycles compared."""
+    the number of cycles compared.  values(rnd, leaf, random_value) draws
+    the inputs instead of random_value when given."""
     out = build(project, [], [], None, Diagnostics())
     ts = out.system
     sym = out.sym
@@ -89,7 +90,7 @@ def run(project, cycles, seed):
         for leaf, var, _ in ts.inputs:
             if leaf is None:
                 continue    # the free values of a faulted task (read only after a fault)
-            v = random_value(rnd, leaf)
+            v = values(rnd, leaf, random_value) if values else random_value(rnd, leaf)
             c, key = lookup(m, leaf.keys)
             c[key] = v
             ins[var] = const_of(v, leaf.type)
