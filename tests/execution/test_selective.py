@@ -21,6 +21,7 @@ from iec2kmod import frontend, sim
 from iec2kmod.codegen import generate
 from iec2kmod.codegen.plan import build_plan
 from iec2kmod.compilation import selective_plan
+from iec2kmod.codegen.selective import SelectivePlan
 
 pytestmark = pytest.mark.execution
 
