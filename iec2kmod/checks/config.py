@@ -77,6 +77,7 @@ class ConfigChecker:
         self.located_owner: dict = {}
         # address -> IEC path of its variable (ConfigInfo.addresses)
         self.paths: dict = {}
+        self.completed: set = set()         # upper paths VAR_CONFIG locates
 
     def error(self, src, pos, msg):
         self.diags.error(src, pos, msg)
@@ -367,7 +368,7 @@ class ConfigChecker:
     def check_completed(self, cfg):
         """Every incomplete location (AT %I*) of a program instance, or of a
         function block instance in one, is completed by VAR_CONFIG."""
-        done = {p.upper() for a, p in self.paths.items()}
+        done = self.completed
         for r in cfg.resources:
             for inst in r.programs:
                 for path, v in _incomplete(inst.pou, _qual(r, inst.name), 0):
@@ -609,8 +610,9 @@ class ConfigChecker:
                     chain = self.instance_chain(d.path, cfg)
                     if chain is not None:
                         r, inst, vs = chain
-                        self.paths.setdefault(d.location, ".".join(
-                            [_qual(r, inst.name)] + [v.name for v in vs]))
+                        path = ".".join([_qual(r, inst.name)] + [v.name for v in vs])
+                        self.completed.add(path.upper())
+                        self.paths.setdefault(d.location, path)
             if d.init is not None and t is not ERROR:
                 d.init = self.decl.check_initializer(d.init, t, src)
                 chain = self.instance_chain(d.path, cfg)
