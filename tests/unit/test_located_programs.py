@@ -79,3 +79,37 @@ def test_name_index_keeps_a_connection_address_its_own_entry():
     table = [E("a"), E("%QW2"), E("r.p.x")]
     got = name_index(table, {"%QW2": "r.p.x", "%IX0.0": "r.p.x", "%MW0": "missing"})
     assert got == {"A": 0, "%QW2": 1, "R.P.X": 2, "%IX0.0": 2}
+
+
+GUARD = """PROGRAM Guard
+VAR
+    Stop AT %IX0.1 : BOOL;
+    Valve AT %QX0.0 : BOOL;
+    Seen AT %MX1.0 : BOOL;
+END_VAR
+    Valve := NOT Stop;
+    Seen := Seen OR Stop;
+END_PROGRAM
+CONFIGURATION C
+    RESOURCE R ON PLC
+        TASK t (INTERVAL := T#20ms, PRIORITY := 0);
+        PROGRAM g WITH t : Guard;
+    END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+@pytest.mark.parametrize("engine", ["z3", "explicit"])
+def test_verify_takes_a_programs_located_input_as_free(tmp_path, engine):
+    """A program's %I variable is an input of every cycle (as a located %I
+    global is), not a constant at its initial value: 'R.g.Valve' is violated
+    by Stop = TRUE; %Q and %M ones are state."""
+    f = tmp_path / "guard.st"
+    f.write_text(GUARD)
+    code, out, err = run("verify", "--engine", engine, "--depth", "3", "--cex-dir",
+                         str(tmp_path), str(f), "-p", "R.g.Valve", "-p",
+                         "R.g.Valve = NOT R.g.Stop")
+    assert code == 3, out + err                  # EXIT_VIOLATED
+    lines = [ln.split() for ln in out.splitlines() if ln.strip().startswith("property")]
+    assert [ln[:3] for ln in lines] == [["property", "1", "violated"],
+                                        ["property", "2", "proved"]], out
