@@ -1716,7 +1716,10 @@ class Gen:
         """Inputs the body may assign (OSCAT does; a warning, not an error)."""
         if not self.real_chance(0.3):
             return
-        ins = [v for v in pou.vars if v.sec == "in" and not v.edge]
+        # a function's ARRAY, STRUCT and STRING inputs are passed by
+        # reference and stay read-only (an error of the checker)
+        ins = [v for v in pou.vars if v.sec == "in" and not v.edge and
+               (pou.kind != "FUNCTION" or v.ty.kind not in ("array", "struct", "string"))]
         for v in ins:
             if self.real_r.random() < 0.6:
                 v.ro = False

@@ -85,10 +85,24 @@ def test_for_control_variable_may_be_an_input_under_the_same_rule():
 
 
 def test_write_to_a_part_of_an_input():
-    got = diagnostics("TYPE A3 : ARRAY[1..3] OF INT; END_TYPE\nFUNCTION F : INT\n"
-                      "VAR_INPUT v : A3; END_VAR\nv[2] := 5;\nF := v[2];\nEND_FUNCTION\n")
-    assert [(l, s) for l, _, s, _ in got] == [(4, "warning")]
-    assert got[0][3].startswith("write to a part of input 'v' inside its function")
+    got = diagnostics("TYPE A3 : ARRAY[1..3] OF INT; END_TYPE\nFUNCTION_BLOCK F\n"
+                      "VAR_INPUT v : A3; END_VAR\nVAR_OUTPUT o : INT; END_VAR\nv[2] := 5;\n"
+                      "o := v[2];\nEND_FUNCTION_BLOCK\n")
+    assert [(l, s) for l, _, s, _ in got] == [(5, "warning")]
+    assert got[0][3].startswith("write to a part of input 'v' inside its function block")
+
+
+@pytest.mark.parametrize("decl, write", [("v : A3", "v[2] := 5"), ("v : A3", "v := v"),
+                                         ("v : R", "v.a := 1"), ("v : STRING[4]", "v := 'x'")])
+def test_a_functions_aggregate_input_stays_read_only(decl, write):
+    """A function's ARRAY, STRUCT and STRING inputs are passed by reference
+    (found by the differential campaign: the C did not compile)."""
+    got = diagnostics("TYPE A3 : ARRAY[1..3] OF INT; R : STRUCT a : INT; END_STRUCT; END_TYPE\n"
+                      f"FUNCTION F : INT\nVAR_INPUT {decl}; END_VAR\n{write};\nF := 1;\n"
+                      "END_FUNCTION\n")
+    assert [(l, s) for l, _, s, _ in got] == [(4, "error")], got
+    assert "of a function: iec2kmod passes a function's" in got[0][3] and \
+        "copy it into a VAR of the function" in got[0][3]
 
 
 @pytest.mark.parametrize("word", ["PUBLIC", "PRIVATE", "INTERNAL", "PROTECTED", "FINAL",
