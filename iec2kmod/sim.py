@@ -28,6 +28,7 @@ from .execmodel import LOOP_BUDGET
 from . import traces
 from .traces import TraceError, format_value, read_trace, write_csv, write_vcd
 from .traces import Trace as SimResult
+from .located import addresses_of, name_index
 
 # the trace functions are traces.py's; sim.<name> stays for its callers
 __all__ = ["run", "build", "render_sim", "SimError", "InternalError", "SimResult",
@@ -234,18 +235,21 @@ def run(what, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=Fal
         exe, plan = build(what, build_dir, sanitize, selective)
     except CompileError as exc:
         raise SimError(str(exc)) from None
-    index = {e.path.upper(): i for i, e in enumerate(plan.table)}
+    # a located variable may be named by its address (iec2kmod/located.py)
+    addresses = addresses_of(getattr(what, "project", what))
+    index = name_index(plan.table, addresses)
     if watch:
         idx = []
         for w in watch:
             i = index.get(w.strip().upper())
             if i is None:
                 raise SimError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
-            idx.append(i)
+            if i not in idx:         # an address and its name are one variable
+                idx.append(i)
     else:
         idx = [i for i, e in enumerate(plan.table) if e.owner == "global" or e.owner == "direct"]
     try:
-        events = read_trace(inputs, plan.table) if inputs else []
+        events = read_trace(inputs, plan.table, addresses) if inputs else []
     except TraceError as exc:
         raise SimError(str(exc)) from None
     ev_path = exe.parent / f"events.{os.getpid()}.txt"

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from . import __version__
 from .checks.types import Elementary, EnumT, SubrangeT, concrete
 from .literals import LiteralError, classify, parse_duration
+from .located import name_index
 
 
 class TraceError(Exception):
@@ -112,11 +113,12 @@ def _int_range(t):
     return t.range if isinstance(t, Elementary) else None
 
 
-def read_trace(path: str, table):
+def read_trace(path: str, table, addresses=None):
     """Input events of a CSV trace (time,variable,value; header and
-    ``#`` comment lines optional), sorted by time then line:
+    ``#`` comment lines optional; a located variable may be named by its
+    address, *addresses* mapping address -> path), sorted by time then line:
     [(t_ns, line, table index, kind, value)]."""
-    index = {e.path.upper(): i for i, e in enumerate(table)}
+    index = name_index(table, addresses)
     events = []
     try:
         with open(path, newline="") as fh:

@@ -575,7 +575,14 @@ class Declarer:
                 if key in self._pending_types:
                     self.error(node.src, node.pos, f"'{node.name}' is already defined as a type")
                     continue
-                if stdlib.is_std_function(key) or key in stdlib.FUNCTION_BLOCKS:
+                if stdlib.ed3_only(key):
+                    self.warning(node.src, node.pos,
+                                 f"'{node.name}' is a standard "
+                                 f"{'function block' if key in stdlib.FUNCTION_BLOCKS else 'function'}"
+                                 " of IEC 61131-3 ed.3 only: this project's "
+                                 f"{node.kind.lower().replace('_', ' ')} of that name (ed.2 "
+                                 "code) replaces it")
+                elif stdlib.is_std_function(key) or key in stdlib.FUNCTION_BLOCKS:
                     self.error(node.src, node.pos,
                                f"'{node.name}' is the name of a standard function or block")
                     continue
@@ -757,8 +764,9 @@ class Declarer:
                                f"function block instances cannot be declared in {where}{hint}")
             if decl.location:
                 self.check_location_decl(decl, block, owner, src, t, allow_located)
-            if constant and decl.init is None and block.kind != "VAR_EXTERNAL":
-                self.error(src, decl.pos, "a CONSTANT needs an initial value")
+            # a CONSTANT without an initial value holds its type's default
+            # initial value (ed.2 2.4.2: the initial value is optional; ed.2
+            # 2.3.3.1 gives every type a default), as MatIEC and CODESYS read it
             if decl.init is not None:
                 if block.kind in ("VAR_EXTERNAL", "VAR_IN_OUT"):
                     self.error(src, decl.init.pos, f"{block.kind} cannot have an initial value")
@@ -783,13 +791,38 @@ class Declarer:
     def check_location_decl(self, decl, block, owner, src, t, allow_located):
         addr = decl.location
         if not allow_located:
-            if addr.endswith("*") and isinstance(owner, POUInfo) and owner.kind == "PROGRAM" and \
-                    block.kind == "VAR":
-                return  # completed by VAR_CONFIG
+            kind = owner.kind if isinstance(owner, POUInfo) else None
+            if block.kind == "VAR" and (kind == "PROGRAM" or
+                                        kind == "FUNCTION_BLOCK" and addr.endswith("*")):
+                # ed.2 program_declaration takes located_var_declarations (the
+                # I/O of every OpenPLC program), and an incomplete location
+                # (%I*, %Q*, %M*) in a program or function block is completed
+                # by the configuration's VAR_CONFIG; the configuration checks
+                # that one address belongs to one variable (checks/config.py)
+                if not addr.endswith("*"):
+                    check_address_type(self, src, decl.pos, addr, t)
+                return
             name = decl.names[0][0]
             where = owner.kind.lower().replace("_", " ") if isinstance(owner, POUInfo) else \
                 "this declaration"
             arrow = "=>" if addr[1] == "Q" else ":="
+            if kind == "PROGRAM":
+                self.error(src, decl.pos,
+                           f"located variable '{name}' AT {addr} in {block.kind}: a program's "
+                           "located variables are declared in VAR (ed.2 "
+                           f"located_var_declarations); declare it there, or connect the "
+                           f"{'output' if block.kind == 'VAR_OUTPUT' else 'input'}: PROGRAM "
+                           f"inst WITH task : {owner.name} ({name} {arrow} {addr})")
+                return
+            if kind == "FUNCTION_BLOCK" and block.kind == "VAR":
+                self.error(src, decl.pos,
+                           f"located variable '{name}' AT {addr} in a function block: every "
+                           "instance of the block would have that address, and one address is "
+                           f"accessed by exactly one variable; declare it incomplete ({name} AT "
+                           f"%{addr[1]}* : {t.name}) and give each instance its address in the "
+                           "configuration's VAR_CONFIG, or make it an input or output of the "
+                           "block and pass it from the program that calls it")
+                return
             if isinstance(owner, POUInfo) and owner.kind == "PROGRAM":
                 other = (f"or make '{name}' an input or output of the program and connect it: "
                          f"PROGRAM inst WITH task : {owner.name} ({name} {arrow} {addr})")
@@ -799,12 +832,14 @@ class Declarer:
             self.error(src, decl.pos,
                        f"located variable '{name}' AT {addr} in a {where}: by the rule of "
                        "located variables, directly represented variables appear only in "
-                       "configuration and resource declarations and in program connections; "
+                       "configuration, resource and program declarations and in program "
+                       "connections; "
                        f"declare it there (VAR_GLOBAL {name} AT {addr} : {t.name}; END_VAR) "
                        f"and reach it through VAR_EXTERNAL {name}, {other}")
             return
         if addr.endswith("*"):
-            self.error(src, decl.pos, f"incomplete address {addr} is allowed only in programs "
+            self.error(src, decl.pos, f"incomplete address {addr} is allowed only in the VAR of programs and "
+                                      "function blocks "
                                       "(completed by VAR_CONFIG)")
             return
         check_address_type(self, src, decl.pos, addr, t)

@@ -315,17 +315,25 @@ def callees(project, pou) -> list:
 def _frame_lines(project, pou, members) -> list[str]:
     """The frame struct of a body (if it has members) and its need."""
     need = [frame_need(c) for c in callees(project, pou)]
-    inner = "0U"
-    for n in need:
-        inner = n if inner == "0U" else f"IEC_FRAME_MAX({n}, {inner})"
+    # enumeration constants, not nested macros: IEC_FRAME_MAX names each
+    # operand twice, so a macro nesting it once per callee grew exponentially
+    # (a program calling 44 OSCAT functions gave gcc an expression it never
+    # finished); each partial maximum is a constant of its own
     out = []
+    inner = "0U"
+    for i, n in enumerate(need):
+        if i:
+            out.append(f"enum {{ {frame_need(pou)}_M{i} = IEC_FRAME_MAX({n}, {inner}) }};")
+            inner = f"{frame_need(pou)}_M{i}"
+        else:
+            inner = n
     if members:
         out += [f"{frame_struct(pou)} {{"] + ["\t" + m for m in members] + ["};", ""]
         own = f"IEC_FRAME_ALIGN(sizeof({frame_struct(pou)}))"
-        out.append(f"#define {frame_need(pou)} ({own} + {inner})" if need else
-                   f"#define {frame_need(pou)} {own}")
+        out.append(f"enum {{ {frame_need(pou)} = {own} + {inner} }};" if need else
+                   f"enum {{ {frame_need(pou)} = {own} }};")
     else:
-        out.append(f"#define {frame_need(pou)} ({inner})")
+        out.append(f"enum {{ {frame_need(pou)} = {inner} }};")
     return out + [""]
 
 

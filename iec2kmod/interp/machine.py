@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 from .. import ast
 from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, concrete
+from ..located import addresses_of, name_index
 from .compiler import PouCompiler
 from ..execmodel import LOOP_BUDGET, MAX_TABLE_ELEMENTS, SIM_ITERATION_NS, kind_of
 from ..traces import Trace, TraceError, read_trace
@@ -537,18 +538,20 @@ def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> InterpRe
     (on ``machine``, a fresh Machine of the project, when given)."""
     m = machine if machine is not None else Machine(project)
     table = m.table()
-    index = {e.path.upper(): i for i, e in enumerate(table)}
+    addresses = addresses_of(project)
+    index = name_index(table, addresses)
     if watch:
         idx = []
         for w in watch:
             i = index.get(w.strip().upper())
             if i is None:
                 raise InterpError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
-            idx.append(i)
+            if i not in idx:         # an address and its name are one variable
+                idx.append(i)
     else:
         idx = [i for i, e in enumerate(table) if e.owner in ("global", "direct")]
     try:
-        events = read_trace(inputs, table) if inputs else []
+        events = read_trace(inputs, table, addresses) if inputs else []
     except TraceError as exc:
         raise InterpError(str(exc)) from None
     return m.schedule(table, idx, [(t, i, v) for t, _, i, _, v in events], end_ns)

@@ -55,6 +55,9 @@ def manifest_of(cfg, plan, config_mod, prog_modules, res_modules, source_hash, i
         "instances": [{"path": ip.path, "type": ip.pou.name, "resource": ip.resource,
                        "task": ip.task} for ip in plan.instances],
         "variables": variables,
+        # a located variable's address names it too (plc-manager read %IW2)
+        "addresses": {a: p for a, p in sorted(getattr(cfg, "addresses", {}).items())
+                      if p.upper() in {v["path"].upper() for v in variables}},
     }
 
 
