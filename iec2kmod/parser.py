@@ -507,7 +507,7 @@ def _model(src: SourceFile, reference: bool):
         return build()
 
 
-_PRAGMA_SCAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|(\{[^}]*\})",
+_PRAGMA_SCAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|(\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\})",
                           re.S)
 
 
