@@ -33,6 +33,10 @@ class _Parser(argparse.ArgumentParser):
         sys.exit(EXIT_USAGE)
 
 
+STRICT_HELP = ("refuse what the standard's rules forbid but other tools accept with a "
+               "warning: a write to a VAR_INPUT inside its POU")
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="iec2kmod", description="IEC 61131-3 to Linux PREEMPT_RT kernel modules")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -41,11 +45,13 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--no-cache", action="store_true", help="ignore the result cache")
     c.add_argument("--timings", action="store_true", help="print the time of each pass")
     c.add_argument("-j", "--jobs", type=int, default=None, help="parallel parser processes")
+    c.add_argument("--strict", action="store_true", help=STRICT_HELP)
     gp = sub.add_parser("gen", help="write the kbuild tree of a project's kernel modules")
     gp.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
     gp.add_argument("-o", "--output", required=True, metavar="OUT", help="output directory")
     gp.add_argument("--selective", nargs="?", const="all", choices=("all", "marked"),
                     help=SELECTIVE_HELP)
+    gp.add_argument("--strict", action="store_true", help=STRICT_HELP)
     bp = sub.add_parser("build", help="build the kernel modules of a generated tree")
     bp.add_argument("tree", metavar="OUT", help="directory written by `iec2kmod gen`")
     bp.add_argument("--kdir", help="kernel build tree (default: the running kernel's, "
@@ -74,6 +80,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "reference interpreter (no C compiler needed)")
     s.add_argument("--selective", nargs="?", const="all", choices=("all", "marked"),
                    help=SELECTIVE_HELP + " (C engine)")
+    s.add_argument("--strict", action="store_true", help=STRICT_HELP)
     v = sub.add_parser("verify", help="prove properties of a configuration for every input "
                                       "sequence (bounded model checking and k-induction)")
     v.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
@@ -129,7 +136,7 @@ def print_diagnostics(diags, stream=None) -> None:
 
 def cmd_check(args) -> int:
     from .frontend import run
-    result = run(args.files, use_cache=not args.no_cache, jobs=args.jobs)
+    result = run(args.files, use_cache=not args.no_cache, jobs=args.jobs, strict=args.strict)
     print_diagnostics(result.diags)
     if args.timings:
         for name, secs in result.timings.items():
@@ -141,10 +148,10 @@ def cmd_check(args) -> int:
     return EXIT_SOURCE if n_err else EXIT_OK
 
 
-def front_end(files):
+def front_end(files, strict=False):
     """Checked project or None (diagnostics printed)."""
     from .frontend import run
-    result = run(files, use_cache=False)
+    result = run(files, use_cache=False, strict=strict)
     print_diagnostics(result.diags)
     if not result.ok:
         n = len(result.diags.errors)
@@ -173,7 +180,7 @@ def selective_plan(project, mode):
 
 def cmd_sim(args) -> int:
     from . import sim
-    project = front_end(args.files)
+    project = front_end(args.files, strict=args.strict)
     if project is None:
         return EXIT_SOURCE
     try:
@@ -254,7 +261,7 @@ def cmd_sim(args) -> int:
 def cmd_gen(args) -> int:
     from pathlib import Path
     from .kmod import generate_tree
-    project = front_end(args.files)
+    project = front_end(args.files, strict=args.strict)
     if project is None:
         return EXIT_SOURCE
     out = Path(args.output)

@@ -60,8 +60,21 @@ class Diagnostic:
         return f"{head}\n{src}\n{caret}"
 
 
+# The warnings --strict makes errors: each begins with one of these words.
+# A write to an input inside its POU is refused by the rule IEC 61131-3 tools
+# check but compiled by CODESYS, TwinCAT and MatIEC (OSCAT relies on it).
+INPUT_WRITE_RULE = "write to"
+STRICT_RULES = (INPUT_WRITE_RULE,)
+
+
 class Diagnostics:
     """Collects diagnostics from every pass."""
+
+    def make_strict(self) -> None:
+        """--strict: the warnings of STRICT_RULES become errors."""
+        self.items = [Diagnostic(d.path, d.line, d.col, "error", d.message, d.source_line)
+                      if d.severity == "warning" and d.message.startswith(STRICT_RULES) else d
+                      for d in self.items]
 
     def __init__(self):
         self.items: list[Diagnostic] = []

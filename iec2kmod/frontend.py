@@ -313,8 +313,19 @@ def _parse_parallel(sources, jobs, total):
     return out
 
 
-def run(paths, use_cache: bool = True, jobs: int | None = None) -> FrontEndResult:
-    """Parses and checks a project: every diagnostic is collected."""
+def run(paths, use_cache: bool = True, jobs: int | None = None,
+        strict: bool = False) -> FrontEndResult:
+    """Parses and checks a project: every diagnostic is collected; strict:
+    the warnings of diagnostics.STRICT_RULES are errors."""
+    result = _run(paths, use_cache, jobs)
+    if strict:
+        result.diags.make_strict()
+        if result.diags.errors:
+            result.project = None
+    return result
+
+
+def _run(paths, use_cache, jobs) -> FrontEndResult:
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     ignored = []

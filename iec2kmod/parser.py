@@ -599,6 +599,10 @@ def _parse_source(src: SourceFile, diags: Diagnostics, reference: bool):
     except TextXSyntaxError as err:
         line, col = err.line or 1, err.col or 1
         offset = min(src.offset(line, col), len(src.text))
+        spec = _access_specifier(src.text, offset)
+        if spec is not None:
+            diags.error(src, *spec)
+            return None
         what = _describe_expected(err)
         token = re.match(r"\w+|\S", src.text[offset:])
         what += f", found '{token.group(0)}'" if token else ", found end of file"
@@ -629,6 +633,25 @@ _ED3_WORDS = re.compile(
     r"\b(CLASS|END_CLASS|METHOD|END_METHOD|INTERFACE|END_INTERFACE|NAMESPACE|"
     r"END_NAMESPACE|EXTENDS|IMPLEMENTS|PROPERTY|END_PROPERTY|REF_TO)\b|"
     r"\b(THIS|SUPER|\w+)\s*\^|\b(REF)\s*\(|ARRAY\s*\[\s*(\*)", re.I)
+# an access or inheritance specifier after the POU keyword (ed.3 6.6.5,
+# CODESYS): FUNCTION_BLOCK PUBLIC name
+_ACCESS_SPECIFIER = re.compile(
+    r"\b(?:FUNCTION_BLOCK|FUNCTION|PROGRAM|METHOD|PROPERTY|CLASS)\s+"
+    r"(PUBLIC|PRIVATE|INTERNAL|PROTECTED|FINAL|ABSTRACT)\b", re.I)
+
+
+def _access_specifier(text: str, offset: int):
+    """(offset, message) for a syntax error at or just after an access
+    specifier (FUNCTION_BLOCK PUBLIC name), else None."""
+    start = text.rfind("\n", 0, max(text.rfind("\n", 0, offset), 0)) + 1
+    end = text.find("\n", offset)
+    for m in _ACCESS_SPECIFIER.finditer(text, start, end if end >= 0 else len(text)):
+        word = m.group(1).upper()
+        return m.start(1), (f"access specifier {word} after {m.group(0).split()[0].upper()}: "
+                            "an IEC 61131-3 ed.3 / CODESYS object-oriented form, which "
+                            f"iec2kmod does not support; remove {word} (an ed.2 POU is "
+                            "visible to the whole project)")
+    return None
 
 
 def _unsupported_hint(text: str, offset: int) -> str:

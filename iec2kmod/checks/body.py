@@ -5,6 +5,7 @@ and IL.  Every expression gets ``.type``; every variable access gets
 from __future__ import annotations
 
 from .. import ast
+from ..diagnostics import INPUT_WRITE_RULE
 from . import stdlib
 from .il import ILChecks, _CR
 from .symbols import POUInfo, Var
@@ -115,6 +116,10 @@ class BodyChecker(ILChecks):
         if isinstance(tt, FBType) or isinstance(vt, FBType):
             self.error(value.pos, "function block instances cannot be assigned")
             return
+        bcd = stdlib.bcd_by_context(getattr(value, "target", None), tt)
+        if bcd is not None and isinstance(value, ast.Call):
+            value.target = bcd
+            value.type = vt = bcd.result
         if assignable(vt, tt):
             if isinstance(vt, LiteralT):
                 value.type = tt.base if isinstance(tt, SubrangeT) else tt
@@ -221,7 +226,13 @@ class BodyChecker(ILChecks):
             v.used = True
             v.assigned = True
             vt = v.type
-            if v.section not in ("VAR", "VAR_TEMP"):
+            if v.section == "VAR_INPUT":
+                # the standard asks of the control variable only an integer
+                # type and no change by the repeated statements (ed.2
+                # 3.3.2.4, ed.3 7.3.3.4.2), not a local: an input as control
+                # variable is a write to the input, under that rule
+                self.input_write(s.var_pos, v)
+            elif v.section not in ("VAR", "VAR_TEMP"):
                 self.error(s.var_pos, f"FOR control variable '{s.var}' must be a local variable "
                                       f"(VAR or VAR_TEMP), not {v.section}")
             elif not is_int(vt):
@@ -321,16 +332,27 @@ class BodyChecker(ILChecks):
         if v.step is not None:
             self.error(r.pos, f"cannot assign to step '{v.name}': only transitions change a "
                               "step's state")
-        elif v.section == "VAR_INPUT" and not r.accessors:
-            self.error(r.pos, f"cannot assign to input '{v.name}'")
         elif v.section == "VAR_INPUT" and not member_write:
-            self.error(r.pos, f"cannot assign to a part of input '{v.name}'")
+            self.input_write(r.pos, v, part=bool(r.accessors))
+            v.assigned = True
         elif v.constant:
             self.error(r.pos, f"cannot assign to constant '{v.name}'")
         elif v in self.loop_vars and not r.accessors:
             self.error(r.pos, f"cannot assign to '{v.name}': it controls the enclosing FOR loop")
         else:
             v.assigned = True
+
+    def input_write(self, pos, v: Var, part=False):
+        """A write to an input inside its own POU: a warning naming the rule
+        (an error under --strict, diagnostics.STRICT_RULES)."""
+        what = f"a part of input '{v.name}'" if part else f"input '{v.name}'"
+        self.warning(pos, f"{INPUT_WRITE_RULE} {what} inside its "
+                          f"{self.pou.kind.lower().replace('_', ' ')}: an input is set by the "
+                          "caller and is read-only inside the POU by the rule IEC 61131-3 tools "
+                          "check (Beckhoff SA0037); accepted as CODESYS, TwinCAT and MatIEC "
+                          "accept it, the write changing the POU's own copy of the input, not the "
+                          "caller's variable; "
+                          "--strict makes it an error")
 
     def index(self, t, indexes, pos):
         if not isinstance(t, ArrayT):

@@ -575,7 +575,14 @@ class Declarer:
                 if key in self._pending_types:
                     self.error(node.src, node.pos, f"'{node.name}' is already defined as a type")
                     continue
-                if node.kind == "FUNCTION" and stdlib.implementation_conversion(key):
+                if stdlib.ed3_only(key):
+                    self.warning(node.src, node.pos,
+                                 f"'{node.name}' is a standard "
+                                 f"{'function block' if key in stdlib.FUNCTION_BLOCKS else 'function'}"
+                                 " of IEC 61131-3 ed.3 only: this project's "
+                                 f"{node.kind.lower().replace('_', ' ')} of that name (ed.2 "
+                                 "code) replaces it")
+                elif node.kind == "FUNCTION" and stdlib.implementation_conversion(key):
                     self.warning(node.src, node.pos,
                                  f"FUNCTION '{node.name}' replaces this implementation's "
                                  f"conversion of that name (not a standard function of ed.2: "
@@ -763,8 +770,9 @@ class Declarer:
                                f"function block instances cannot be declared in {where}{hint}")
             if decl.location:
                 self.check_location_decl(decl, block, owner, src, t, allow_located)
-            if constant and decl.init is None and block.kind != "VAR_EXTERNAL":
-                self.error(src, decl.pos, "a CONSTANT needs an initial value")
+            # a CONSTANT without an initial value holds its type's default
+            # initial value (ed.2 2.4.2: the initial value is optional; ed.2
+            # 2.3.3.1 gives every type a default), as MatIEC and CODESYS read it
             if decl.init is not None:
                 if block.kind in ("VAR_EXTERNAL", "VAR_IN_OUT"):
                     self.error(src, decl.init.pos, f"{block.kind} cannot have an initial value")

@@ -270,6 +270,9 @@ FUNCTIONS = {
     "SUB_TIME": (_fixed([TIME, TIME], TIME), ["IN1", "IN2"], 2, 2),
     "MUL_TIME": (_fixed([TIME, LREAL], TIME), ["IN1", "IN2"], 2, 2),
     "DIV_TIME": (_fixed([TIME, LREAL], TIME), ["IN1", "IN2"], 2, 2),
+    # ed.2's names of MUL_TIME and DIV_TIME (ed.2 table 30), the same functions
+    "MULTIME": (_fixed([TIME, LREAL], TIME, "MUL_TIME"), ["IN1", "IN2"], 2, 2),
+    "DIVTIME": (_fixed([TIME, LREAL], TIME, "DIV_TIME"), ["IN1", "IN2"], 2, 2),
     "ADD_TOD_TIME": (_fixed([_T["TOD"], TIME], _T["TOD"]), ["IN1", "IN2"], 2, 2),
     "ADD_DT_TIME": (_fixed([_T["DT"], TIME], _T["DT"]), ["IN1", "IN2"], 2, 2),
     "SUB_TOD_TIME": (_fixed([_T["TOD"], TIME], _T["TOD"]), ["IN1", "IN2"], 2, 2),
@@ -287,6 +290,20 @@ CONVERTIBLE = [n for n in ("BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT
                            "LTIME", "DATE", "TOD", "DT", "STRING", "WSTRING")]
 _ALIASES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
 _BCD = {"BYTE": "USINT", "WORD": "UINT", "DWORD": "UDINT", "LWORD": "ULINT"}
+_BCD_SOURCES = {"SINT": "BYTE", "USINT": "BYTE", "INT": "WORD", "UINT": "WORD",
+                "DINT": "DWORD", "UDINT": "DWORD", "LINT": "LWORD", "ULINT": "LWORD"}
+
+
+def bcd_by_context(f, target):
+    """The call *f* of an overloaded X_TO_BCD retyped for the bit string
+    *target* its result is stored in (BIN_LEVEL := INT_TO_BCD(n) with
+    BIN_LEVEL : BYTE, ed.2 Annex F.5), or None when it is not one."""
+    if not isinstance(f, StdFunc) or f.family != "TO_BCD" or not f.name.endswith("_TO_BCD"):
+        return None
+    t = target.base if target is not None else None
+    if not isinstance(t, Elementary) or t.cat != "bit" or t.name not in _BCD or t is f.result:
+        return None
+    return StdFunc(f.name, "TO_BCD", list(f.param_types), t)
 
 
 def _type_by_name(n):
@@ -318,8 +335,11 @@ def conversion(name: str):
     up = name.upper()
     if up == "BCD_TO_INT":
         return ELEMENTARY["WORD"], INT, "BCD_TO"
-    if up == "INT_TO_BCD":
-        return INT, ELEMENTARY["WORD"], "TO_BCD"
+    if up.endswith("_TO_BCD") and up[:-7] in _BCD_SOURCES:
+        # ed.2's overloaded *_TO_BCD (INT_TO_BCD, ...): ANY_INT -> ANY_BIT, the
+        # bit string given by the context (bcd_by_context), else the one of
+        # the source's width
+        return ELEMENTARY[up[:-7]], ELEMENTARY[_BCD_SOURCES[up[:-7]]], "TO_BCD"
     if "_TRUNC_" in up:
         s, d = up.split("_TRUNC_", 1)
         if s in ("REAL", "LREAL") and d in ELEMENTARY and ELEMENTARY[d].cat in ("sint", "uint"):
@@ -365,6 +385,18 @@ def implementation_conversion(name: str) -> bool:
     s, d = (t.name for t in conv[:2])
     s, d = _ALIASES.get(s, s), _ALIASES.get(d, d)
     return s in _TIME_TYPES and d in _TIME_TYPES and (s, d) not in _TABLE30_CONVERSIONS
+
+
+def ed3_only(name: str) -> bool:
+    """Standard names that IEC 61131-3 ed.3 added (ATAN2, table 23; the typed
+    counters CTU_DINT ..., table 43; the typed REAL_TRUNC_INT ... forms,
+    table 22): an ed.2 project may define a POU of that name, which then
+    replaces the standard one (with a warning)."""
+    up = name.upper()
+    if up == "ATAN2" or "_TRUNC_" in up and conversion(up) is not None:
+        return True
+    head, _, tail = up.partition("_")
+    return head in ("CTU", "CTD", "CTUD") and tail in ("DINT", "LINT", "UDINT", "ULINT")
 
 
 def is_std_function(name: str) -> bool:

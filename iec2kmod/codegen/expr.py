@@ -559,8 +559,12 @@ class ExprEmitter:
             a = self.emit(f, args[0], src)
             if fres.name == "BCD_TO_INT":
                 return f"((iec_int)iec_word_bcd_to_uint({a}))"
-            if fres.name == "INT_TO_BCD":
-                return f"iec_uint_to_bcd_word((iec_uint){a})"
+            if fres.name.endswith("_TO_BCD"):
+                # the overloaded X_TO_BCD, typed by its context: a negative
+                # value or one with more digits than fit gives 0
+                enc = "iec__bcd_encode_s" if src.cat == "sint" else "iec__bcd_encode"
+                cast = "iec_s64" if src.cat == "sint" else "iec_u64"
+                return f"(({dst.c_type}){enc}(({cast}){a}, {dst.bits // 4}))"
             if fam == "BCD_TO":
                 return f"iec_{tag(src)}_bcd_to_{tag(dst)}({a})"
             return f"iec_{tag(src)}_to_bcd_{tag(dst)}({a})"

@@ -195,6 +195,12 @@ static inline iec_u64 iec__bcd_encode(iec_u64 v, int digits)
 	return v ? 0 : r;
 }
 
+/* the overloaded *_TO_BCD of a signed integer: a negative value gives 0 */
+static inline iec_u64 iec__bcd_encode_s(iec_s64 v, int digits)
+{
+	return v < 0 ? 0 : iec__bcd_encode((iec_u64)v, digits);
+}
+
 static inline iec_usint iec_byte_bcd_to_usint(iec_byte v)
 {
 	return (iec_usint)iec__bcd_decode(v, 2);

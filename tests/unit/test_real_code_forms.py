@@ -1,0 +1,131 @@
+"""The ed.2 forms real code uses (issue 25), through the CLI and the checker:
+a write to an input is a warning, an error under --strict (check, gen, sim);
+an access specifier after a POU keyword gets a message naming it; MULTIME,
+DIVTIME, CONSTANT without initial value, *_TO_BCD typed by its context, a
+user POU with an ed.3-only standard name.  What they compute is in
+tests/conformance/valid/realcode/ed2_forms.st (C and interpreter)."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from iec2kmod.checks import check_project
+from iec2kmod.diagnostics import Diagnostics, SourceFile
+from iec2kmod.parser import parse_source
+
+pytestmark = pytest.mark.unit
+ROOT = Path(__file__).resolve().parents[2]
+
+WRITES_INPUT = """FUNCTION_BLOCK Fb
+VAR_INPUT sl : INT; END_VAR
+VAR_OUTPUT y : INT; END_VAR
+    sl := sl + 1;
+    y := sl;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : Fb; o : INT; END_VAR
+    f(sl := 1, y => o);
+END_PROGRAM
+CONFIGURATION C
+  TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+  PROGRAM m WITH t : Main;
+END_CONFIGURATION
+"""
+
+
+def run(*args):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    p = subprocess.run([sys.executable, "-m", "iec2kmod.cli", *args], env=env,
+                       capture_output=True, text=True, timeout=300)
+    return p.returncode, p.stdout, p.stderr
+
+
+def diagnostics(text):
+    diags = Diagnostics()
+    unit = parse_source(SourceFile("t.st", text), diags)
+    if unit is not None and not diags.errors:
+        check_project([unit], diags)
+    return [(d.line, d.col, d.severity, d.message) for d in diags.sorted()]
+
+
+def test_write_to_input_is_a_warning_naming_the_rule(tmp_path):
+    f = tmp_path / "w.st"
+    f.write_text(WRITES_INPUT)
+    code, _, err = run("check", "--no-cache", str(f))
+    assert code == 0, err
+    assert f"{f}:4:5: warning: write to input 'sl' inside its function block" in err
+    assert "SA0037" in err and "--strict makes it an error" in err
+
+
+@pytest.mark.parametrize("command", ["check", "gen", "sim"])
+def test_strict_makes_the_write_to_an_input_an_error(tmp_path, command):
+    f = tmp_path / "w.st"
+    f.write_text(WRITES_INPUT)
+    extra = {"check": ["--no-cache"], "gen": ["-o", str(tmp_path / "out")],
+             "sim": ["--cycles", "1"]}[command]
+    code, _, err = run(command, "--strict", *extra, str(f))
+    assert code == 1, err
+    assert f"{f}:4:5: error: write to input 'sl' inside its function block" in err
+    assert "1 error(s)" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_for_control_variable_may_be_an_input_under_the_same_rule():
+    got = diagnostics("FUNCTION F : INT\nVAR_INPUT n : INT; END_VAR\nVAR a : INT; END_VAR\n"
+                      "FOR n := 1 TO 3 DO a := a + n; END_FOR;\nF := a;\nEND_FUNCTION\n")
+    assert [(l, c, s) for l, c, s, _ in got] == [(4, 5, "warning")]
+    assert got[0][3].startswith("write to input 'n' inside its function")
+    # an output as control variable stays refused (not a local)
+    got = diagnostics("FUNCTION_BLOCK B\nVAR_OUTPUT n : INT; END_VAR\n"
+                      "FOR n := 1 TO 3 DO ; END_FOR;\nEND_FUNCTION_BLOCK\n")
+    assert any(s == "error" and "must be a local variable" in m for _, _, s, m in got)
+
+
+def test_write_to_a_part_of_an_input():
+    got = diagnostics("TYPE A3 : ARRAY[1..3] OF INT; END_TYPE\nFUNCTION F : INT\n"
+                      "VAR_INPUT v : A3; END_VAR\nv[2] := 5;\nF := v[2];\nEND_FUNCTION\n")
+    assert [(l, s) for l, _, s, _ in got] == [(4, "warning")]
+    assert got[0][3].startswith("write to a part of input 'v' inside its function")
+
+
+@pytest.mark.parametrize("word", ["PUBLIC", "PRIVATE", "INTERNAL", "PROTECTED", "FINAL",
+                                  "ABSTRACT"])
+@pytest.mark.parametrize("kind", ["FUNCTION_BLOCK", "PROGRAM"])
+def test_access_specifier_is_named(word, kind):
+    got = diagnostics(f"{kind} {word} P\nVAR_OUTPUT q : BOOL; END_VAR\nq := TRUE;\n"
+                      f"END_{kind}\n")
+    assert got == [(1, len(kind) + 2, "error",
+                    f"access specifier {word} after {kind}: an IEC 61131-3 ed.3 / CODESYS "
+                    f"object-oriented form, which iec2kmod does not support; remove {word} "
+                    "(an ed.2 POU is visible to the whole project)")]
+
+
+def test_ed2_names_and_forms_check_clean():
+    got = diagnostics("""PROGRAM P
+VAR CONSTANT c : INT; END_VAR
+VAR t : TIME; b : BYTE; d : DWORD; x : INT; END_VAR
+t := MULTIME(T#1s, 2); t := DIVTIME(t, 2);
+b := INT_TO_BCD(c + 12); d := USINT_TO_BCD(USINT#99); x := c;
+END_PROGRAM
+""")
+    assert got == []
+
+
+def test_bcd_result_typed_by_context_only_for_bit_strings():
+    got = diagnostics("PROGRAM P\nVAR i : INT; END_VAR\ni := INT_TO_BCD(12);\nEND_PROGRAM\n")
+    assert [(l, s, m.split(':')[0]) for l, _, s, m in got] == \
+        [(3, "error", "cannot assign WORD to 'i' of type INT")]
+
+
+def test_ed3_only_name_replaced_by_a_user_pou_with_a_warning_other_names_refused():
+    got = diagnostics("FUNCTION_BLOCK CTU_DINT\nVAR_OUTPUT q : BOOL; END_VAR\nq := TRUE;\n"
+                      "END_FUNCTION_BLOCK\nFUNCTION SIN : REAL\nVAR_INPUT x : REAL; END_VAR\n"
+                      "SIN := x;\nEND_FUNCTION\n")
+    assert got == [
+        (1, 1, "warning", "'CTU_DINT' is a standard function block of IEC 61131-3 ed.3 "
+                          "only: this project's function block of that name (ed.2 code) "
+                          "replaces it"),
+        (5, 1, "error", "'SIN' is the name of a standard function or block")]
