@@ -24,7 +24,7 @@ from .codegen import generate, source_list
 from .codegen import cnames as N
 from .codegen.body import copy_value
 from .codegen.plan import PlanEmitter, build_plan, unbound_pointer_check
-from .codegen.pou import frame_need
+from .codegen.pou import frame_max, frame_need
 from .literals import LiteralError, classify, parse_duration
 
 
@@ -108,9 +108,7 @@ def render_sim(project, selective=None):
         if not body:
             body = ["(void)ctx;"]
         implicit = project.configurations[0].resources[0].node.name is None
-        size = "16U"
-        for need in sorted({frame_need(ip.pou) for ip in tp.instances}):
-            size = f"IEC_FRAME_MAX({need}, {size})"
+        size = frame_max(sorted({frame_need(ip.pou) for ip in tp.instances}) + ["16U"])
         tasks.append({"index": tp.index, "frame_size": size,
                       "name": tp.name if implicit else f"{tp.resource}.{tp.name}",
                       "interval": tp.interval_ns or 0, "priority": tp.priority,

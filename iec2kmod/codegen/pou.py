@@ -312,12 +312,24 @@ def callees(project, pou) -> list:
             if k in project.pous and not getattr(project.pous[k], "standard", False)]
 
 
+def frame_max(terms: list[str], empty: str = "0U") -> str:
+    """IEC_FRAME_MAX over terms as a balanced tree.  The macro names each
+    argument twice, so a chain MAX(a, MAX(b, MAX(c, ...))) of k terms
+    expands to 2^k copies: a program calling 60 functions (OSCAT's) took
+    the preprocessor minutes and gigabytes.  Balanced, each term is copied
+    2^ceil(log2 k) <= 2k times."""
+    if not terms:
+        return empty
+    if len(terms) == 1:
+        return terms[0]
+    half = (len(terms) + 1) // 2
+    return f"IEC_FRAME_MAX({frame_max(terms[:half])}, {frame_max(terms[half:])})"
+
+
 def _frame_lines(project, pou, members) -> list[str]:
     """The frame struct of a body (if it has members) and its need."""
     need = [frame_need(c) for c in callees(project, pou)]
-    inner = "0U"
-    for n in need:
-        inner = n if inner == "0U" else f"IEC_FRAME_MAX({n}, {inner})"
+    inner = frame_max(need)
     out = []
     if members:
         out += [f"{frame_struct(pou)} {{"] + ["\t" + m for m in members] + ["};", ""]
