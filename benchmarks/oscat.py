@@ -3,7 +3,7 @@
 what is refused and why, and whether its functions compute what OSCAT's
 documentation says, in the C engine and the interpreter.
 
-    python3 benchmarks/oscat.py --oscat PATH [--engines c,vm] [--plc-st]
+    python3 benchmarks/oscat.py --oscat PATH [--engines c,vm,kernel] [--plc-st]
                                 [--cases NAME,NAME] [--json OUT.json]
 
 PATH is a copy of the translation the user provides (github
@@ -26,7 +26,10 @@ their MatIEC inline C).
    left out is listed with its cause.
 3. The cases of ``oscat_cases.py`` (inputs -> outputs written from OSCAT's
    documentation, never from our output) run in one program that calls the
-   POUs it needs from the library, in every engine given.  A case whose
+   POUs it needs from the library, in every engine given: the simulator's
+   C engine and interpreter (default), and ``kernel``: the same program as
+   kernel modules in the PREEMPT_RT QEMU guest (booted as the QEMU tier
+   does; its prerequisites missing, the run says which).  A case whose
    call does not check is reported with the error and not run.
 
 Exit status: 0 when every case agrees with its expectation in every engine
@@ -181,6 +184,11 @@ def check_chapter(f: Path) -> dict:
     t0 = time.perf_counter()
     res = _check([f])
     refused = refusals(blocks, res.diags, lambda b: f)
+    if res.project is None and res.diags.errors:
+        # a syntax error: nothing of the file was checked, every POU is refused
+        first = res.diags.errors[0]
+        for b in blocks:
+            refused.setdefault(b.key, (b, first.message, first.line))
     return {"chapter": chapter_name(f), "pous": len(blocks),
             "accepted": len(blocks) - len(refused),
             "refused": {k: {"kind": b.kind, "error": msg, "line": line}
@@ -422,6 +430,13 @@ def run_cases(cases, lib_blocks, engines, tmp: Path, log) -> dict:
     watch = [f"m.r{i}_{j}" for i, c in enumerate(active) for j in range(len(c.outputs))]
     results = {c.name: {} for c in active}
     for eng in engines:
+        if eng == "kernel":
+            last = kernel_values(lib, prog, watch, cycles, log)
+            for i, c in enumerate(active):
+                results[c.name][eng] = [
+                    (o, last.get(f"m.r{i}_{j}"), agrees(last.get(f"m.r{i}_{j}"), typ, want, c.tol))
+                    for j, (o, typ, want) in enumerate(c.outputs)]
+            continue
         out = tmp / f"out_{eng}.csv"
         t0 = time.perf_counter()
         p = subprocess.run([sys.executable, "-m", "iec2kmod", "sim", "--engine", eng,
@@ -448,6 +463,65 @@ def run_cases(cases, lib_blocks, engines, tmp: Path, log) -> dict:
                 rows.append((o, got, agrees(got, typ, want, c.tol)))
             results[c.name][eng] = rows
     return {"results": results, "not_run": not_run, "cycles": cycles}
+
+
+def kernel_values(lib: Path, prog: Path, watch, cycles, log) -> dict:
+    """The case program as kernel modules (iec2kmod gen + build) in the
+    PREEMPT_RT QEMU guest (iec2kmod.vm, as the QEMU tier boots it): loaded
+    with plc-manager, read with `plc-manager read --json` once the task has
+    run its cycles, stopped; the kernel log must stay clean.  {path: value
+    as text} like the simulator's CSV; {} when anything fails (logged)."""
+    from iec2kmod.vm import Guest
+    work = Path(tempfile.mkdtemp(prefix="oscat-kernel-", dir=os.environ.get("TMPDIR")))
+    tree = work / "tree"
+    t0 = time.perf_counter()
+    for cmd in (["gen", str(lib), str(prog), "-o", str(tree)], ["build", str(tree)]):
+        p = subprocess.run([sys.executable, "-m", "iec2kmod", *cmd], capture_output=True,
+                           text=True, env=_env(), timeout=1800)
+        if p.returncode != 0:
+            log(f"  kernel: iec2kmod {cmd[0]} failed: {(p.stderr or p.stdout).strip()[-800:]}")
+            return {}
+    log(f"  kernel: modules built in {time.perf_counter() - t0:.1f} s; booting the guest")
+    g = Guest(str(work), console_log=str(work / "console.log"))
+    values = {}
+    try:
+        g.start()
+        g.start_pyserver()
+
+        def manager(*argv, timeout=300):
+            return g.pyrun(script="plc-manager", argv=[str(a) for a in argv], timeout=timeout)
+        r = manager("load", str(tree))
+        if r.exit_code != 0:
+            log(f"  kernel: plc-manager load failed: {r.output[-800:]}")
+            return {}
+        try:
+            deadline = time.monotonic() + 120
+            while time.monotonic() < deadline:
+                r = manager("status", "--json")
+                tasks = [t for res in json.loads(r.output)["resources"] for t in res["tasks"]] \
+                    if r.exit_code == 0 else []
+                if tasks and all(int(t["cycles"]) > cycles + 2 for t in tasks):
+                    break
+                time.sleep(1)
+            r = manager("read", "--json", *watch)
+            if r.exit_code != 0:
+                log(f"  kernel: plc-manager read failed: {r.output[-800:]}")
+                return {}
+            for v in json.loads(r.output):
+                val = v["value"]
+                values[v["path"]] = ("TRUE" if val else "FALSE") if isinstance(val, bool) \
+                    else str(val)
+        finally:
+            manager("stop")
+        g.check_kernel_log()
+        log(f"  kernel: {len(values)} values read, kernel log clean, "
+            f"{time.perf_counter() - t0:.1f} s")
+    except Exception as exc:  # the guest's own errors name what is missing
+        log(f"  kernel: {type(exc).__name__}: {str(exc)[-800:]}")
+        return {}
+    finally:
+        g.close()
+    return values
 
 
 def agrees(got, typ, want, tol) -> bool:
@@ -486,7 +560,8 @@ def main(argv=None) -> int:
     ap.add_argument("--oscat", required=True, type=Path,
                     help="a copy of wonka929/OSCAT_OpenPLC (or its 'OSCAT BASIC 3.33')")
     ap.add_argument("--engines", default=None,
-                    help="comma-separated engines of `iec2kmod sim --engine` (default: all)")
+                    help="comma-separated engines of `iec2kmod sim --engine`, and kernel "
+                         "(the QEMU guest) (default: the sim engines)")
     ap.add_argument("--plc-st", action="store_true",
                     help="check build/plc.st (with Beremiz's inline C) instead of "
                          "build/generated_plc.st")
@@ -570,8 +645,9 @@ def main(argv=None) -> int:
             if args.cases:
                 want = {n.strip() for n in args.cases.split(",")}
                 cases = [c for c in cases if c.name in want]
-            avail = engine_names()
-            engines = args.engines.split(",") if args.engines else avail
+            avail = engine_names() + ["kernel"]
+            engines = args.engines.split(",") if args.engines else [e for e in avail
+                                                                    if e != "kernel"]
             for e in engines:
                 if e not in avail:
                     print(f"oscat.py: engine {e} is not one of {', '.join(avail)}",
