@@ -308,14 +308,16 @@ CASES = [
 # translation defects), with the reason: benchmarks/oscat.py does not count
 # them as failures when the library leaves them out
 KNOWN_REFUSALS = {
-    "BYTE_TO_STRH": "the translation calls BYTE_TO_STRING(IN, '%c') with a printf-like format "
-                    "argument, neither ed.2 (a conversion has one input) nor MatIEC's library; "
-                    "OSCAT's own BYTE_TO_STRH writes the two characters through a POINTER TO "
-                    "BYTE (CODESYS pointers, not ed.2)",
-    "_ARRAY_MEDIAN": "the translation replaced OSCAT's POINTER TO ARRAY input by a VAR_IN_OUT "
-                     "and passes it to the inner _ARRAY_SORT instance by writing inst.PT := pt "
-                     "before a call without PT: an in-out must be connected in the call "
-                     "(ed.2 2.5.2.1), and inst.PT is not accessible from outside",
-    "ARRAY_SDV": "as _ARRAY_MEDIAN: FB_array_var.pt := pt; FB_array_var() leaves the VAR_IN_OUT "
-                 "PT of ARRAY_VAR unconnected (the translation's rewrite of OSCAT's POINTER TO)",
+    "BYTE_TO_STRH": "the translation's body passes a printf format to the conversion, "
+                    "BYTE_TO_STRING(IN, '%c') (plc.xml: '%02X'): a type conversion has one "
+                    "input in ed.2 (Table 22) and in MatIEC's library; ed.2 code builds the two "
+                    "hex digits itself",
+    "_ARRAY_MEDIAN": "the translation passes its array to the inner _ARRAY_SORT instance by "
+                     "writing the instance's VAR_IN_OUT as a member (inst.PT := pt) and then "
+                     "calling it without PT: an in-out must be connected in the call (ed.2 "
+                     "2.5.2.1) and is not accessible from outside; ed.2 code: "
+                     "inst(PT := pt, SIZE := size)",
+    "ARRAY_SDV": "as _ARRAY_MEDIAN: FB_array_var.pt := pt; FB_array_var() leaves the "
+                 "VAR_IN_OUT PT of ARRAY_VAR unconnected; ed.2 code: FB_array_var(PT := pt, "
+                 "SIZE := size)",
 }
