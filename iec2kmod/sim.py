@@ -26,6 +26,7 @@ from .codegen.body import copy_value
 from .codegen.plan import PlanEmitter, build_plan, unbound_pointer_check
 from .codegen.pou import frame_max, frame_need
 from .literals import LiteralError, classify, parse_duration
+from .located import addresses_of, name_index
 
 
 # the same per-cycle loop budget as the kernel's tasks, so that a long loop
@@ -323,9 +324,10 @@ def _int_range(t):
     return t.range if isinstance(t, Elementary) else None
 
 
-def read_trace(path: str, plan):
-    """Input events from a CSV trace: time,variable,value (header optional)."""
-    index = {e.path.upper(): i for i, e in enumerate(plan.table)}
+def read_trace(path: str, plan, addresses=None):
+    """Input events from a CSV trace: time,variable,value (header optional);
+    a located variable may be named by its address."""
+    index = name_index(plan.table, addresses)
     events = []
     try:
         with open(path, newline="") as fh:
@@ -359,17 +361,19 @@ def run(project, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=
     build_dir = Path(build_dir or (Path(os.environ.get("IEC2KMOD_CACHE") or
                                         Path.home() / ".cache" / "iec2kmod") / "sim"))
     exe, plan = build(project, build_dir, sanitize, selective)
-    index = {e.path.upper(): i for i, e in enumerate(plan.table)}
+    addresses = addresses_of(project)
+    index = name_index(plan.table, addresses)
     if watch:
         idx = []
         for w in watch:
             i = index.get(w.strip().upper())
             if i is None:
                 raise SimError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
-            idx.append(i)
+            if i not in idx:         # an address and its name are one variable
+                idx.append(i)
     else:
         idx = [i for i, e in enumerate(plan.table) if e.owner == "global" or e.owner == "direct"]
-    events = read_trace(inputs, plan) if inputs else []
+    events = read_trace(inputs, plan, addresses) if inputs else []
     ev_path = exe.parent / f"events.{os.getpid()}.txt"
     with open(ev_path, "w") as fh:
         for t, _, i, kind, value in events:

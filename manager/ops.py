@@ -842,6 +842,7 @@ class Variables:
         self.c = c
         self.st = st
         self.types: Dict[str, values.VarType] = {}
+        self.aliases: Dict[str, str] = {}       # %IW2 -> path of its variable
         self.source = "kernel"
         manifest = None
         if project:
@@ -861,13 +862,18 @@ class Variables:
             # the manifest lists exactly the kernel's table, with the types
             for v in manifest["variables"]:
                 self.types[v["path"].lower()] = values.VarType.from_manifest(v)
+            # and the addresses of the located variables, names of them too
+            for address, path in (manifest.get("addresses") or {}).items():
+                if str(path).lower() in self.types:
+                    self.aliases[str(address).lower()] = str(path).lower()
         else:
             for k in c.var_list():
                 self.types[k.path.lower()] = values.VarType(path=k.path, kind=k.kind,
                                                             size=k.size, writable=k.writable)
 
     def get(self, name: str) -> values.VarType:
-        t = self.types.get(name.strip().lower())
+        key = name.strip().lower()
+        t = self.types.get(self.aliases.get(key, key))
         if t is None:
             close = difflib.get_close_matches(name.lower(), list(self.types), n=3)
             names = [self.types[c].path for c in close]

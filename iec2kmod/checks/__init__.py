@@ -73,7 +73,8 @@ def check_recursion(project, diags):
 def lint(project, diags):
     for pou in project.pous.values():
         for v in pou.vars.values():
-            if v.used or v.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "RESULT"):
+            if v.used or v.location or v.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT",
+                                                     "RESULT"):
                 continue
             if v.section == "VAR_GLOBAL":
                 continue

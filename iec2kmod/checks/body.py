@@ -421,12 +421,12 @@ class BodyChecker(ILChecks):
         if isinstance(e, _CR):
             return e.cr_type
         if isinstance(e, ast.Direct):
-            self.error(e.pos, f"directly represented variable {e.address} used in a POU: by "
-                              "the rule of located variables, directly represented variables "
-                              "appear only in configuration and resource declarations and in "
-                              "program connections; declare it there with a name (VAR_GLOBAL "
-                              f"name AT {e.address} : ...) and use that name here through "
-                              "VAR_EXTERNAL, or connect it to an input or output of the program "
+            self.error(e.pos, f"directly represented variable {e.address} used in a POU: "
+                              "iec2kmod reaches an address through the one variable located "
+                              "there; declare it with a name in the program's VAR or in the "
+                              f"configuration's VAR_GLOBAL (name AT {e.address} : ...) and use "
+                              "that name here (through VAR_EXTERNAL for a global), or connect "
+                              "it to an input or output of the program "
                               f"(PROGRAM inst WITH task : type (x {'=>' if e.address[1] == 'Q' else ':='} "
                               f"{e.address}))")
             return ERROR

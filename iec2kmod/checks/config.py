@@ -4,6 +4,7 @@ represented variables."""
 
 from __future__ import annotations
 
+import os
 import re
 
 from .. import ast
@@ -71,6 +72,12 @@ class ConfigChecker:
         # address -> [(owner description, resource name or None, src, pos)]
         self.addresses: dict = {}
         self.reported_externals: set = set()
+        # program type key -> (instance name, its place) of the instance
+        # that owns the type's located variables
+        self.located_owner: dict = {}
+        # address -> IEC path of its variable (ConfigInfo.addresses)
+        self.paths: dict = {}
+        self.completed: set = set()         # upper paths VAR_CONFIG locates
 
     def error(self, src, pos, msg):
         self.diags.error(src, pos, msg)
@@ -113,6 +120,8 @@ class ConfigChecker:
                 continue
             for v in self.decl.declare_block(block, cfg, src, cfg.globals, allow_located=True):
                 self.note_address(v, None, src)
+                if v.location:
+                    self.paths.setdefault(v.location, v.name)
         res_names = {}
         for rnode in node.resources:
             r = self.resource(rnode, cfg)
@@ -132,6 +141,8 @@ class ConfigChecker:
             else:
                 self.error(src, block.pos, f"{block.kind} is not allowed in a configuration")
         self.check_address_rules(src)
+        self.check_completed(cfg)
+        cfg.addresses = {a: p for a, p in self.paths.items() if not a.endswith("*")}
         return cfg
 
     def resource(self, rnode, cfg) -> ResourceInfo:
@@ -155,6 +166,8 @@ class ConfigChecker:
                     self.warning(src, v.pos, f"resource global '{v.name}' hides the "
                                              "configuration global of the same name")
                 self.note_address(v, r.name, src)
+                if v.location:
+                    self.paths.setdefault(v.location, _qual(r, v.name))
         for t in rnode.tasks:
             if t.name.upper() in r.tasks:
                 self.error(src, t.pos, f"task '{t.name}' is already defined")
@@ -323,7 +336,48 @@ class ConfigChecker:
                 self.error(src, pc.pos, f"VAR_IN_OUT '{v.name}' of program '{pou.name}' must be "
                                         f"connected to a global variable ({v.name} := ...)")
         self.bind_externals(pou, r, cfg, inst, src)
+        self.program_located(pou, inst, pc, r, src)
         return inst
+
+    def program_located(self, pou, inst, pc, r, src):
+        """The located variables a program type declares (ed.2
+        located_var_declarations) belong to its one instance: a second
+        instance would give their addresses a second variable."""
+        located = [v for v in pou.vars.values() if v.location and not v.location.endswith("*")]
+        if not located:
+            return
+        owner = self.located_owner.get(pou.key)
+        if owner is not None:
+            v = located[0]
+            more = f" and {len(located) - 1} more" if len(located) > 1 else ""
+            self.error(src, pc.pos,
+                       f"a second instance '{pc.name}' of program '{pou.name}', which declares "
+                       f"'{v.name}' AT {v.location}{more} ({_place(v.src, v.pos)}): the first "
+                       f"instance '{owner[0]}' ({owner[1]}) has that address, and one address is "
+                       "accessed by exactly one variable; instantiate the program once, or "
+                       f"declare '{v.name}' AT {v.location[:3].rstrip('XBWDL0123456789.')}* and "
+                       "give each instance its address in VAR_CONFIG")
+            return
+        self.located_owner[pou.key] = (pc.name, _place(src, pc.pos))
+        path = _qual(r, inst.name)
+        for v in located:
+            self.note_direct(v.location, r.name, v.src, v.pos,
+                             f"'{path}.{v.name}'", var=v)
+            self.paths.setdefault(v.location, f"{path}.{v.name}")
+
+    def check_completed(self, cfg):
+        """Every incomplete location (AT %I*) of a program instance, or of a
+        function block instance in one, is completed by VAR_CONFIG."""
+        done = self.completed
+        for r in cfg.resources:
+            for inst in r.programs:
+                for path, v in _incomplete(inst.pou, _qual(r, inst.name), 0):
+                    if path.upper() not in done:
+                        self.error(cfg.src, inst.node.pos,
+                                   f"'{path}' is declared AT {v.location} "
+                                   f"({_place(v.src, v.pos)}): its location must be completed "
+                                   f"in the configuration's VAR_CONFIG ({path} AT "
+                                   f"{v.location[:-1]}... : {v.type.name};)")
 
     def inout_connection(self, conn, param, r, cfg, inst):
         """A program's VAR_IN_OUT refers to a whole global of its type."""
@@ -551,7 +605,14 @@ class ConfigChecker:
                                            f"{target.location}")
                 else:
                     check_address_type(self.decl, src, d.pos, d.location, target.type)
-                    self.note_direct(d.location, None, src, d.pos, f"VAR_CONFIG {d.path}")
+                    self.note_direct(d.location, None, src, d.pos, f"VAR_CONFIG {d.path}",
+                                     var=target)
+                    chain = self.instance_chain(d.path, cfg)
+                    if chain is not None:
+                        r, inst, vs = chain
+                        path = ".".join([_qual(r, inst.name)] + [v.name for v in vs])
+                        self.completed.add(path.upper())
+                        self.paths.setdefault(d.location, path)
             if d.init is not None and t is not ERROR:
                 d.init = self.decl.check_initializer(d.init, t, src)
                 chain = self.instance_chain(d.path, cfg)
@@ -609,8 +670,9 @@ class ConfigChecker:
             if len(entries) > 1:
                 first = entries[0]
                 for e in entries[1:]:
-                    self.error(e[2], e[3], f"address {addr} is already used by {first[0]}: one "
-                                           "address is accessed by exactly one variable")
+                    self.error(e[2], e[3], f"address {addr} is already used by {first[0]} "
+                                           f"({_place(first[2], first[3])}): one address is "
+                                           "accessed by exactly one variable")
             for e in entries:
                 resources = set(e[5])
                 if e[1] is not None:
@@ -627,8 +689,37 @@ class ConfigChecker:
             (area1, start1, n1), addr1, e1 = a
             (area2, start2, n2), addr2, e2 = b
             if area1 == area2 and start2 < start1 + n1:
-                self.error(e2[2], e2[3], f"address {addr2} overlaps {addr1} ({e1[0]}): one "
-                                         "address is accessed by exactly one variable")
+                self.error(e2[2], e2[3], f"address {addr2} overlaps {addr1} ({e1[0]}, "
+                                         f"{_place(e1[2], e1[3])}): one address is accessed by "
+                                         "exactly one variable")
+
+
+def _qual(r, name):
+    """IEC path of a name in resource r, as the variable table writes it (a
+    configuration without RESOURCE has one implicit resource, not written)."""
+    return f"{r.name}.{name}" if r.node.name else name
+
+
+def _place(src, pos):
+    """file:line:col of a declaration (the file's name: the same message
+    wherever the project lies)."""
+    if src is None or pos is None:
+        return "?"
+    line, col = src.linecol(pos)
+    return f"{os.path.basename(src.path)}:{line}:{col}"
+
+
+def _incomplete(pou, path, depth):
+    """(path, Var) of every incomplete location in an instance of pou: its
+    own and those of the function block instances it holds."""
+    if pou is None or depth > 32:
+        return
+    for v in pou.vars.values():
+        if v.location and v.location.endswith("*"):
+            yield f"{path}.{v.name}", v
+        elif isinstance(v.type, FBType) and not v.type.pou.standard and \
+                v.section in ("VAR", "VAR_INPUT", "VAR_OUTPUT"):
+            yield from _incomplete(v.type.pou, f"{path}.{v.name}", depth + 1)
 
 
 def _same_type(a, b):

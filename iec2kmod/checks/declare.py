@@ -797,13 +797,38 @@ class Declarer:
     def check_location_decl(self, decl, block, owner, src, t, allow_located):
         addr = decl.location
         if not allow_located:
-            if addr.endswith("*") and isinstance(owner, POUInfo) and owner.kind == "PROGRAM" and \
-                    block.kind == "VAR":
-                return  # completed by VAR_CONFIG
+            kind = owner.kind if isinstance(owner, POUInfo) else None
+            if block.kind == "VAR" and (kind == "PROGRAM" or
+                                        kind == "FUNCTION_BLOCK" and addr.endswith("*")):
+                # ed.2 program_declaration takes located_var_declarations (the
+                # I/O of every OpenPLC program), and an incomplete location
+                # (%I*, %Q*, %M*) in a program or function block is completed
+                # by the configuration's VAR_CONFIG; the configuration checks
+                # that one address belongs to one variable (checks/config.py)
+                if not addr.endswith("*"):
+                    check_address_type(self, src, decl.pos, addr, t)
+                return
             name = decl.names[0][0]
             where = owner.kind.lower().replace("_", " ") if isinstance(owner, POUInfo) else \
                 "this declaration"
             arrow = "=>" if addr[1] == "Q" else ":="
+            if kind == "PROGRAM":
+                self.error(src, decl.pos,
+                           f"located variable '{name}' AT {addr} in {block.kind}: a program's "
+                           "located variables are declared in VAR (ed.2 "
+                           f"located_var_declarations); declare it there, or connect the "
+                           f"{'output' if block.kind == 'VAR_OUTPUT' else 'input'}: PROGRAM "
+                           f"inst WITH task : {owner.name} ({name} {arrow} {addr})")
+                return
+            if kind == "FUNCTION_BLOCK" and block.kind == "VAR":
+                self.error(src, decl.pos,
+                           f"located variable '{name}' AT {addr} in a function block: every "
+                           "instance of the block would have that address, and one address is "
+                           f"accessed by exactly one variable; declare it incomplete ({name} AT "
+                           f"%{addr[1]}* : {t.name}) and give each instance its address in the "
+                           "configuration's VAR_CONFIG, or make it an input or output of the "
+                           "block and pass it from the program that calls it")
+                return
             if isinstance(owner, POUInfo) and owner.kind == "PROGRAM":
                 other = (f"or make '{name}' an input or output of the program and connect it: "
                          f"PROGRAM inst WITH task : {owner.name} ({name} {arrow} {addr})")
@@ -813,12 +838,14 @@ class Declarer:
             self.error(src, decl.pos,
                        f"located variable '{name}' AT {addr} in a {where}: by the rule of "
                        "located variables, directly represented variables appear only in "
-                       "configuration and resource declarations and in program connections; "
+                       "configuration, resource and program declarations and in program "
+                       "connections; "
                        f"declare it there (VAR_GLOBAL {name} AT {addr} : {t.name}; END_VAR) "
                        f"and reach it through VAR_EXTERNAL {name}, {other}")
             return
         if addr.endswith("*"):
-            self.error(src, decl.pos, f"incomplete address {addr} is allowed only in programs "
+            self.error(src, decl.pos, f"incomplete address {addr} is allowed only in the VAR of programs and "
+                                      "function blocks "
                                       "(completed by VAR_CONFIG)")
             return
         check_address_type(self, src, decl.pos, addr, t)

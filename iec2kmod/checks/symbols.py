@@ -127,6 +127,11 @@ class ConfigInfo:
     # VAR_CONFIG initial values: [(ResourceInfo, ProgramInstance, [Var, ...], init)],
     # the Vars leading from the program instance to the variable (FB instances first)
     config_inits: list = field(default_factory=list)
+    # every located variable by its address: address -> IEC path of the
+    # variable (a global, r.inst.var of a program's located variable, the
+    # VAR_CONFIG path of a completed %I* location); the tools take an
+    # address wherever they take this path (sim, interpreter, plc-manager)
+    addresses: dict = field(default_factory=dict)
 
 
 @dataclass(eq=False)

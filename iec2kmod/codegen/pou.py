@@ -313,11 +313,12 @@ def callees(project, pou) -> list:
 
 
 def frame_max(terms: list[str], empty: str = "0U") -> str:
-    """IEC_FRAME_MAX over terms as a balanced tree.  The macro names each
-    argument twice, so a chain MAX(a, MAX(b, MAX(c, ...))) of k terms
-    expands to 2^k copies: a program calling 60 functions (OSCAT's) took
-    the preprocessor minutes and gigabytes.  Balanced, each term is copied
-    2^ceil(log2 k) <= 2k times."""
+    """IEC_FRAME_MAX over terms in one expression, as a balanced tree (the
+    task frame size of sim over the task's program instances).  The macro
+    names each argument twice, so a chain MAX(a, MAX(b, MAX(c, ...))) of k
+    terms expands to 2^k copies; balanced, each term is copied
+    2^ceil(log2 k) <= 2k times.  The POUs' own needs are enumeration
+    constants (_frame_lines), linear in their callees."""
     if not terms:
         return empty
     if len(terms) == 1:
@@ -329,15 +330,25 @@ def frame_max(terms: list[str], empty: str = "0U") -> str:
 def _frame_lines(project, pou, members) -> list[str]:
     """The frame struct of a body (if it has members) and its need."""
     need = [frame_need(c) for c in callees(project, pou)]
-    inner = frame_max(need)
+    # enumeration constants, not nested macros: IEC_FRAME_MAX names each
+    # operand twice, so a macro nesting it once per callee grew exponentially
+    # (a program calling 44 OSCAT functions gave gcc an expression it never
+    # finished); each partial maximum is a constant of its own
     out = []
+    inner = "0U"
+    for i, n in enumerate(need):
+        if i:
+            out.append(f"enum {{ {frame_need(pou)}_M{i} = IEC_FRAME_MAX({n}, {inner}) }};")
+            inner = f"{frame_need(pou)}_M{i}"
+        else:
+            inner = n
     if members:
         out += [f"{frame_struct(pou)} {{"] + ["\t" + m for m in members] + ["};", ""]
         own = f"IEC_FRAME_ALIGN(sizeof({frame_struct(pou)}))"
-        out.append(f"#define {frame_need(pou)} ({own} + {inner})" if need else
-                   f"#define {frame_need(pou)} {own}")
+        out.append(f"enum {{ {frame_need(pou)} = {own} + {inner} }};" if need else
+                   f"enum {{ {frame_need(pou)} = {own} }};")
     else:
-        out.append(f"#define {frame_need(pou)} ({inner})")
+        out.append(f"enum {{ {frame_need(pou)} = {inner} }};")
     return out + [""]
 
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 from .. import ast
 from ..checks.types import ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, concrete
+from ..located import addresses_of, name_index
 from ..literals import LiteralError, classify, parse_duration
 from .compiler import PouCompiler
 from ..checks.config import SIM_ITERATION_NS
@@ -471,8 +472,8 @@ def value_for(entry, text: str):
     raise VMError(f"invalid value '{text}' for {entry.path}")
 
 
-def read_trace(path: str, table):
-    index = {e.path.upper(): i for i, e in enumerate(table)}
+def read_trace(path: str, table, addresses=None):
+    index = name_index(table, addresses)
     events = []
     try:
         with open(path, newline="") as fh:
@@ -511,17 +512,19 @@ def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> VMResult
     (on ``machine``, a fresh Machine of the project, when given)."""
     m = machine if machine is not None else Machine(project)
     table = m.table()
-    index = {e.path.upper(): i for i, e in enumerate(table)}
+    addresses = addresses_of(project)
+    index = name_index(table, addresses)
     if watch:
         idx = []
         for w in watch:
             i = index.get(w.strip().upper())
             if i is None:
                 raise VMError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
-            idx.append(i)
+            if i not in idx:         # an address and its name are one variable
+                idx.append(i)
     else:
         idx = [i for i, e in enumerate(table) if e.owner in ("global", "direct")]
-    events = read_trace(inputs, table) if inputs else []
+    events = read_trace(inputs, table, addresses) if inputs else []
     return m.schedule(table, idx, events, end_ns)
 
 

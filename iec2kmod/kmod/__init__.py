@@ -602,6 +602,9 @@ def _manifest(cfg, plan, config_mod, prog_modules, res_modules, source_hash, ifa
         "instances": [{"path": ip.path, "type": ip.pou.name, "resource": ip.resource,
                        "task": ip.task} for ip in plan.instances],
         "variables": variables,
+        # a located variable's address names it too (plc-manager read %IW2)
+        "addresses": {a: p for a, p in sorted(getattr(cfg, "addresses", {}).items())
+                      if p.upper() in {v["path"].upper() for v in variables}},
     }
 
 

@@ -177,7 +177,8 @@ def input_entries(m):
                 else:
                     c, k = m.cells[id(target.symbol)]
                     written.add((id(c), k))
-            for v in pi.pou.inputs:
+            for v in pi.pou.inputs + [v for v in pi.pou.vars.values()
+                                      if (v.location or "")[:2] == "%I"]:
                 if writes(pi.pou, v):
                     own_written.add((id(pi), v.key))
     table = m.table()
@@ -192,6 +193,9 @@ def input_entries(m):
         connected = {c.name.upper() for c in pi.node.connections}
         for v in pi.pou.inputs:
             if v.key not in connected and (id(pi), v.key) not in own_written:
+                free_roots.append(f"{ipath}.{v.name}".upper())
+        for v in pi.pou.vars.values():          # located %I of the program (z3: model.py)
+            if (v.location or "")[:2] == "%I" and (id(pi), v.key) not in own_written:
                 free_roots.append(f"{ipath}.{v.name}".upper())
     outside = []
     implicit_one = len(cfg.resources) == 1 and cfg.resources[0].node.name

@@ -68,8 +68,11 @@ class SymbolicMachine:
         self.unconnected = set()
         for (path, inst), pi in zip(m.instances, self.programs):
             connected = {c.name.upper() for c in pi.node.connections}
+            # a program's located %I variable is an input of the process
+            # image, as a located %I global is: free where no cycle writes it
             self._instance(inst, path, keys=("I", path), unconnected={
-                v.key for v in pi.pou.inputs if v.key not in connected})
+                v.key for v in pi.pou.inputs if v.key not in connected} | {
+                v.key for v in pi.pou.vars.values() if (v.location or "")[:2] == "%I"})
         self.clock = {"$tick": 0}
         if self.ticks > 1:
             self._hidden(self.clock, "$tick", Elementary("$TICK", "uint",

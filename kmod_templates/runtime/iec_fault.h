@@ -177,7 +177,7 @@ static inline const char *iec_fault_name(enum iec_fault_code code)
  * that would not fit records IEC_FAULT_FRAME instead of overrunning.
  */
 #define IEC_FRAME_ALIGN(n)	((((iec_u32)(n)) + 15U) & ~15U)
-#define IEC_FRAME_MAX(a, b)	((a) > (b) ? (a) : (b))
+#define IEC_FRAME_MAX(a, b)	((iec_u32)(a) > (iec_u32)(b) ? (iec_u32)(a) : (iec_u32)(b))
 
 static inline void iec_frame_area(struct iec_ctx *ctx, iec_u8 *base,
 				  iec_u32 size)

@@ -126,10 +126,12 @@ def project_of(paths):
     return res.project, None
 
 
-def write_trace(events, table, path):
+def write_trace(events, table, path, addresses=None):
     """The trace rows whose variable exists and is writable (a minimised
-    project may have lost some)."""
+    project may have lost some); a located variable may be named by its
+    address (``addresses``: ConfigInfo.addresses)."""
     ok = {e.path.upper() for e in table if e.writable}
+    ok |= {a.upper() for a, p in (addresses or {}).items() if p.upper() in ok}
     rows = [f"{t}ns,{p},{v}\n" for t, p, v in events if p.upper() in ok]
     Path(path).write_text("".join(rows))
     return len(rows)
@@ -313,7 +315,7 @@ def run_units(units, engines, workdir, split_on_failure=True):
     plan = build_plan(project)
     trace = workdir / "trace.csv"
     events = sorted((ev for u in units for ev in u.trace), key=lambda e: e[0])
-    write_trace(events, plan.table, trace)
+    write_trace(events, plan.table, trace, project.configurations[0].addresses)
     end = end_ns(max(u.cycles for u in units))
     runs = {}
     for eng in engines:
@@ -398,7 +400,7 @@ def run_text(text, events, engines, cycles, workdir):
         return None, err
     plan = build_plan(project)
     trace = workdir / "trace.csv"
-    write_trace(events, plan.table, trace)
+    write_trace(events, plan.table, trace, project.configurations[0].addresses)
     end = end_ns(cycles)
     runs = {}
     for eng in engines:

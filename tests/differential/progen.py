@@ -238,6 +238,13 @@ class Gen:
         # project it gave before they were added
         self.fid_r = random.Random(f"fid{seed}")
         self.fid = True
+        # the real-code forms of issue 25 (located variables in programs,
+        # writes to inputs) likewise: with real_code=False a seed gives the
+        # project it gave before
+        self.real_r = random.Random(f"real{seed}")
+        self.real = True
+        self.loc_next = 0
+        self.located_progs = set()
         # named constants in array bounds and CASE labels: a generator of
         # their own, kept out of the variables the bodies draw from, so a
         # seed's project is the one it gave before, with names for numbers
@@ -1541,6 +1548,7 @@ class Gen:
             f.vars.append(Var(self.uid("io"), ptype(scalar_only=True), "inout"))
         if self.chance(0.3):
             f.vars.append(Var(self.uid("o"), self.pick_type(scalar_only=True), "out"))
+        self.input_writes(f)
         self.locals_for(f, r.randint(0, 2))
         scope = list(f.vars) + [Var(name, res, "result", wo=True)]
         self.for_ranges = []
@@ -1627,6 +1635,7 @@ class Gen:
         if self.chance(0.6):
             self.externals_for(fb, [g for g in self.cglobals if not g.loc])
         self.add_instances(fb)
+        self.input_writes(fb)
         self.locals_for(fb, r.randint(1, 3))
         self.pou_body(fb)
         self.fbs.append(fb)
@@ -1667,10 +1676,51 @@ class Gen:
         if self.chance(0.15):
             prog.vars.append(Var(self.uid("pg"), INT, "pglobal"))
             self.feat("program_var_global")
+        self.program_located(prog)
         self.locals_for(prog, r.randint(2, 5))
         self.pou_body(prog)
         self.progs.append(prog)
         self.feat("program")
+
+    # ------------------------------------------- real-code forms (issue 25)
+    def real_chance(self, p):
+        return self.real and self.real_r.random() < p
+
+    def program_located(self, prog):
+        """Located variables in the program's VAR, as OpenPLC programs declare
+        their I/O (addresses from the last quarter of the unit's range, which
+        nothing else takes); the trace writes the %I ones by address."""
+        if not self.real_chance(0.35):
+            return
+        for _ in range(self.real_r.randint(1, 3)):
+            if self.loc_next >= 16:
+                break
+            o = (self.addr_base + 48 + self.loc_next) * 4
+            self.loc_next += 1
+            kind = self.real_r.choice("IQM")
+            size = self.real_r.choice("XBWD")
+            if size == "X":
+                t, addr = BOOL, self.addr_text(kind, "X", o, self.real_r.randint(0, 7))
+            else:
+                t = T[self.real_r.choice({"B": ["BYTE", "SINT", "USINT"],
+                                          "W": ["WORD", "INT", "UINT"],
+                                          "D": ["DWORD", "DINT", "UDINT"]}[size])]
+                addr = self.addr_text(kind, size, o)
+            prog.vars.append(Var(self.uid("lv"), t, "var", loc=addr))
+            if kind == "I":
+                self.inputs.append((addr, t))
+            self.located_progs.add(prog.name)
+            self.feat("located_in_program_" + kind)
+
+    def input_writes(self, pou):
+        """Inputs the body may assign (OSCAT does; a warning, not an error)."""
+        if not self.real_chance(0.3):
+            return
+        ins = [v for v in pou.vars if v.sec == "in" and not v.edge]
+        for v in ins:
+            if self.real_r.random() < 0.6:
+                v.ro = False
+                self.feat("input_write")
 
     # ------------------------------------------------------------ render
     SEC = {"in": "VAR_INPUT", "out": "VAR_OUTPUT", "inout": "VAR_IN_OUT", "ext": "VAR_EXTERNAL",
@@ -1794,7 +1844,10 @@ class Gen:
         for prog in self.progs:
             res = prog.home
             lines, tasks, insts = rinst[res]
-            for _ in range(1 if self.chance(0.7) else 2):
+            n_inst = 1 if self.chance(0.7) else 2
+            if prog.name in self.located_progs:
+                n_inst = 1           # one address, one variable: one instance
+            for _ in range(n_inst):
                 iname = self.uid(p + "i")
                 tn, _ = self.pick(tasks)
                 conns = self.connections(prog, res)
@@ -1910,7 +1963,8 @@ class Gen:
 
 def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
                   sfc: bool = True, fidelity: bool = True, strings: bool = True,
-                  named_constants: bool = True, continue_stmt: bool = True) -> Unit:
+                  named_constants: bool = True, continue_stmt: bool = True,
+                  real_code: bool = True) -> Unit:
     """``sfc=False``: no SFC bodies -- the same project the seed gave before
     the generator knew SFC (SFC is decided by a random generator of its own).
     ``fidelity=False``: none of the constructs of issue 10 (function forms,
@@ -1920,13 +1974,16 @@ def generate_unit(seed: int, k: int = 0, cycles: int = 100, size: float = 1.0,
     refuses them); True gives every seed's project as before.
     ``named_constants=False``: no VAR CONSTANT naming an array bound or a
     CASE label (decided by a generator of its own as well).
-    ``continue_stmt=False``: no CONTINUE (ed.3) in loops (likewise)."""
+    ``continue_stmt=False``: no CONTINUE (ed.3) in loops (likewise).
+    ``real_code=False``: no located variables in programs and no writes to
+    inputs (issue 25; likewise)."""
     g = Gen(seed, k, size)
     g.sfc = sfc
     g.fid = fidelity
     g.strings = strings
     g.nc = named_constants
     g.cont = continue_stmt
+    g.real = real_code
     g._dims = {}
     g.for_ranges = []
     return g.unit(cycles)

@@ -135,9 +135,10 @@ END_PROGRAM
 
 def test_frame_need_of_many_callees_stays_small_after_preprocessing(tmp_path):
     """A POU's frame need is the MAX over its callees' (IEC_FRAME_MAX names
-    each argument twice): chained, 20 callees expanded to 2^20 copies (a
-    program calling OSCAT's 60 functions took gcc minutes and 18 GB);
-    balanced, each callee is copied at most 2k times."""
+    each argument twice): as one chained macro, 20 callees expanded to 2^20
+    copies (a program calling OSCAT's 60 functions took gcc minutes and
+    18 GB); as enumeration constants, one per partial maximum, it is
+    linear."""
     from iec2kmod.checks import check_project
     from iec2kmod.codegen import generate
     from iec2kmod.diagnostics import Diagnostics, SourceFile
@@ -154,8 +155,8 @@ def test_frame_need_of_many_callees_stays_small_after_preprocessing(tmp_path):
     assert not diags.errors, [d.format() for d in diags.items]
     gen = generate(project)
     defines = [line for body in gen.bodies.values() for line in body[1].splitlines()
-               if line.startswith("#define IEC_FRAME_NEED_")]
-    assert len(defines) == k + 1
+               if line.startswith(("#define IEC_FRAME_NEED_", "enum { IEC_FRAME_NEED_"))]
+    assert len(defines) >= k + 1
     c = tmp_path / "need.c"
     c.write_text("#define IEC_FRAME_MAX(a, b)\t((a) > (b) ? (a) : (b))\n"
                  "#define IEC_FRAME_ALIGN(n) (n)\n" + "\n".join(

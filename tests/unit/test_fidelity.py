@@ -178,13 +178,20 @@ def test_program_access_paths_are_recorded():
 # ------------------------------------- the rule of directly represented variables
 
 def test_located_variable_message_names_the_rule_and_the_fix():
+    # a program's VAR may locate a variable (ed.2 located_var_declarations,
+    # issue 25); a function block's complete address, an address in a
+    # statement and a located VAR_INPUT stay refused, each with its fix
     errs = errors("PROGRAM Ctrl\nVAR_OUTPUT m : BOOL; END_VAR\nVAR q AT %QX0.1 : BOOL; END_VAR\n"
-                  "m := %IX0.1;\nq := m;\nEND_PROGRAM")
-    assert len(errs) == 2
-    assert "rule of located variables" in errs[0] and \
-        "VAR_GLOBAL q AT %QX0.1 : BOOL; END_VAR" in errs[0] and \
-        "PROGRAM inst WITH task : Ctrl (q => %QX0.1)" in errs[0]
-    assert "rule of located variables" in errs[1] and "(x := %IX0.1)" in errs[1]
+                  "m := %IX0.1;\nq := m;\nEND_PROGRAM\n"
+                  "FUNCTION_BLOCK B\nVAR w AT %IW4 : WORD; END_VAR\nEND_FUNCTION_BLOCK\n"
+                  "PROGRAM P2\nVAR_INPUT i AT %IX0.2 : BOOL; END_VAR\nEND_PROGRAM")
+    assert len(errs) == 3
+    assert "%IX0.1 used in a POU" in errs[0] and "(name AT %IX0.1 : ...)" in errs[0] and \
+        "(x := %IX0.1)" in errs[0]
+    assert "'w' AT %IW4 in a function block" in errs[1] and "(w AT %I* : WORD)" in errs[1] \
+        and "VAR_CONFIG" in errs[1]
+    assert "'i' AT %IX0.2 in VAR_INPUT" in errs[2] and \
+        "PROGRAM inst WITH task : P2 (i := %IX0.2)" in errs[2]
 
 
 # -------------------------- 8. calls on array elements, LDATE#, generic TRUNC

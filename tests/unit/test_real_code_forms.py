@@ -129,3 +129,12 @@ def test_ed3_only_name_replaced_by_a_user_pou_with_a_warning_other_names_refused
                           "only: this project's function block of that name (ed.2 code) "
                           "replaces it"),
         (5, 1, "error", "'SIN' is the name of a standard function or block")]
+
+
+def test_matiec_inline_c_block_with_braces_is_one_pragma():
+    """MatIEC's {{ ... }} holds C code whose braces end no pragma (OSCAT's
+    OpenPLC translation, Beremiz's LOGGER block)."""
+    got = diagnostics("FUNCTION_BLOCK L\nVAR_INPUT trig : BOOL; END_VAR\nVAR t0 : BOOL; END_VAR\n"
+                      "IF trig AND NOT t0 THEN\n  {{\n   if (x) { f(1); }\n  }}\nEND_IF;\n"
+                      "t0 := trig;\nEND_FUNCTION_BLOCK\n")
+    assert got == [(5, 3, "warning", "pragma ignored")]
