@@ -636,7 +636,7 @@ _ED3_WORDS = re.compile(
 # an access or inheritance specifier after the POU keyword (ed.3 6.6.5,
 # CODESYS): FUNCTION_BLOCK PUBLIC name
 _ACCESS_SPECIFIER = re.compile(
-    r"\b(?:FUNCTION_BLOCK|FUNCTION|PROGRAM|METHOD|PROPERTY|CLASS)\s+"
+    r"\b(?:FUNCTION_BLOCK|FUNCTION|PROGRAM)\s+"
     r"(PUBLIC|PRIVATE|INTERNAL|PROTECTED|FINAL|ABSTRACT)\b", re.I)
 
 
