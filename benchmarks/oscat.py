@@ -46,6 +46,7 @@ import json
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -517,10 +518,11 @@ def kernel_values(lib: Path, prog: Path, watch, cycles, log) -> dict:
         log(f"  kernel: {len(values)} values read, kernel log clean, "
             f"{time.perf_counter() - t0:.1f} s")
     except Exception as exc:  # the guest's own errors name what is missing
-        log(f"  kernel: {type(exc).__name__}: {str(exc)[-800:]}")
+        log(f"  kernel: {type(exc).__name__}: {str(exc)[-800:]} (console: {work}/console.log)")
         return {}
     finally:
         g.close()
+    shutil.rmtree(work, ignore_errors=True)   # kept above when something failed
     return values
 
 
