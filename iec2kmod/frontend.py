@@ -96,7 +96,7 @@ def _parse_one(src: SourceFile):
     return unit, diags.items
 
 
-_TOP_END = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|\{\{.*?\}\}|\{[^}]*\}|"
+_TOP_END = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\}|"
                       r"\b(END_FUNCTION_BLOCK|END_FUNCTION|END_PROGRAM|END_TYPE|"
                       r"END_CONFIGURATION)\b", re.S | re.I)
 

@@ -22,7 +22,7 @@ from .codegen import source_list
 from .codegen import cnames as N
 from .codegen.body import copy_value
 from .codegen.plan import unbound_pointer_check
-from .codegen.pou import frame_need
+from .codegen.pou import frame_max, frame_need
 from .compilation import Compilation, CompileError
 from .execmodel import LOOP_BUDGET
 from . import traces
@@ -89,9 +89,7 @@ def render_sim(what, selective=None):
     tasks = []
     implicit = project.configurations[0].resources[0].node.name is None
     for tp in plan.tasks:
-        size = "16U"
-        for need in sorted({frame_need(ip.pou) for ip in tp.instances}):
-            size = f"IEC_FRAME_MAX({need}, {size})"
+        size = frame_max(sorted({frame_need(ip.pou) for ip in tp.instances}) + ["16U"])
         tasks.append({"index": tp.index, "frame_size": size,
                       "name": tp.name if implicit else f"{tp.resource}.{tp.name}",
                       "interval": tp.interval_ns or 0, "priority": tp.priority,

@@ -582,6 +582,12 @@ class Declarer:
                                  " of IEC 61131-3 ed.3 only: this project's "
                                  f"{node.kind.lower().replace('_', ' ')} of that name (ed.2 "
                                  "code) replaces it")
+                elif node.kind == "FUNCTION" and stdlib.implementation_conversion(key):
+                    self.warning(node.src, node.pos,
+                                 f"FUNCTION '{node.name}' replaces this implementation's "
+                                 f"conversion of that name (not a standard function of ed.2: "
+                                 f"Table 22 leaves *_TO_** to the implementation, Table 30 names "
+                                 f"only DT_TO_TOD and DT_TO_DATE between time types)")
                 elif stdlib.is_std_function(key) or key in stdlib.FUNCTION_BLOCKS:
                     self.error(node.src, node.pos,
                                f"'{node.name}' is the name of a standard function or block")

@@ -367,6 +367,26 @@ def conversion(name: str):
     return None
 
 
+_TIME_TYPES = ("TIME", "LTIME", "DATE", "TOD", "DT")
+# ed.2 Table 30 (13, 14): the only conversions between time types the standard names
+_TABLE30_CONVERSIONS = {("DT", "TOD"), ("DT", "DATE")}
+
+
+def implementation_conversion(name: str) -> bool:
+    """True for a conversion between two time types that ed.2 does not name:
+    Table 22 leaves the list of *_TO_** conversions to the implementation
+    (footnote a) and Table 30 names only DT_TO_TOD and DT_TO_DATE.  This
+    implementation provides e.g. TOD_TO_TIME and DATE_TO_DT; MatIEC does not,
+    and libraries written for it (OSCAT) define their own.  A user FUNCTION
+    of such a name replaces ours (declare.py warns)."""
+    conv = conversion(name)
+    if conv is None or conv[2] != "CONVERT":
+        return False
+    s, d = (t.name for t in conv[:2])
+    s, d = _ALIASES.get(s, s), _ALIASES.get(d, d)
+    return s in _TIME_TYPES and d in _TIME_TYPES and (s, d) not in _TABLE30_CONVERSIONS
+
+
 def ed3_only(name: str) -> bool:
     """Standard names that IEC 61131-3 ed.3 added (ATAN2, table 23; the typed
     counters CTU_DINT ..., table 43; the typed REAL_TRUNC_INT ... forms,

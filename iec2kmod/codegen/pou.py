@@ -312,6 +312,21 @@ def callees(project, pou) -> list:
             if k in project.pous and not getattr(project.pous[k], "standard", False)]
 
 
+def frame_max(terms: list[str], empty: str = "0U") -> str:
+    """IEC_FRAME_MAX over terms in one expression, as a balanced tree (the
+    task frame size of sim over the task's program instances).  The macro
+    names each argument twice, so a chain MAX(a, MAX(b, MAX(c, ...))) of k
+    terms expands to 2^k copies; balanced, each term is copied
+    2^ceil(log2 k) <= 2k times.  The POUs' own needs are enumeration
+    constants (_frame_lines), linear in their callees."""
+    if not terms:
+        return empty
+    if len(terms) == 1:
+        return terms[0]
+    half = (len(terms) + 1) // 2
+    return f"IEC_FRAME_MAX({frame_max(terms[:half])}, {frame_max(terms[half:])})"
+
+
 def _frame_lines(project, pou, members) -> list[str]:
     """The frame struct of a body (if it has members) and its need."""
     need = [frame_need(c) for c in callees(project, pou)]

@@ -1019,7 +1019,7 @@ def _only_space_between(text, a, b):
     between = text[a:b]
     # the declaration may start with its keyword (FUNCTION_BLOCK, PROGRAM) or
     # sit on the next line; comments and other pragmas may come between
-    between = re.sub(r"\(\*.*?\*\)|//[^\n]*|\{[^}]*\}", " ", between, flags=re.S)
+    between = re.sub(r"\(\*.*?\*\)|//[^\n]*|\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\}", " ", between, flags=re.S)
     return re.fullmatch(r"\s*(?:(?:FUNCTION_BLOCK|PROGRAM|FUNCTION|VAR\w*|RETAIN|"
                         r"NON_RETAIN|CONSTANT)\s+)*", between, re.I) is not None
 

@@ -33,7 +33,7 @@ PRAGMA = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\
                     r"(\{\s*(verify|assume)\b\s*([A-Za-z_][A-Za-z0-9_]*)?\s*:([^}]*)\})",
                     re.S | re.I)
 POU_SPAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
-                      r"\{[^}]*\}|\b(END_PROGRAM|END_FUNCTION_BLOCK|END_FUNCTION)\b|"
+                      r"\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\}|\b(END_PROGRAM|END_FUNCTION_BLOCK|END_FUNCTION)\b|"
                       r"\b(PROGRAM|FUNCTION_BLOCK|FUNCTION)\s+([A-Za-z_][A-Za-z0-9_]*)",
                       re.S | re.I)
 

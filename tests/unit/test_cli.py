@@ -130,3 +130,37 @@ def test_repeat_run_uses_the_cache(tmp_path):
     assert "cache:" in second[2] and "parse:" in first[2]
     f.write_text(GOOD)
     assert run("check", str(f), env_extra=env)[0] == 0
+
+
+# Beremiz's LOGGER block as in every plc.st of OSCAT's OpenPLC translation:
+# MatIEC's inline C {{ ... }} runs to the first }}, whatever braces,
+# semicolons or keywords its C code holds
+LOGGER = """FUNCTION_BLOCK LOGGER
+  VAR_INPUT TRIG : BOOL; MSG : STRING; LEVEL : BYTE := 2; END_VAR
+  VAR TRIG0 : BOOL; END_VAR
+  IF TRIG AND NOT TRIG0 THEN
+  {{
+   if (1) { LogMessage(GetFbVar(LEVEL),(char*)GetFbVar(MSG, .body),GetFbVar(MSG, .len)); }
+   /* END_IF; END_FUNCTION_BLOCK */
+  }}
+  END_IF;
+  TRIG0:=TRIG;
+END_FUNCTION_BLOCK
+"""
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_matiec_inline_c_pragma_is_warned_and_ignored(tmp_path, jobs):
+    # with -j 2 the file (over 40000 characters) is cut between POUs for the
+    # parallel parser: the cut must not fall inside the pragma either
+    fillers = "".join(f"FUNCTION F{i} : INT\n  VAR_INPUT a : INT; END_VAR\n  F{i} := a + {i};\n"
+                      f"END_FUNCTION\n" for i in range(700))
+    prog = GOOD.replace("VAR n : INT; END_VAR", "VAR n : INT; log : LOGGER; END_VAR").replace(
+        "END_IF;\nEND_PROGRAM", "END_IF;\n  log(TRIG := run, MSG := 'on');\n  n := F7(n);\nEND_PROGRAM")
+    f = tmp_path / "plc.st"
+    f.write_text(LOGGER + fillers + prog)
+    assert len(f.read_text()) > 40000
+    rc, out, err = run("check", "--no-cache", "-j", jobs, str(f))
+    assert rc == 0, err
+    assert err.splitlines()[0] == f"{f}:5:3: warning: pragma ignored"
+    assert err.splitlines()[-1] == "0 error(s), 1 warning(s)"

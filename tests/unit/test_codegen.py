@@ -131,3 +131,36 @@ END_PROGRAM
     assert v["WHO"].init.value == "anon"
     fields = project.types["S"].fields
     assert fields["A"][2].value == 42 and fields["B"][2].value == 1
+
+
+def test_frame_need_of_many_callees_stays_small_after_preprocessing(tmp_path):
+    """A POU's frame need is the MAX over its callees' (IEC_FRAME_MAX names
+    each argument twice): as one chained macro, 20 callees expanded to 2^20
+    copies (a program calling OSCAT's 60 functions took gcc minutes and
+    18 GB); as enumeration constants, one per partial maximum, it is
+    linear."""
+    from iec2kmod.checks import check_project
+    from iec2kmod.codegen import generate
+    from iec2kmod.diagnostics import Diagnostics, SourceFile
+    from iec2kmod.parser import parse_source
+    k = 20
+    funcs = "".join(f"FUNCTION F{i} : INT\n  VAR_INPUT a : INT; END_VAR\n"
+                    f"  VAR t : ARRAY[1..4] OF INT; END_VAR\n  t[1] := a; F{i} := t[1] + {i};\n"
+                    "END_FUNCTION\n" for i in range(k))
+    calls = " + ".join(f"F{i}(n)" for i in range(k))
+    text = funcs + f"PROGRAM p\n  VAR n : INT; END_VAR\n  n := {calls};\nEND_PROGRAM\n"
+    diags = Diagnostics()
+    unit = parse_source(SourceFile("t.st", text), diags)
+    project = check_project([unit], diags)
+    assert not diags.errors, [d.format() for d in diags.items]
+    gen = generate(project)
+    defines = [line for body in gen.bodies.values() for line in body[1].splitlines()
+               if line.startswith(("#define IEC_FRAME_NEED_", "enum { IEC_FRAME_NEED_"))]
+    assert len(defines) >= k + 1
+    c = tmp_path / "need.c"
+    c.write_text("#define IEC_FRAME_MAX(a, b)\t((a) > (b) ? (a) : (b))\n"
+                 "#define IEC_FRAME_ALIGN(n) (n)\n" + "\n".join(
+                     d for d in defines) + "\nunsigned long need = IEC_FRAME_NEED_PROG_P;\n")
+    p = subprocess.run(["gcc", "-E", "-P", str(c)], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert len(p.stdout) < 200_000, len(p.stdout)

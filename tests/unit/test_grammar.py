@@ -345,6 +345,41 @@ def test_comments_and_pragmas():
         (5, 5, "warning", "pragma ignored")]
 
 
+# MatIEC's inline C (Beremiz's LOGGER and python_eval blocks, OSCAT's plc.st):
+# a pragma opened by {{ runs to the first }}, so the C code in it may hold
+# braces, semicolons and keywords
+MATIEC_INLINE_C = """FUNCTION_BLOCK logger
+  VAR_INPUT trig : BOOL; level : INT; END_VAR
+  VAR trig0 : BOOL; END_VAR
+  IF trig AND NOT trig0 THEN
+  {{
+   if (level > 0) { LogMessage(GetFbVar(LEVEL)); } /* END_IF; x := 1; */
+  }}
+  END_IF;
+  trig0 := trig;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK poll
+  VAR_OUTPUT ack : BOOL; END_VAR
+  {extern void __PythonEvalFB(int, void*);__PythonEvalFB(1, data__);}
+  {{ struct { int a; } s; s.a = 0; }} ack := TRUE;
+END_FUNCTION_BLOCK
+"""
+
+
+@pytest.mark.parametrize("reference", [False, True], ids=["fast", "textx"])
+def test_matiec_inline_c_pragma_is_one_pragma(reference):
+    from iec2kmod.diagnostics import Diagnostics, SourceFile
+    from iec2kmod.parser import parse_source
+    diags = Diagnostics()
+    unit = parse_source(SourceFile("t.st", MATIEC_INLINE_C), diags, reference=reference)
+    assert unit is not None and not diags.errors, [d.format() for d in diags.items]
+    assert [(d.line, d.col, d.message) for d in diags.items] == [
+        (5, 3, "pragma ignored"), (13, 3, "pragma ignored"), (14, 3, "pragma ignored")]
+    logger, poll = unit.pous
+    assert [type(s).__name__ for s in logger.body] == ["If", "Assign"]
+    assert [type(s).__name__ for s in poll.body] == ["Assign"]
+
+
 def test_string_literals_may_contain_comment_and_pragma_characters():
     e = expr("'(* not a comment *) {nor a pragma} // nor this'")
     assert e.value == "(* not a comment *) {nor a pragma} // nor this"
