@@ -32,6 +32,7 @@
 #ifndef IEC_CONV_H
 #define IEC_CONV_H
 
+#include "iec_int.h"
 #include "iec_time.h"
 
 /* name, C type, unsigned C type of the same width */
@@ -67,10 +68,15 @@
 	X(fn, fT, char, iec_char, iec_u8)				\
 	X(fn, fT, wchar, iec_wchar, iec_u16)
 
+/* The low bits of v (modulo 2^n, then the target's two's complement).  v
+ * is masked in 64 bits to the target's width before it is narrowed: sparse
+ * warns "cast truncates bits from constant value" on a narrowing cast once
+ * a call with a constant is inlined (as for iec_int.h's arithmetic). */
 #define IEC__DEF_CONV_INT(fn, fT, tn, tT, tU)				\
 static inline tT iec_##fn##_to_##tn(fT v)				\
 {									\
-	return (tT)(tU)v;						\
+	return (tT)(tU)((iec_u64)v &					\
+			IEC__MASK(iec_u64, 8 * sizeof(tU)));		\
 }
 
 #define IEC__CONV_FROM(fn, fT, fU) IEC__INT_LIST_B(IEC__DEF_CONV_INT, fn, fT)

@@ -24,10 +24,13 @@ def modbus(port: int) -> dict:
             seen.append(c.read_holding_registers(10, count=1).registers[0])     # %QW10 count
             time.sleep(0.1)
         out["count_seen"] = seen
+        # tick toggles every 10 ms cycle: read until both of its states were
+        # seen (a loaded TCG guest can answer several reads on one parity)
         ticks = set()
-        for _ in range(6):
+        deadline = time.monotonic() + 20
+        while len({t[1] for t in ticks}) < 2 and time.monotonic() < deadline:
             ticks.add(tuple(c.read_coils(0, count=2).bits[:2]))                # %QX0.0 motor, tick
-            time.sleep(0.03)
+            time.sleep(0.013)
         out["coil_states"] = sorted(map(list, ticks))
         r = c.write_register(1024, 21)                                         # %MW0 sp
         out["write_sp"] = not r.isError()

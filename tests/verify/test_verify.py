@@ -462,9 +462,13 @@ def test_differential_progen(tmp_path):
     for seed in picked:
         f = tmp_path / f"seed{seed}.st"
         # the encoding refuses SFC bodies (and was written before the constructs
-        # of issue 10): the seeds' projects without them
-        f.write_text(progen.generate_unit(seed, 0, size=0.5, sfc=False,
-                                          fidelity=False).standalone())
+        # of issue 10): the seeds' projects without them.  PROGEN_SEEDS were
+        # picked among the projects the encoding accepts (no transcendental
+        # function), as the generator made them before issues 25 and 29: their
+        # draws change the rest of a project (seed 30 then calls EXP, LOG).
+        # Boundary values reach the encoding in tests/verify/test_encode_diff.py
+        f.write_text(progen.generate_unit(seed, 0, size=0.5, sfc=False, fidelity=False,
+                                          boundary=False, real_code=False).standalone())
         _check([f], 20, [seed])
 
 
