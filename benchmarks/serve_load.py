@@ -24,6 +24,7 @@ figures of the whole, not of the server alone.
 
     python benchmarks/serve_load.py [--vars 1000] [--writes 100] [--seconds 20]
         [--clock tcg|icount]
+    python benchmarks/serve_load.py --smoke   (CI: 250 variables, 10 writes/s, 3 s)
 """
 
 from __future__ import annotations
@@ -211,7 +212,12 @@ def main() -> None:
     ap.add_argument("--writes", type=int, default=100)
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--clock", choices=("tcg", "icount"), default="tcg")
+    ap.add_argument("--smoke", action="store_true",
+                    help="CI size: 250 variables, 10 writes/s, 3 s a run (figures not worth "
+                         "comparing)")
     a = ap.parse_args()
+    if a.smoke:
+        a.vars, a.writes, a.seconds = 250, 10, 3.0
     from iec2kmod.vm import Guest
     from plc_manager.serve.opcua import add_user, ensure_certificate, ensure_shelf
     work = Path(tempfile.mkdtemp(prefix="serve_load-"))
