@@ -218,7 +218,7 @@ def main() -> None:
     a = ap.parse_args()
     if a.smoke:
         a.vars, a.writes, a.seconds = 250, 10, 3.0
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     from plc_manager.serve.opcua import add_user, ensure_certificate, ensure_shelf
     work = Path(tempfile.mkdtemp(prefix="serve_load-"))
     src = work / "src"
