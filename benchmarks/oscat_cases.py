@@ -7,9 +7,11 @@ OSCAT BASIC manual (github.com/franz-hoepfinger-oscat/oscat-basic-docs,
 docs/en/<page>, the page in ``doc``).  A manual example with the same
 function and inputs as a plc.xml case is kept once (the plc.xml one).
 The data module of benchmarks/oscat.py (it runs nothing itself); this
-text is ours, no OSCAT source is in it.  MINUTE_OF_DT, SINH and SQRTN have
-no case: some copies in the translation declare their parameters in VAR
-(benchmarks/oscat.py reports the conflict and keeps the other copy).
+text is ours, no OSCAT source is in it.  MINUTE_OF_DT has no case: the
+translation declares its parameter XDT in VAR_OUTPUT, so no call can pass
+a date to it.  SINH and SQRTN have none yet: some of their copies declare
+the parameters in VAR (benchmarks/oscat.py reports the conflict and keeps
+the copy that declares them).
 
 Conventions of the OpenPLC translation (wonka929/OSCAT_OpenPLC) the values
 follow: DATE and DT are UDINT seconds since 1970-01-01 (CODESYS's

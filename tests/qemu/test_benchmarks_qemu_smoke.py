@@ -42,8 +42,9 @@ GUEST = {
                    rf"^server CPU: {NUM}% of one CPU$",
                    rf"^notifications: {NUM}/s; writes done {NUM}/s \(\d+ behind schedule\)$",
                    rf"^poll -> client \(ms\) +p50 +{NUM} +p99 +{NUM} +max +{NUM} +\(n=\d+\)$",
-                   rf"^write -> echo notified \(ms\) +p50 +{NUM} +p99 +{NUM} +max +{NUM} "
-                   r"+\(n=\d+\)$",
+                   # on a loaded machine a 6 s run may see no write come back
+                   rf"^write -> echo notified \(ms\) +(p50 +{NUM} +p99 +{NUM} +max +{NUM} "
+                   r"+\(n=\d+\)|no sample \(n=0\))$",
                    r"^task t10: alone \d+ cycles, \d+ overruns; with the server \d+ cycles, "
                    r"\d+ overruns$"],
     "scale": [rf"^ +4 +\d+ +{NUM} +{NUM} +{NUM} +configuration x1: ",
