@@ -4,7 +4,7 @@ what is refused and why, and whether its functions compute what OSCAT's
 documentation says, in the C engine and the interpreter.
 
     python3 benchmarks/oscat.py --oscat PATH [--engines c,vm,kernel] [--plc-st]
-                                [--cases NAME,NAME] [--json OUT.json]
+                                [--cases NAME,NAME] [--json OUT.json] [--smoke]
 
 PATH is a copy of the translation the user provides (github
 wonka929/OSCAT_OpenPLC, "OSCAT BASIC 3.33/<chapter>/build/generated_plc.st");
@@ -20,17 +20,24 @@ their MatIEC inline C).
 2. The chapters are concatenated into one library: each chapter's own
    ``program0`` and CONFIGURATION are left out, POUs and types that several
    chapters repeat identically are kept once, and POUs or types of one name
-   with different text are reported as conflicts (the first kept).  The
-   library is checked as one project; the refused POUs, and the POUs that
-   call them, are then left out until the rest checks clean, and every POU
-   left out is listed with its cause.
+   with different text are reported as conflicts (kept: the copy that
+   declares more parameters, the translation lost the VAR_INPUT of some
+   copies; else the first).  The
+   library is checked as one project, its errors counted by cause; the
+   refused POUs, and the POUs that call them, are then left out until the
+   rest checks clean, and every POU left out is listed with its cause.
 3. The cases of ``oscat_cases.py`` (inputs -> outputs written from OSCAT's
-   documentation, never from our output) run in one program that calls the
+   documentation: the translation's plc.xml texts and the examples of the
+   OSCAT BASIC manual, never from our output) run in one program that calls the
    POUs it needs from the library, in every engine given: the simulator's
    C engine and interpreter (default), and ``kernel``: the same program as
    kernel modules in the PREEMPT_RT QEMU guest (booted as the QEMU tier
    does; its prerequisites missing, the run says which).  A case whose
    call does not check is reported with the error and not run.
+
+``--smoke`` (CI, tests/unit/test_oscat_benchmark.py on a stand-in of the
+translation): steps 1 and 2 whole, step 3 with the first 3 cases in the C
+engine only.
 
 Exit status: 0 when every case agrees with its expectation in every engine
 and no POU is refused but those ``oscat_cases.KNOWN_REFUSALS`` names (the
@@ -285,7 +292,8 @@ def check_library(blocks: list[Block], tmp: Path) -> dict:
         res = _check([f], jobs=os.cpu_count() or 1)
         errs = res.diags.errors
         rounds.append({"pous": sum(b.kind != "TYPE" for b in current), "errors": len(errs),
-                       "warnings": len(res.diags.warnings)})
+                       "warnings": len(res.diags.warnings),
+                       "causes": Counter(_cause(d.message) for d in errs)})
         if not errs:
             return {"rounds": rounds, "left_out": left_out, "blocks": current,
                     "warnings": Counter(_cause(d.message) for d in res.diags.warnings)}
@@ -468,11 +476,11 @@ def run_cases(cases, lib_blocks, engines, tmp: Path, log) -> dict:
 
 def kernel_values(lib: Path, prog: Path, watch, cycles, log) -> dict:
     """The case program as kernel modules (iec2kmod gen + build) in the
-    PREEMPT_RT QEMU guest (iec2kmod.vm, as the QEMU tier boots it): loaded
+    PREEMPT_RT QEMU guest (iec2kmod.testing.vm, as the QEMU tier boots it): loaded
     with plc-manager, read with `plc-manager read --json` once the task has
     run its cycles, stopped; the kernel log must stay clean.  {path: value
     as text} like the simulator's CSV; {} when anything fails (logged)."""
-    from iec2kmod.vm import Guest
+    from iec2kmod.testing.vm import Guest
     work = Path(tempfile.mkdtemp(prefix="oscat-kernel-", dir=os.environ.get("TMPDIR")))
     tree = work / "tree"
     t0 = time.perf_counter()
@@ -572,6 +580,9 @@ def main(argv=None) -> int:
                     help="the module with CASES and KNOWN_REFUSALS (default: oscat_cases.py)")
     ap.add_argument("--no-run", action="store_true", help="check only, run no case")
     ap.add_argument("--json", type=Path, default=None, help="write every figure as JSON")
+    ap.add_argument("--smoke", action="store_true",
+                    help="CI size: the first 3 cases, in the C engine only (the chapters and "
+                         "the library are checked whole)")
     args = ap.parse_args(argv)
 
     oscat_cases = load_cases(args.cases_file)
@@ -612,8 +623,11 @@ def main(argv=None) -> int:
     log(f"== library: {npou} POUs and {len(blocks) - npou} types after removing {dups} "
         f"identical repetitions; {len(conflicts)} conflicting definitions")
     for b, first in conflicts:
+        nb, nf = _interface_size(b), _interface_size(first)
+        why = (f"kept: the copy declaring {nf} parameters; this one declares {nb}"
+               if nf != nb else "kept: the first")
         log(f"    conflict: {b.kind} {b.name} of {chapter_name(b.path)} differs from the one of "
-            f"{chapter_name(first.path)} (kept: the larger interface, else the first)")
+            f"{chapter_name(first.path)} ({why})")
     report["library"] = {"pous": npou, "types": len(blocks) - npou, "duplicates": dups,
                          "conflicts": [[b.kind, b.name, chapter_name(b.path),
                                         chapter_name(first.path)] for b, first in conflicts]}
@@ -625,6 +639,10 @@ def main(argv=None) -> int:
         log(f"  checked as one project in {len(lib['rounds'])} round(s), "
             f"{time.perf_counter() - t0:.1f} s: " +
             ", ".join(f"{r['pous']} POUs -> {r['errors']} errors" for r in lib["rounds"]))
+        if lib["rounds"][0]["errors"]:
+            log(f"  errors of the whole library by cause ({lib['rounds'][0]['errors']}):")
+            for cause, n in lib["rounds"][0]["causes"].most_common():
+                log(f"    {n:>4}  {cause[:150]}")
         clean = sum(b.kind != "TYPE" for b in lib["blocks"])
         log(f"  {clean}/{npou} POUs check clean together; left out {len(left)}:")
         known = {k.upper(): v for k, v in oscat_cases.KNOWN_REFUSALS.items()}
@@ -650,12 +668,15 @@ def main(argv=None) -> int:
             avail = engine_names() + ["kernel"]
             engines = args.engines.split(",") if args.engines else [e for e in avail
                                                                     if e != "kernel"]
+            if args.smoke:
+                cases, engines = cases[:3], engines[:1]
             for e in engines:
                 if e not in avail:
                     print(f"oscat.py: engine {e} is not one of {', '.join(avail)}",
                           file=sys.stderr)
                     return 2
-            log(f"== {len(cases)} cases from OSCAT's documentation, engines {', '.join(engines)}")
+            log(f"== {len(cases)} cases ({sum(len(c.outputs) for c in cases)} values) from "
+                f"OSCAT's documentation, engines {', '.join(engines)}")
             run = run_cases(cases, lib["blocks"], engines, tmp, log)
             agree = Counter()
             differs = {}

@@ -24,6 +24,7 @@ figures of the whole, not of the server alone.
 
     python benchmarks/serve_load.py [--vars 1000] [--writes 100] [--seconds 20]
         [--clock tcg|icount]
+    python benchmarks/serve_load.py --smoke   (CI: 250 variables, 10 writes/s, 6 s)
 """
 
 from __future__ import annotations
@@ -211,8 +212,13 @@ def main() -> None:
     ap.add_argument("--writes", type=int, default=100)
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--clock", choices=("tcg", "icount"), default="tcg")
+    ap.add_argument("--smoke", action="store_true",
+                    help="CI size: 250 variables, 10 writes/s, 6 s a run (figures not worth "
+                         "comparing)")
     a = ap.parse_args()
-    from iec2kmod.vm import Guest
+    if a.smoke:
+        a.vars, a.writes, a.seconds = 250, 10, 6.0
+    from iec2kmod.testing.vm import Guest
     from plc_manager.serve.opcua import add_user, ensure_certificate, ensure_shelf
     work = Path(tempfile.mkdtemp(prefix="serve_load-"))
     src = work / "src"
@@ -250,7 +256,9 @@ def main() -> None:
           f"{s['writes'] / s['seconds']:.0f}/s ({s['late_writes']} behind schedule)")
     for name, xs in (("poll -> client (ms)", s["lat"]), ("write -> echo notified (ms)",
                                                         s["echo_lat"])):
-        if xs:
+        if not xs:
+            print(f"{name:30} no sample (n=0)")
+        else:
             print(f"{name:30} p50 {statistics.median(xs):8.1f}  p99 {pct(xs, 0.99):8.1f}  "
                   f"max {max(xs):8.1f}  (n={len(xs)})")
     print(f"task t10: alone {al['cycles']} cycles, {al['overruns']} overruns; "

@@ -4,6 +4,7 @@ expressions over every numeric type (tests/verify/exprgen.py), any number
 of programs: the CI tier (tests/verify/test_encode_diff.py) runs 6.
 
     python3 benchmarks/verify_encode_diff.py --count 50 --seed 1 --outputs 60 --cycles 12
+    python3 benchmarks/verify_encode_diff.py --smoke   (CI: 2 programs x 20 expressions)
 
 Prints one line per program that differs (output, both values, its
 expression) and a summary: programs, expressions, cycles compared, time."""
@@ -30,7 +31,11 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--outputs", type=int, default=60)
     ap.add_argument("--cycles", type=int, default=12)
+    ap.add_argument("--smoke", action="store_true",
+                    help="CI size: 2 programs x 20 expressions, 4 cycles (seconds)")
     a = ap.parse_args(argv)
+    if a.smoke:
+        a.count, a.outputs, a.cycles = 2, 20, 4
     from iec2kmod.cli import front_end
     t0 = time.time()
     bad = cycles = 0

@@ -2,7 +2,9 @@
 """Every benchmark under benchmarks/ that runs on the host, at its smoke size
 (``--smoke``: a few cycles or projects, seconds each), so that none rots
 unseen: each must exit 0 and print its figures.  The benchmarks that boot
-the QEMU guest are in tests/qemu/test_benchmarks_smoke.py.  The smoke
+the QEMU guest are in tests/qemu/test_benchmarks_qemu_smoke.py, the ones
+whose smoke test needs a stand-in input in the file ELSEWHERE names, and a
+data module (no main block) is not a benchmark of its own.  The smoke
 sizes do not measure anything worth comparing: run the scripts without
 --smoke for the figures."""
 
@@ -46,9 +48,11 @@ HOST = {
                     r"^property verdicts .*: proved \d+"],
     "scale": [rf"^ +4 +\d+ +{NUM} +{NUM} +{NUM} +configuration x1: ",
               rf"^ +8 +\d+ +{NUM} +{NUM} +nan +not built$"],
+    "verify_encode_diff": [rf"^2 programs x 20 expressions, \d+ cycles compared, 0 differ, "
+                           rf"{NUM} s$"],
 }
 
-QEMU_ONLY = {"jitter", "netlink_flood", "netlink_fuzz", "soak", "swap_latency"}
+QEMU_ONLY = {"jitter", "netlink_flood", "netlink_fuzz", "serve_load", "soak", "swap_latency"}
 
 
 def run_smoke(script: str, *extra: str, timeout: float = 900):
@@ -66,13 +70,40 @@ def check_figures(script: str, out: str, patterns) -> None:
     assert not missing, f"{script} --smoke did not print {missing}:\n{out[-3000:]}"
 
 
+# scripts whose smoke test needs more than the script's own output (a
+# stand-in input, checks of its report): where that test is; it must run
+# the script with --smoke
+ELSEWHERE = {"mutate": "tests/unit/test_mutate_smoke.py",
+             "oscat": "tests/unit/test_oscat_benchmark.py"}
+
+
+def is_script(path: Path) -> bool:
+    """A benchmark is a script (it runs); a module without a main block is a
+    benchmark's data (benchmarks/oscat_cases.py), imported, not run."""
+    return re.search(r"^if __name__ == [\"']__main__[\"']:", path.read_text(), re.M) is not None
+
+
 def test_every_benchmark_has_a_smoke_test():
-    scripts = {p.stem for p in BENCH.glob("*.py")}
-    assert scripts == set(HOST) | QEMU_ONLY, (
-        f"benchmarks without a smoke test: {sorted(scripts - set(HOST) - QEMU_ONLY)}; "
-        f"smoke tests of missing scripts: {sorted(set(HOST) - scripts)}")
+    scripts = {p.stem for p in BENCH.glob("*.py") if is_script(p)}
+    owned = set(HOST) | QEMU_ONLY | set(ELSEWHERE)
+    assert scripts == owned, (
+        f"benchmarks without a smoke test: {sorted(scripts - owned)}; "
+        f"smoke tests of missing scripts: {sorted(owned - scripts)}")
+    assert not set(HOST) & set(ELSEWHERE) and not QEMU_ONLY & set(ELSEWHERE)
     for s in sorted(scripts):
         assert "--smoke" in (BENCH / f"{s}.py").read_text(), f"{s}.py has no --smoke option"
+    for s, test in sorted(ELSEWHERE.items()):
+        text = (ROOT / test).read_text() if (ROOT / test).is_file() else None
+        assert text is not None, f"the smoke test of {s}.py, {test}, does not exist"
+        assert f"{s}.py" in text and re.search(r"[\"']--smoke[\"']", text), \
+            f"{test} does not run benchmarks/{s}.py with --smoke"
+
+
+def test_a_data_module_is_not_a_script(tmp_path):
+    (tmp_path / "data.py").write_text('"""cases"""\nCASES = []\n')
+    (tmp_path / "run.py").write_text('import sys\n\n\nif __name__ == "__main__":\n'
+                                     '    sys.exit(0)\n')
+    assert not is_script(tmp_path / "data.py") and is_script(tmp_path / "run.py")
 
 
 @pytest.mark.execution

@@ -37,6 +37,16 @@ GUEST = {
              r"^ +command to new body running: min .* modules left \[\]$",
              r"^cycles: 2 load/stop, modules back to 0 after each; Slab first \d+",
              r"^kills: 2 SIGKILLs "],
+    "serve_load": [r"^250 variables subscribed \(100 ms\), 10 writes/s asked, "
+                   rf"{NUM} s, guest clock tcg$",
+                   rf"^server CPU: {NUM}% of one CPU$",
+                   rf"^notifications: {NUM}/s; writes done {NUM}/s \(\d+ behind schedule\)$",
+                   rf"^poll -> client \(ms\) +p50 +{NUM} +p99 +{NUM} +max +{NUM} +\(n=\d+\)$",
+                   # on a loaded machine a 6 s run may see no write come back
+                   rf"^write -> echo notified \(ms\) +(p50 +{NUM} +p99 +{NUM} +max +{NUM} "
+                   r"+\(n=\d+\)|no sample \(n=0\))$",
+                   r"^task t10: alone \d+ cycles, \d+ overruns; with the server \d+ cycles, "
+                   r"\d+ overruns$"],
     "scale": [rf"^ +4 +\d+ +{NUM} +{NUM} +{NUM} +configuration x1: ",
               rf"^  load \(command, tasks running\) min +{NUM} ",
               rf"^  stop \(command, all removed\) +min +{NUM} "],

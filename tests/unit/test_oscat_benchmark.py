@@ -3,7 +3,9 @@ of OSCAT's OpenPLC translation (chapters with build/generated_plc.st, each
 with its own program0 and Config0, POUs repeated across chapters, a copy
 that lost its VAR_INPUT, a POU outside ed.2 and its caller).  No OSCAT
 source is used: CI has no copy of it; the real run is
-``python3 benchmarks/oscat.py --oscat PATH``."""
+``python3 benchmarks/oscat.py --oscat PATH``.  The smoke run of the script
+(tests/benchmarks/test_benchmarks_smoke.py names this file for it) is
+test_smoke_run_checks_everything_and_runs_three_cases_in_c."""
 
 from __future__ import annotations
 
@@ -206,7 +208,10 @@ def test_standin_library_checks_and_cases_agree_in_every_engine(tmp_path):
     assert "== library: 6 POUs and 2 types after removing 1 identical repetitions; " \
            "1 conflicting definitions" in lines, out
     assert "    conflict: FUNCTION HALF of OSCAT BASIC 3.33-1 First differs from the one of " \
-           "OSCAT BASIC 3.33-2 Second (kept: the larger interface, else the first)" in lines, out
+           "OSCAT BASIC 3.33-2 Second (kept: the copy declaring 1 parameters; this one " \
+           "declares 0)" in lines, out
+    assert "  errors of the whole library by cause (1):" in lines, out
+    assert "       1  BYTE_TO_STRING takes 1 argument, 2 given" in lines, out
     assert "  4/6 POUs check clean together; left out 2:" in lines, out
     assert "    FUNCTION_BLOCK HEXOF (OSCAT BASIC 3.33-1 First): BYTE_TO_STRING takes 1 " \
            "argument, 2 given" in lines, out
@@ -266,3 +271,36 @@ def test_plc_st_with_matiec_inline_c_checks_like_generated_plc_st(tmp_path):
     assert any("OSCAT BASIC 3.33-1 First" in s and "6/7   POUs accepted  (1 errors" in s
                for s in lines), out
     assert "  total: 11/12 POUs accepted, 1 refused" in lines, out
+
+
+def test_smoke_run_checks_everything_and_runs_three_cases_in_c(tmp_path):
+    top = _standin(tmp_path)
+    cases = tmp_path / "cases.py"
+    cases.write_text(CASES.replace("WANT_QUARTER", "10").replace(
+        "KNOWN_REFUSALS", 'CASES.append(Case("TWICE2", "TWICE", [("TWICE(2)", "INT", 5)], "x"))'
+        "\nKNOWN_REFUSALS"))
+    rc, out, err = _run("--oscat", str(top), "--cases-file", str(cases), "--smoke")
+    assert rc == 0, out + err
+    lines = out.splitlines()
+    assert "  total: 9/10 POUs accepted, 1 refused" in lines, out
+    assert "  4/6 POUs check clean together; left out 2:" in lines, out
+    # the fourth case (a wrong expectation) is not run, nor any engine but C
+    assert "== 3 cases (3 values) from OSCAT's documentation, engines c" in lines, out
+    assert "  c: 3/3 cases agree with the documentation (0 not run)" in lines, out
+    assert not any(s.startswith(("  vm:", "  interp:")) for s in lines), out
+
+
+def test_the_case_table_names_each_case_once_and_repeats_no_call():
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import oscat_cases
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    names = [c.name for c in oscat_cases.CASES]
+    assert len(names) == len(set(names)), sorted(n for n in names if names.count(n) > 1)
+    calls = [o[0].replace(" ", "").upper() for c in oscat_cases.CASES if c.kind == "F"
+             for o in c.outputs]
+    assert len(calls) == len(set(calls)), sorted(c for c in calls if calls.count(c) > 1)
+    assert all(c.doc for c in oscat_cases.CASES)
+    assert oscat_cases.t("T#1d2h24m") == (26 * 3600 + 24 * 60) * 10**9
+    assert oscat_cases.d(2008, 2, 29) == 1204243200 and oscat_cases.tod(12, 6) == 43560000
