@@ -117,10 +117,15 @@ def build_parser() -> argparse.ArgumentParser:
                         "large' (default 4096)")
     x = sub.add_parser("export", help="write a model of a configuration for another tool")
     x.add_argument("files", nargs="+", metavar="PROJECT", help="source files or directories")
-    x.add_argument("--uppaal", action="store_true", required=True,
-                   help="a network of UPPAAL timed automata (XML) with the properties as "
-                        "queries")
-    x.add_argument("-o", "--output", required=True, metavar="MODEL.xml")
+    xf = x.add_mutually_exclusive_group(required=True)
+    xf.add_argument("--uppaal", action="store_true",
+                    help="a network of UPPAAL timed automata (XML) with the properties as "
+                         "queries")
+    xf.add_argument("--st", action="store_true",
+                    help="the equivalent textual project (ST, IL, textual SFC) of a PLCopen "
+                         "XML project; -o FILE or standard output")
+    x.add_argument("-o", "--output", metavar="OUT",
+                   help="the model (MODEL.xml, required with --uppaal) or the text (--st)")
     x.add_argument("--property", "-p", action="append", default=[], metavar="EXPR",
                    help="also export this property as a query (repeatable)")
     x.add_argument("--instance", metavar="PATH",
@@ -236,6 +241,9 @@ def cmd_sim(args) -> int:
             print(f"iec2kmod: runtime error: {fault} (task {task}, t={t / 1e9:.6f} s); the "
                   f"task is stopped", file=sys.stderr)
             continue
+        if str(file).lower().endswith(".xml"):      # the XML's line (issue 28)
+            from .plcopen import remap_location
+            file, line = remap_location(file, line)
         print(f"{file}:{line}: runtime error: {fault} in {pou} (task {task}, "
               f"t={t / 1e9:.6f} s); the task is stopped", file=sys.stderr)
     if args.csv:
@@ -292,6 +300,12 @@ def cmd_build(args) -> int:
 
 
 def cmd_export(args) -> int:
+    if args.st:
+        from .plcopen.export import run_export_st
+        return run_export_st(args)
+    if not args.output:
+        print("iec2kmod: error: export --uppaal needs -o MODEL.xml", file=sys.stderr)
+        return EXIT_USAGE
     from .verify.cli import run_export
     return run_export(args)
 
@@ -307,7 +321,7 @@ COMMANDS = {"export": cmd_export, "verify": cmd_verify, "check": cmd_check, "sim
 # the third-party modules of the optional features: (distribution, extra of
 # pyproject.toml); check, gen, build and sim need none of them
 OPTIONAL_MODULES = {"z3": ("z3-solver", "verify"), "docker": ("docker", "container"),
-                    "requests": ("requests", "container")}
+                    "requests": ("requests", "container"), "lxml": ("lxml", "plcopen")}
 
 
 def main(argv=None) -> int:

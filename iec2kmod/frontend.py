@@ -53,7 +53,9 @@ def collect_files(paths, ignored=None) -> list[str]:
     out = []
     for p in paths:
         path = Path(p)
-        if path.is_dir():
+        if path.is_dir() and (path / "plc.xml").is_file():
+            out.append(str(path / "plc.xml"))   # a Beremiz/OpenPLC project (issue 28)
+        elif path.is_dir():
             files = sorted(f for f in path.rglob("*") if f.is_file())
             found = [str(f) for f in files if f.suffix.lower() in SOURCE_SUFFIXES]
             if ignored is not None:
@@ -65,8 +67,9 @@ def collect_files(paths, ignored=None) -> list[str]:
                 raise InputError(f"{p}: no .st, .il or .iec files in this directory")
             out += found
         elif path.is_file():
-            if path.suffix.lower() not in SOURCE_SUFFIXES:
-                raise InputError(f"{p}: not a source file (sources are .st, .il or .iec files)")
+            if path.suffix.lower() not in SOURCE_SUFFIXES + (".xml",):
+                raise InputError(f"{p}: not a source file (sources are .st, .il or .iec files, "
+                                 f"or a PLCopen .xml project)")
             out.append(str(path))
         elif path.exists():
             raise InputError(f"{p}: not a regular file")
@@ -78,6 +81,9 @@ def collect_files(paths, ignored=None) -> list[str]:
 
 
 def _read(path: str) -> SourceFile:
+    if path.lower().endswith(".xml"):           # PLCopen TC6 XML: iec2kmod/plcopen
+        from .plcopen import read_xml
+        return read_xml(path)
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
@@ -318,6 +324,9 @@ def run(paths, use_cache: bool = True, jobs: int | None = None,
     """Parses and checks a project: every diagnostic is collected; strict:
     the warnings of diagnostics.STRICT_RULES are errors."""
     result = _run(paths, use_cache, jobs)
+    if any(str(p).lower().endswith(".xml") for p in collect_files(paths)):
+        from .plcopen import remap            # generated lines -> the XML's (issue 28)
+        result.diags.items = [remap(d) for d in result.diags.items]
     if strict:
         result.diags.make_strict()
         if result.diags.errors:
@@ -333,6 +342,13 @@ def _run(paths, use_cache, jobs) -> FrontEndResult:
     timings["read"] = time.perf_counter() - t0
     notes = [Diagnostic(p, 1, 1, "note", "ignored: not a source file (sources are .st, .il "
                                          "or .iec files)") for p in ignored]
+    if any(s.path.lower().endswith(".xml") for s in sources):
+        from .plcopen import xml_diagnostics
+        notes += xml_diagnostics([s.path for s in sources])
+        if any(d.severity == "error" for d in notes):
+            diags = Diagnostics()
+            diags.items = notes
+            return FrontEndResult([], diags, None, timings)
 
     key = None
     if use_cache:

@@ -1,0 +1,702 @@
+"""TC6 XML -> textual IEC 61131-3, with a source map (see __init__.py).
+
+The XSD: PLCopen publishes tc6_xml_v201.xsd; Beremiz ships a copy
+(plcopen/tc6_xml_v201.xsd) in a GPL repository without a licence header of
+its own, and PLCopen's download comes with its own terms.  Neither is
+vendored: validation uses the file $IEC2KMOD_TC6_XSD names (or the one of a
+Beremiz checkout, $IEC2KMOD_BEREMIZ/plcopen/tc6_xml_v201.xsd) when there is
+one, and otherwise only the reader's own structural checks, which name the
+element and its line for everything it reads.
+
+TC6 2.0 as Beremiz writes it (namespace tc6_0201 with xhtml:p CDATA bodies,
+the older namespaces tc6_0200 and tc6.xsd) is read the same way; only the
+2.01 namespace is validated against the 2.01 XSD."""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..diagnostics import Diagnostic, SourceFile
+
+NAMESPACES = ("http://www.plcopen.org/xml/tc6_0201", "http://www.plcopen.org/xml/tc6_0200",
+              "http://www.plcopen.org/xml/tc6.xsd")
+XSD_NS = "http://www.plcopen.org/xml/tc6_0201"
+
+ELEMENTARY = ("BOOL", "BYTE", "WORD", "DWORD", "LWORD", "SINT", "INT", "DINT", "LINT",
+              "USINT", "UINT", "UDINT", "ULINT", "REAL", "LREAL", "TIME", "DATE", "DT", "TOD")
+VAR_SECTIONS = {"inputVars": "VAR_INPUT", "outputVars": "VAR_OUTPUT",
+                "inOutVars": "VAR_IN_OUT", "localVars": "VAR", "tempVars": "VAR_TEMP",
+                "externalVars": "VAR_EXTERNAL", "globalVars": "VAR_GLOBAL"}
+POU_KW = {"function": "FUNCTION", "functionBlock": "FUNCTION_BLOCK", "program": "PROGRAM"}
+
+
+class XmlRefusal(Exception):
+    """Something of the XML this reader cannot translate: element, line."""
+
+    def __init__(self, el, message):
+        super().__init__(message)
+        self.line = getattr(el, "sourceline", None) or 1
+        self.message = message
+
+
+@dataclass
+class Translation:
+    path: str
+    text: str = ""
+    # generated line (1-based) - 1 -> (xml line, column shift or None, context)
+    smap: list = field(default_factory=list)
+    diags: list = field(default_factory=list)
+    xml_lines: list = field(default_factory=list)
+
+
+_TRANSLATIONS: dict[str, Translation] = {}
+
+
+def is_xml(path) -> bool:
+    return str(path).lower().endswith(".xml")
+
+
+def _local(el) -> str:
+    tag = el.tag
+    if not isinstance(tag, str):
+        return ""
+    return tag.rsplit("}", 1)[-1]
+
+
+def _kids(el, name=None):
+    return [c for c in el if isinstance(c.tag, str) and (name is None or _local(c) == name)]
+
+
+def _kid(el, name):
+    for c in el:
+        if isinstance(c.tag, str) and _local(c) == name:
+            return c
+    return None
+
+
+def _schema_path():
+    p = os.environ.get("IEC2KMOD_TC6_XSD")
+    if p:
+        return p
+    b = os.environ.get("IEC2KMOD_BEREMIZ")
+    if b and Path(b, "plcopen", "tc6_xml_v201.xsd").is_file():
+        return str(Path(b, "plcopen", "tc6_xml_v201.xsd"))
+    return None
+
+
+_SCHEMAS: dict = {}
+
+
+def _validate(tree, tr: Translation) -> bool:
+    """Validates against the 2.01 XSD when one is configured; False when
+    the schema found errors (each reported with its element and line)."""
+    from lxml import etree
+    xsd = _schema_path()
+    root = tree.getroot()
+    ns = root.tag[1:].split("}")[0] if root.tag.startswith("{") else ""
+    if xsd is None or ns != XSD_NS:
+        return True
+    try:
+        schema = _SCHEMAS.get(xsd)
+        if schema is None:
+            schema = _SCHEMAS[xsd] = etree.XMLSchema(etree.parse(xsd))
+    except (OSError, etree.XMLSchemaParseError, etree.XMLSyntaxError) as exc:
+        _diag(tr, 1, "error", f"cannot load the TC6 schema {xsd}: {exc}")
+        return False
+    if schema.validate(tree):
+        return True
+    for e in schema.error_log:
+        msg = re.sub(r"\{[^}]*\}", "", e.message)
+        _diag(tr, e.line or 1, "error", f"TC6 schema: {msg}")
+    return False
+
+
+def _diag(tr, line, severity, message, col=1):
+    text = tr.xml_lines[line - 1] if 0 < line <= len(tr.xml_lines) else ""
+    tr.diags.append(Diagnostic(tr.path, line, col, severity, message, text))
+
+
+def translate(path: str) -> Translation:
+    """The textual project of a TC6 XML file, with its map and diagnostics."""
+    from lxml import etree
+    tr = Translation(path)
+    data = Path(path).read_bytes()
+    try:
+        txt = data.decode("utf-8")
+    except UnicodeDecodeError:
+        txt = data.decode("latin-1")
+    tr.xml_lines = txt.split("\n")
+    try:
+        parser = etree.XMLParser(remove_blank_text=False, resolve_entities=False,
+                                 no_network=True, huge_tree=True)
+        tree = etree.parse(path, parser)
+    except etree.XMLSyntaxError as exc:
+        line, col = (exc.position if exc.position else (1, 1))
+        _diag(tr, line or 1, "error", f"not well-formed XML: {exc.msg}", col=col or 1)
+        return tr
+    root = tree.getroot()
+    ns = root.tag[1:].split("}")[0] if root.tag.startswith("{") else ""
+    if _local(root) != "project" or ns not in NAMESPACES:
+        _diag(tr, root.sourceline or 1, "error",
+              f"not a PLCopen TC6 project: root element <{_local(root)}> in namespace "
+              f"'{ns}' (expected <project> in {NAMESPACES[0]})")
+        return tr
+    if not _validate(tree, tr):
+        return tr
+    gen = _Generator(tr)
+    try:
+        gen.project(root)
+    except XmlRefusal as exc:
+        _diag(tr, exc.line, "error", exc.message)
+    for name, line in gen.vendor.items():
+        _diag(tr, line, "note", f"ignored: vendor data '{name}' (addData), no effect on execution")
+    tr.text = "\n".join(gen.lines) + "\n"
+    tr.smap = gen.smap
+    return tr
+
+
+def read_xml(path: str) -> SourceFile:
+    """The generated text as the SourceFile of `path`; the translation is
+    kept for remap() and xml_diagnostics()."""
+    from ..frontend import InputError
+    try:
+        tr = translate(path)
+    except OSError as exc:
+        raise InputError(f"{path}: {exc.strerror or exc}") from None
+    except ModuleNotFoundError as exc:
+        raise InputError(f"{path}: reading PLCopen XML needs lxml, which is not installed: "
+                         f"pip install 'iec2kmod[plcopen]' ({exc})") from None
+    _TRANSLATIONS[path] = tr
+    return SourceFile(path, tr.text if not any(d.severity == "error" for d in tr.diags) else "")
+
+
+def xml_diagnostics(paths) -> list:
+    out = []
+    for p in paths:
+        tr = _TRANSLATIONS.get(p)
+        if tr is not None:
+            out += tr.diags
+    return out
+
+
+def remap(d: Diagnostic) -> Diagnostic:
+    tr = _TRANSLATIONS.get(d.path)
+    if tr is None or not tr.smap or d in tr.diags:
+        return d
+    i = min(max(d.line, 1), len(tr.smap)) - 1
+    xml_line, shift, ctx = tr.smap[i]
+    col = d.col + shift if shift is not None else 1
+    msg = d.message + (f" ({ctx})" if ctx else "")
+    text = tr.xml_lines[xml_line - 1] if 0 < xml_line <= len(tr.xml_lines) else ""
+    return Diagnostic(d.path, xml_line, max(col, 1), d.severity, msg, text)
+
+
+def remap_location(path, line):
+    tr = _TRANSLATIONS.get(path)
+    if tr is None or not tr.smap or not line:
+        return path, line
+    return path, tr.smap[min(max(int(line), 1), len(tr.smap)) - 1][0]
+
+
+def to_text(path: str):
+    """`export --st`: the textual project and the XML's diagnostics."""
+    tr = translate(path)
+    return tr.text, tr.diags
+
+
+# ----------------------------------------------------------------- generator
+
+def _formatted(el):
+    """(text, xml line of its first character, column shift of that line)
+    of a formattedText element (an xhtml:p CDATA, or plain text)."""
+    if el is None:
+        return "", 1, 0
+    p = None
+    for c in el:
+        if isinstance(c.tag, str) and _local(c) == "p":
+            p = c
+            break
+    node = p if p is not None else el
+    text = "".join(node.itertext())
+    return text, node.sourceline or 1, None
+
+
+class _Generator:
+    def __init__(self, tr: Translation):
+        self.tr = tr
+        self.lines: list[str] = []
+        self.smap: list = []
+        self.vendor: dict[str, int] = {}
+        self.pou_transitions = {}
+
+    # -- output
+    def emit(self, text: str, el, ctx=None):
+        line = getattr(el, "sourceline", None) or (el if isinstance(el, int) else 1)
+        for part in text.split("\n"):
+            self.lines.append(part)
+            self.smap.append((line, None, ctx))
+
+    def emit_body(self, el, ctx=None, prefix="", suffix=""):
+        """The text of a formattedText element, each line mapped to its own
+        line of the XML (exact columns after the first line)."""
+        text, line, _ = _formatted(el)
+        first_shift = 0
+        raw = self.tr.xml_lines[line - 1] if 0 < line <= len(self.tr.xml_lines) else ""
+        k = raw.find("<![CDATA[")
+        if k >= 0:
+            first_shift = k + len("<![CDATA[")
+        parts = text.split("\n")
+        for i, part in enumerate(parts):
+            pre = prefix if i == 0 else ""
+            post = suffix if i == len(parts) - 1 else ""
+            shift = (first_shift if i == 0 else 0) - len(pre)
+            self.lines.append(pre + part + post)
+            self.smap.append((line + i, shift, ctx))
+
+    def note_vendor(self, el):
+        for d in el.iter():
+            if isinstance(d.tag, str) and _local(d) == "data":
+                self.vendor.setdefault(d.get("name", "?"), d.sourceline or 1)
+
+    def doc(self, el, indent=""):
+        d = _kid(el, "documentation")
+        if d is None:
+            return
+        text = "".join(d.itertext()).strip()
+        if text:
+            text = text.replace("(*", "( *").replace("*)", "* )")
+            self.emit(f"{indent}(* {text} *)", d)
+
+    # -- project
+    def project(self, root):
+        for a in root.iter():
+            if isinstance(a.tag, str) and _local(a) == "addData":
+                self.note_vendor(a)
+        types = _kid(root, "types")
+        if types is None:
+            raise XmlRefusal(root, "element <project> has no <types>")
+        dts = _kid(types, "dataTypes")
+        if dts is not None and _kids(dts, "dataType"):
+            self.emit("TYPE", dts)
+            for dt in _kids(dts, "dataType"):
+                self.data_type(dt)
+            self.emit("END_TYPE", dts)
+        pous = _kid(types, "pous")
+        for pou in _kids(pous, "pou") if pous is not None else []:
+            self.pou(pou)
+        inst = _kid(root, "instances")
+        confs = _kid(inst, "configurations") if inst is not None else None
+        for c in _kids(confs, "configuration") if confs is not None else []:
+            self.configuration(c)
+
+    # -- types and values
+    def type_of(self, tel, where):
+        """The textual type of a <type>/<baseType> element."""
+        kids = _kids(tel)
+        if len(kids) != 1:
+            raise XmlRefusal(tel, f"element <{_local(tel)}> of {where} must hold one type element")
+        t = kids[0]
+        name = _local(t)
+        if name in ELEMENTARY:
+            return name
+        if name in ("string", "wstring"):
+            kw = name.upper()
+            n = t.get("length")
+            return f"{kw}[{n}]" if n else kw
+        if name == "derived":
+            return t.get("name")
+        if name == "array":
+            dims = [f"{d.get('lower')}..{d.get('upper')}" for d in _kids(t, "dimension")]
+            base = _kid(t, "baseType")
+            if not dims or base is None:
+                raise XmlRefusal(t, f"<array> of {where} needs <dimension> and <baseType>")
+            return f"ARRAY [{', '.join(dims)}] OF {self.type_of(base, where)}"
+        if name in ("subrangeSigned", "subrangeUnsigned"):
+            r = _kid(t, "range")
+            base = _kid(t, "baseType")
+            if r is None or base is None:
+                raise XmlRefusal(t, f"<{name}> of {where} needs <range> and <baseType>")
+            return f"{self.type_of(base, where)} ({r.get('lower')}..{r.get('upper')})"
+        if name == "enum":
+            vals = _kid(t, "values")
+            names = [v.get("name") for v in _kids(vals, "value")] if vals is not None else []
+            if not names:
+                raise XmlRefusal(t, f"<enum> of {where} has no <value>")
+            return "(" + ", ".join(names) + ")"
+        if name == "struct":
+            raise XmlRefusal(t, f"<struct> of {where}: a structure type is declared in "
+                                f"<dataTypes>, not inline")
+        raise XmlRefusal(t, f"type element <{name}> of {where} is not supported")
+
+    def value(self, vel):
+        """The textual initial value of an <initialValue> (or value) element."""
+        kids = _kids(vel)
+        if len(kids) != 1:
+            raise XmlRefusal(vel, f"element <{_local(vel)}> must hold one value element")
+        v = kids[0]
+        name = _local(v)
+        if name == "simpleValue":
+            val = v.get("value")
+            if val is None:
+                raise XmlRefusal(v, "<simpleValue> has no attribute 'value'")
+            return val
+        if name == "arrayValue":
+            items = []
+            for it in _kids(v, "value"):
+                inner = self.value(it)
+                rep = it.get("repetitionValue")
+                items.append(f"{rep}({inner})" if rep and rep != "1" else inner)
+            return "[" + ", ".join(items) + "]"
+        if name == "structValue":
+            items = [f"{it.get('member')} := {self.value(it)}" for it in _kids(v, "value")]
+            return "(" + ", ".join(items) + ")"
+        raise XmlRefusal(v, f"value element <{name}> is not supported")
+
+    def data_type(self, dt):
+        name = dt.get("name")
+        base = _kid(dt, "baseType")
+        if base is None:
+            raise XmlRefusal(dt, f"<dataType> '{name}' has no <baseType>")
+        ctx = f"dataType '{name}'"
+        init = _kid(dt, "initialValue")
+        ini = f" := {self.value(init)}" if init is not None else ""
+        kids = _kids(base)
+        if len(kids) == 1 and _local(kids[0]) == "struct":
+            self.emit(f"    {name} : STRUCT", dt, ctx)
+            for v in _kids(kids[0], "variable"):
+                self.var_decl(v, "        ", f"member '{v.get('name')}' of {ctx}")
+            self.emit("    END_STRUCT;", dt, ctx)
+            return
+        self.emit(f"    {name} : {self.type_of(base, ctx)}{ini};", dt, ctx)
+
+    def var_decl(self, v, indent, ctx=None):
+        name = v.get("name")
+        tel = _kid(v, "type")
+        if tel is None:
+            raise XmlRefusal(v, f"<variable> '{name}' has no <type>")
+        ctx = ctx or f"variable '{name}'"
+        at = f" AT {v.get('address')}" if v.get("address") else ""
+        init = _kid(v, "initialValue")
+        ini = f" := {self.value(init)}" if init is not None else ""
+        self.doc(v, indent)
+        self.emit(f"{indent}{name}{at} : {self.type_of(tel, ctx)}{ini};", v, ctx)
+
+    def var_list(self, vl, keyword, indent="    "):
+        quals = [q for a, q in (("constant", "CONSTANT"), ("retain", "RETAIN"),
+                                ("nonretain", "NON_RETAIN")) if vl.get(a) in ("true", "1")]
+        if vl.get("persistent") in ("true", "1"):
+            raise XmlRefusal(vl, f"<{_local(vl)} persistent=\"true\">: PERSISTENT variables are "
+                                 f"not supported")
+        self.emit(f"{indent}{' '.join([keyword] + quals)}", vl)
+        for v in _kids(vl, "variable"):
+            self.var_decl(v, indent + "    ")
+        self.emit(f"{indent}END_VAR", vl)
+
+    # -- POUs
+    def pou(self, pou):
+        name = pou.get("name")
+        kind = pou.get("pouType")
+        kw = POU_KW.get(kind)
+        if kw is None:
+            raise XmlRefusal(pou, f"<pou> '{name}': pouType '{kind}' is not supported")
+        ctx = f"pou '{name}'"
+        iface = _kid(pou, "interface")
+        head = f"{kw} {name}"
+        if kind == "function":
+            rt = _kid(iface, "returnType") if iface is not None else None
+            if rt is None:
+                raise XmlRefusal(pou, f"function '{name}' has no <returnType>")
+            head += f" : {self.type_of(rt, ctx)}"
+        self.doc(pou)
+        self.emit(head, pou, ctx)
+        for sec in _kids(iface) if iface is not None else []:
+            s = _local(sec)
+            if s in VAR_SECTIONS:
+                self.var_list(sec, VAR_SECTIONS[s])
+            elif s == "accessVars":
+                raise XmlRefusal(sec, f"<accessVars> in {ctx}: access paths are declared in a "
+                                      f"configuration")
+            elif s not in ("returnType", "addData", "documentation"):
+                raise XmlRefusal(sec, f"element <{s}> in the interface of {ctx} is not supported")
+        self.pou_transitions = {}
+        trs = _kid(pou, "transitions")
+        for t in _kids(trs, "transition") if trs is not None else []:
+            self.pou_transitions[t.get("name")] = t
+        body = _kid(pou, "body")
+        if body is None:
+            raise XmlRefusal(pou, f"{ctx} has no <body>")
+        lang = self.body(body, ctx, pou)
+        acts = _kid(pou, "actions")
+        actions = _kids(acts, "action") if acts is not None else []
+        if actions and lang != "SFC":
+            raise XmlRefusal(actions[0], f"action '{actions[0].get('name')}' of {ctx}: actions "
+                                         f"of a {lang} body are not supported (only SFC bodies "
+                                         f"have actions)")
+        for a in actions:
+            self.action(a, f"action '{a.get('name')}' of {ctx}")
+        self.emit(f"END_{kw}", pou, ctx)
+        self.emit("", pou)
+
+    def body(self, body, ctx, pou):
+        langs = [k for k in _kids(body) if _local(k) in ("ST", "IL", "FBD", "LD", "SFC")]
+        if len(langs) != 1:
+            raise XmlRefusal(body, f"<body> of {ctx} must hold one of <ST>, <IL>, <FBD>, <LD>, "
+                                   f"<SFC>")
+        b = langs[0]
+        lang = _local(b)
+        if lang in ("ST", "IL"):
+            self.emit_body(b, ctx)
+        elif lang == "SFC":
+            self.sfc(b, ctx)
+        else:
+            raise XmlRefusal(b, f"<{lang}> body of {ctx}: {lang} is not supported yet "
+                                f"(ST, IL and SFC bodies are)")
+        return lang
+
+    def action(self, a, ctx):
+        body = _kid(a, "body")
+        if body is None:
+            raise XmlRefusal(a, f"{ctx} has no <body>")
+        b = [k for k in _kids(body) if _local(k) in ("ST", "IL", "FBD", "LD", "SFC")]
+        if len(b) != 1 or _local(b[0]) not in ("ST", "IL"):
+            raise XmlRefusal(body, f"{ctx}: only ST and IL action bodies are supported")
+        self.emit(f"ACTION {a.get('name')}:", a, ctx)
+        self.emit_body(b[0], ctx)
+        self.emit("END_ACTION", a, ctx)
+
+    # -- SFC
+    def sfc(self, sfc, ctx):
+        els = {}
+        refs = {}                       # localId -> elements whose input names it
+        for e in _kids(sfc):
+            lid = e.get("localId")
+            if lid is not None:
+                els[lid] = e
+        for e in _kids(sfc):
+            for cin in _kids(e, "connectionPointIn"):
+                for c in _kids(cin, "connection"):
+                    refs.setdefault(c.get("refLocalId"), []).append(e)
+        steps = [e for e in _kids(sfc) if _local(e) == "step"]
+        known = ("step", "transition", "selectionDivergence", "selectionConvergence",
+                 "simultaneousDivergence", "simultaneousConvergence", "jumpStep",
+                 "actionBlock", "comment", "addData", "documentation")
+        for e in _kids(sfc):
+            if _local(e) not in known:
+                raise XmlRefusal(e, f"element <{_local(e)}> (localId {e.get('localId')}) in the "
+                                    f"SFC body of {ctx}: FBD/LD elements in SFC are not "
+                                    f"supported yet")
+
+        def inputs(e):
+            out = []
+            for cin in _kids(e, "connectionPointIn"):
+                for c in _kids(cin, "connection"):
+                    r = els.get(c.get("refLocalId"))
+                    if r is None:
+                        raise XmlRefusal(c, f"connection to localId {c.get('refLocalId')}, "
+                                            f"which is not in the SFC body of {ctx}")
+                    out.append(r)
+            return out
+
+        def sources(e, seen=()):
+            out = []
+            for r in inputs(e):
+                k = _local(r)
+                if k == "step":
+                    out.append(r.get("name"))
+                elif k in ("selectionDivergence", "simultaneousConvergence"):
+                    out += sources(r)
+                else:
+                    raise XmlRefusal(r, f"<{k}> (localId {r.get('localId')}) before transition "
+                                        f"localId {e.get('localId')} in {ctx}")
+            return out
+
+        def targets(e):
+            out = []
+            for r in refs.get(e.get("localId"), []):
+                k = _local(r)
+                if k == "step":
+                    out.append(r.get("name"))
+                elif k == "jumpStep":
+                    out.append(r.get("targetName"))
+                elif k in ("selectionConvergence", "simultaneousDivergence"):
+                    out += targets(r)
+                else:
+                    raise XmlRefusal(r, f"<{k}> (localId {r.get('localId')}) after transition "
+                                        f"localId {e.get('localId')} in {ctx}")
+            return out
+
+        inline = []                      # (name, body element, ctx)
+        for s in steps:
+            name = s.get("name")
+            kw = "INITIAL_STEP" if s.get("initialStep") in ("true", "1") else "STEP"
+            sctx = f"step localId {s.get('localId')} '{name}'"
+            self.emit(f"    {kw} {name}:", s, sctx)
+            for blk in refs.get(s.get("localId"), []):
+                if _local(blk) != "actionBlock":
+                    continue
+                for a in _kids(blk, "action"):
+                    actx = f"block localId {blk.get('localId')} '{name}'"
+                    q = a.get("qualifier", "N")
+                    args = [q]
+                    if a.get("duration"):
+                        args.append(a.get("duration"))
+                    if a.get("indicator"):
+                        args.append(a.get("indicator"))
+                    ref = _kid(a, "reference")
+                    inl = _kid(a, "inline")
+                    if ref is not None:
+                        an = ref.get("name")
+                    elif inl is not None:
+                        an = f"{name}_INLINE{len(inline) + 1}"
+                        inline.append((an, inl, actx))
+                    else:
+                        raise XmlRefusal(a, f"action of {actx} has neither <reference> nor "
+                                            f"<inline>")
+                    self.emit(f"        {an}({', '.join(args)});", a, actx)
+            self.emit("    END_STEP", s, sctx)
+        trans = [e for e in _kids(sfc) if _local(e) == "transition"]
+
+        def pos(e):
+            p = _kid(e, "position")
+            try:
+                return (float(p.get("x")), float(p.get("y"))) if p is not None else (0, 0)
+            except (TypeError, ValueError):
+                return (0, 0)
+        # a selection divergence is tested left to right (IEC 61131-3 2.6.3):
+        # the textual order gives the priority where the XML has none
+        for t in sorted(trans, key=pos):
+            tctx = f"transition localId {t.get('localId')}"
+            src, dst = sources(t), targets(t)
+            if not src or not dst:
+                raise XmlRefusal(t, f"{tctx} of {ctx} is not connected "
+                                    f"({'no step before it' if not src else 'no step after it'})")
+            prio = f" (PRIORITY := {t.get('priority')})" if t.get("priority") else ""
+            fs = src[0] if len(src) == 1 else "(" + ", ".join(src) + ")"
+            ts = dst[0] if len(dst) == 1 else "(" + ", ".join(dst) + ")"
+            head = f"    TRANSITION{prio} FROM {fs} TO {ts}"
+            cond = _kid(t, "condition")
+            kids = _kids(cond) if cond is not None else []
+            if len(kids) != 1:
+                raise XmlRefusal(t, f"{tctx} of {ctx} has no <condition>")
+            c = kids[0]
+            if _local(c) == "inline":
+                lang = [k for k in _kids(c) if _local(k) in ("ST", "IL", "FBD", "LD")]
+                if len(lang) != 1 or _local(lang[0]) not in ("ST", "IL"):
+                    raise XmlRefusal(c, f"inline condition of {tctx} in {ctx}: only ST and IL "
+                                        f"are supported")
+                self.emit(head, t, tctx)
+                if _local(lang[0]) == "ST":
+                    text = _formatted(lang[0])[0].strip()
+                    if text.endswith(";"):
+                        self.emit_body(lang[0], tctx, prefix="        := ")
+                    else:
+                        self.emit_body(lang[0], tctx, prefix="        := ", suffix=";")
+                else:
+                    self.emit("        :", t, tctx)
+                    self.emit_body(lang[0], tctx)
+            elif _local(c) == "reference":
+                rn = c.get("name")
+                td = self.pou_transitions.get(rn)
+                if td is None:
+                    raise XmlRefusal(c, f"{tctx} of {ctx} names transition '{rn}', which the "
+                                        f"POU does not declare")
+                body = _kid(td, "body")
+                lang = [k for k in _kids(body) if _local(k) in ("ST", "IL", "FBD", "LD")] \
+                    if body is not None else []
+                if len(lang) != 1 or _local(lang[0]) not in ("ST", "IL"):
+                    raise XmlRefusal(td, f"transition '{rn}' of {ctx}: only ST and IL bodies "
+                                         f"are supported")
+                rctx = f"transition '{rn}'"
+                self.emit(head, t, tctx)
+                if _local(lang[0]) == "ST":
+                    text = _formatted(lang[0])[0].strip()
+                    m = re.match(rf"^(?:{re.escape(rn)}\s*)?:=", text, re.I)
+                    if not m:
+                        raise XmlRefusal(lang[0], f"ST body of transition '{rn}' in {ctx} must "
+                                                  f"be ':= condition;'")
+                    self.emit_body(lang[0], rctx)
+                else:
+                    self.emit("        :", td, rctx)
+                    self.emit_body(lang[0], rctx)
+            else:
+                raise XmlRefusal(c, f"condition <{_local(c)}> of {tctx} in {ctx}: a wired "
+                                    f"(FBD/LD) condition is not supported yet")
+            self.emit("    END_TRANSITION", t, tctx)
+        for an, inl, actx in inline:
+            lang = [k for k in _kids(inl) if _local(k) in ("ST", "IL", "FBD", "LD")]
+            if len(lang) != 1 or _local(lang[0]) not in ("ST", "IL"):
+                raise XmlRefusal(inl, f"inline action of {actx} in {ctx}: only ST and IL are "
+                                      f"supported")
+            self.emit(f"    ACTION {an}:", inl, actx)
+            self.emit_body(lang[0], actx)
+            self.emit("    END_ACTION", inl, actx)
+
+    # -- configurations
+    def configuration(self, c):
+        name = c.get("name")
+        self.doc(c)
+        self.emit(f"CONFIGURATION {name}", c, f"configuration '{name}'")
+        for g in _kids(c, "globalVars"):
+            self.var_list(g, "VAR_GLOBAL")
+        for r in _kids(c, "resource"):
+            self.resource(r)
+        acc = _kid(c, "accessVars")
+        if acc is not None and _kids(acc, "accessVariable"):
+            self.emit("    VAR_ACCESS", acc)
+            for a in _kids(acc, "accessVariable"):
+                tel = _kid(a, "type")
+                if tel is None:
+                    raise XmlRefusal(a, f"<accessVariable> '{a.get('alias')}' has no <type>")
+                d = {"readOnly": "READ_ONLY", "readWrite": "READ_WRITE"}.get(
+                    a.get("direction") or "readOnly")
+                if d is None:
+                    raise XmlRefusal(a, f"<accessVariable> '{a.get('alias')}': direction "
+                                        f"'{a.get('direction')}'")
+                self.emit(f"        {a.get('alias')} : {a.get('instancePathAndName')} : "
+                          f"{self.type_of(tel, 'access path')} {d};", a,
+                          f"access path '{a.get('alias')}'")
+            self.emit("    END_VAR", acc)
+        cv = _kid(c, "configVars")
+        if cv is not None and _kids(cv, "configVariable"):
+            self.emit("    VAR_CONFIG", cv)
+            for v in _kids(cv, "configVariable"):
+                tel = _kid(v, "type")
+                path = v.get("instancePathAndName")
+                at = f" AT {v.get('address')}" if v.get("address") else ""
+                init = _kid(v, "initialValue")
+                ini = f" := {self.value(init)}" if init is not None else ""
+                if tel is None:
+                    raise XmlRefusal(v, f"<configVariable> '{path}' has no <type>")
+                self.emit(f"        {path}{at} : {self.type_of(tel, path)}{ini};", v,
+                          f"config variable '{path}'")
+            self.emit("    END_VAR", cv)
+        self.emit("END_CONFIGURATION", c)
+
+    def resource(self, r):
+        name = r.get("name")
+        rctx = f"resource '{name}'"
+        self.emit(f"    RESOURCE {name} ON PLC", r, rctx)
+        for g in _kids(r, "globalVars"):
+            self.var_list(g, "VAR_GLOBAL", "        ")
+        progs = []
+        for t in _kids(r, "task"):
+            props = []
+            if t.get("single"):
+                props.append(f"SINGLE := {t.get('single')}")
+            if t.get("interval"):
+                props.append(f"INTERVAL := {t.get('interval')}")
+            props.append(f"PRIORITY := {t.get('priority', '0')}")
+            self.emit(f"        TASK {t.get('name')}({', '.join(props)});", t,
+                      f"task '{t.get('name')}'")
+            for p in _kids(t, "pouInstance"):
+                progs.append((p, t.get("name")))
+        for p in _kids(r, "pouInstance"):
+            progs.append((p, None))
+        for p, task in progs:
+            w = f" WITH {task}" if task else ""
+            self.emit(f"        PROGRAM {p.get('name')}{w} : {p.get('typeName')};", p,
+                      f"pouInstance '{p.get('name')}'")
+        self.emit("    END_RESOURCE", r, rctx)
