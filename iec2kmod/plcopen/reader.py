@@ -285,6 +285,9 @@ class _Generator:
                 self.data_type(dt)
             self.emit("END_TYPE", dts)
         pous = _kid(types, "pous")
+        self.user_functions = {p.get("name", "").upper() for p in
+                               (_kids(pous, "pou") if pous is not None else [])
+                               if p.get("pouType") == "function"}
         for pou in _kids(pous, "pou") if pous is not None else []:
             self.pou(pou)
         inst = _kid(root, "instances")
@@ -410,8 +413,22 @@ class _Generator:
             if rt is None:
                 raise XmlRefusal(pou, f"function '{name}' has no <returnType>")
             head += f" : {self.type_of(rt, ctx)}"
+        body = _kid(pou, "body")
+        if body is None:
+            raise XmlRefusal(pou, f"{ctx} has no <body>")
+        graphic = [k for k in _kids(body) if _local(k) in ("FBD", "LD")]
+        net = None
+        if graphic:                       # translated first: it may need hidden variables
+            from .graphic import Network
+            net = Network(self, graphic[0], ctx, kind, self.user_functions)
+            net_lines = net.translate()
         self.doc(pou)
         self.emit(head, pou, ctx)
+        if net is not None and net.hidden:
+            self.emit("    VAR", graphic[0], ctx)
+            for name, typ in net.hidden:
+                self.emit(f"        {name} : {typ};", graphic[0], ctx)
+            self.emit("    END_VAR", graphic[0], ctx)
         for sec in _kids(iface) if iface is not None else []:
             s = _local(sec)
             if s in VAR_SECTIONS:
@@ -425,10 +442,12 @@ class _Generator:
         trs = _kid(pou, "transitions")
         for t in _kids(trs, "transition") if trs is not None else []:
             self.pou_transitions[t.get("name")] = t
-        body = _kid(pou, "body")
-        if body is None:
-            raise XmlRefusal(pou, f"{ctx} has no <body>")
-        lang = self.body(body, ctx, pou)
+        if net is not None:
+            for text, el, lctx in net_lines:
+                self.emit(text, el, lctx)
+            lang = _local(graphic[0])
+        else:
+            lang = self.body(body, ctx, pou)
         acts = _kid(pou, "actions")
         actions = _kids(acts, "action") if acts is not None else []
         if actions and lang != "SFC":

@@ -102,17 +102,33 @@ def test_diagnostics_point_at_the_xml(tmp_path, capsys):
 
 def test_refusals_name_element_and_line(tmp_path, capsys):
     p, lines = _broken(tmp_path, ("<ST>\n            <xhtml:p><![CDATA[Twice := x * 2;]]></xhtml:p>\n"
-                                  "          </ST>", "<FBD/>"))
+                                  "          </ST>",
+                                  '<FBD><jump localId="4" label="Nowhere"><position x="0" y="0"/>'
+                                  '<connectionPointIn><expression>TRUE</expression>'
+                                  '</connectionPointIn></jump></FBD>'))
     assert main(["check", "--no-cache", str(p)]) == 1
     err = capsys.readouterr().err
-    n = _line_of(lines, "<FBD/>")
-    assert f"{p}:{n}:1: error: <FBD> body of pou 'Twice': FBD is not supported yet" in err
+    n = _line_of(lines, "Nowhere")
+    assert f"{p}:{n}:1: error: block localId 4 'Nowhere' in pou 'Twice': no label 'Nowhere' " \
+           f"in the body" in err
     p, lines = _broken(tmp_path, ('<reference name="Finished"/>', '<reference name="Nowhere"/>'))
     assert main(["check", "--no-cache", str(p)]) == 1
     err = capsys.readouterr().err
     n = _line_of(lines, "Nowhere")
     assert f"{p}:{n}:1: error: transition localId 6 of pou 'Sequencer' names transition " \
            f"'Nowhere', which the POU does not declare" in err
+
+
+def test_graphic_diagnostics_name_the_block(tmp_path, capsys):
+    src = (HERE / "cases" / "ld_rungs.xml").read_text()
+    assert "<variable>Pulse</variable>" in src
+    p = tmp_path / "plc.xml"
+    p.write_text(src.replace("<variable>Pulse</variable>", "<variable>Pulsee</variable>"))
+    lines = p.read_text().split("\n")
+    assert main(["check", "--no-cache", str(p)]) == 1
+    err = capsys.readouterr().err
+    coil = _line_of(lines, '<coil localId="7">')
+    assert f"{p}:{coil}:1: error: unknown variable 'Pulsee' (block localId 7 'Pulsee')" in err
 
 
 def test_malformed_and_foreign_xml(tmp_path, capsys):

@@ -1,0 +1,421 @@
+"""FBD and LD bodies (TC6 XML) -> ST statements (issue 28, slice 2).
+
+A network is a graph of elements joined by connections (a connection names
+the localId of the element whose output it reads, and for a block the
+output pin, formalParameter).  The translation:
+
+  * Values.  Every input point is an expression of what it is connected to:
+    a variable (inVariable, inOutVariable), a function block instance's
+    output (``inst.Q``), a function call (written in place, with its
+    inputs in the block's pin order; a function output read twice is
+    computed twice), a connector read through its continuation, the left
+    power rail (TRUE), a contact (``flow AND var``), a coil (its flow,
+    passed through).  Several connections into one point are a wired OR
+    (LD).  Negated pins and variables: NOT; an edge (rising/falling) on a
+    contact, a block input or a variable: a hidden R_TRIG/F_TRIG instance
+    called just before the statement that first needs it.
+  * Statements: function block calls, outVariables, inOutVariables, coils,
+    jumps and returns.  IEC 61131-3 (ed.2 4.1.3): an element is evaluated
+    once all its inputs are; so the statements are topologically sorted by
+    data flow (a statement reading an instance's output comes after that
+    instance's call), ties broken by the editor's executionOrderId when it
+    gives one, else by position (top to bottom, then left to right).  A
+    feedback path (a cycle) is cut at the element that comes first in that
+    order, which reads the value of the previous cycle.  When the editor
+    numbered every statement (executionOrderId > 0 on all), that order is
+    followed as it is.
+  * Coils: ``v := flow`` (negated ``NOT flow``), set ``IF flow THEN v :=
+    TRUE``, reset likewise FALSE, rising/falling: ``v := R_TRIG(flow).Q``.
+  * EN of a function block instance: the call under ``IF en``; its ENO is
+    EN.  EN of a function call is refused (its output without execution is
+    not defined by the standard).
+  * Labels cut the network into segments by their vertical position; a
+    jump goes forward to a label (a backward jump is refused); statements
+    after a jump run under a guard variable; return: ``IF cond THEN
+    RETURN``.
+"""
+
+from __future__ import annotations
+
+import heapq
+
+from .reader import XmlRefusal, _kid, _kids, _local
+
+STATEMENTS = ("block", "outVariable", "inOutVariable", "coil", "jump", "return")
+KNOWN = STATEMENTS + ("inVariable", "connector", "continuation", "label", "comment",
+                      "leftPowerRail", "rightPowerRail", "contact", "addData",
+                      "documentation", "actionBlock", "vendorElement")
+
+
+def _text(el, name):
+    k = _kid(el, name)
+    return "".join(k.itertext()).strip() if k is not None else ""
+
+
+def _pos(el):
+    p = _kid(el, "position")
+    try:
+        return (float(p.get("y")), float(p.get("x"))) if p is not None else (0.0, 0.0)
+    except (TypeError, ValueError):
+        return (0.0, 0.0)
+
+
+def _true(v):
+    return v in ("true", "1")
+
+
+class Network:
+    def __init__(self, gen, body, ctx, pou_kind, user_functions):
+        self.gen = gen                   # the reader's _Generator (emit)
+        self.body = body
+        self.ctx = ctx
+        self.kind = pou_kind
+        self.user = user_functions       # names of the project's functions
+        self.els = {}
+        self.connectors = {}
+        self.hidden = []                 # (name, type) to declare in the POU
+        self.pre = []                    # statements a value needs first
+        self.done_trig = {}              # key -> trig instance name
+        for e in _kids(body):
+            k = _local(e)
+            if k not in KNOWN:
+                raise XmlRefusal(e, f"element <{k}> (localId {e.get('localId')}) in the "
+                                    f"{_local(body)} body of {ctx} is not supported")
+            lid = e.get("localId")
+            if lid is not None:
+                self.els[lid] = e
+            if k == "connector":
+                self.connectors[e.get("name")] = e
+            if k == "actionBlock":
+                raise XmlRefusal(e, f"<actionBlock> (localId {lid}) outside an SFC body of {ctx}")
+            if k == "vendorElement":
+                raise XmlRefusal(e, f"<vendorElement> (localId {lid}) in {ctx}: vendor elements "
+                                    f"are not supported")
+
+    # -- naming
+    def label(self, e):
+        k = _local(e)
+        name = (e.get("instanceName") or e.get("typeName") if k == "block" else
+                _text(e, "expression") or _text(e, "variable") or e.get("label") or e.get("name")
+                or k)
+        return f"block localId {e.get('localId')} '{name}'"
+
+    def trig(self, kind, expr, e, key):
+        """The Q of a hidden R_TRIG/F_TRIG instance fed with expr, called
+        before the current statement (once per key)."""
+        if self.kind == "function":
+            raise XmlRefusal(e, f"edge detection in {self.label(e)} of {self.ctx}: a function "
+                                f"has no memory (use a function block)")
+        name = self.done_trig.get(key)
+        if name is None:
+            fb = "R_TRIG" if kind == "rising" else "F_TRIG"
+            name = f"_{fb}_{e.get('localId')}_{len(self.done_trig)}"
+            self.hidden.append((name, fb))
+            self.done_trig[key] = name
+            self.pre.append((f"{name}(CLK := {expr});", e))
+        return f"{name}.Q"
+
+    # -- values
+    def point(self, cpin, e, what):
+        if cpin is None:
+            raise XmlRefusal(e, f"{what} of {self.label(e)} in {self.ctx} is not connected")
+        conns = _kids(cpin, "connection")
+        expr = _kid(cpin, "expression")
+        if not conns and expr is not None and (expr.text or "").strip():
+            return f"({expr.text.strip()})"
+        if not conns:
+            raise XmlRefusal(cpin, f"{what} of {self.label(e)} in {self.ctx} is not connected")
+        vals = [self.output(c, e) for c in conns]
+        return vals[0] if len(vals) == 1 else "(" + " OR ".join(vals) + ")"
+
+    def output(self, conn, user):
+        ref = conn.get("refLocalId")
+        src = self.els.get(ref)
+        if src is None:
+            raise XmlRefusal(conn, f"connection of {self.label(user)} in {self.ctx} to localId "
+                                   f"{ref}, which is not in the body")
+        k = _local(src)
+        pin = conn.get("formalParameter") or ""
+        if k in ("inVariable", "inOutVariable"):
+            v = _text(src, "expression")
+            if not v:
+                raise XmlRefusal(src, f"{self.label(src)} in {self.ctx} has no <expression>")
+            v = f"({v})" if not v.replace("_", "").replace(".", "").isalnum() else v
+            if src.get("edge") in ("rising", "falling"):
+                v = self.trig(src.get("edge"), v, src, ("v", ref))
+            return f"NOT {v}" if _true(src.get("negated")) else v
+        if k == "leftPowerRail":
+            return "TRUE"
+        if k == "continuation":
+            c = self.connectors.get(src.get("name"))
+            if c is None:
+                raise XmlRefusal(src, f"continuation '{src.get('name')}' (localId {ref}) in "
+                                      f"{self.ctx} has no connector of that name")
+            return self.point(_kid(c, "connectionPointIn"), c, "the input")
+        if k == "contact":
+            flow = self.point(_kid(src, "connectionPointIn"), src, "the left link")
+            var = _text(src, "variable")
+            term = var
+            if src.get("edge") in ("rising", "falling"):
+                term = self.trig(src.get("edge"), var, src, ("c", ref))
+            if _true(src.get("negated")):
+                term = f"NOT {term}"
+            return term if flow == "TRUE" else f"({flow} AND {term})"
+        if k == "coil":
+            return self.point(_kid(src, "connectionPointIn"), src, "the left link")
+        if k == "block":
+            return self.block_output(src, pin, conn)
+        raise XmlRefusal(conn, f"connection of {self.label(user)} in {self.ctx} to <{k}> "
+                               f"(localId {ref}), which has no output")
+
+    def pins(self, blk, section):
+        sec = _kid(blk, section)
+        return _kids(sec, "variable") if sec is not None else []
+
+    def pin_value(self, blk, v):
+        cpin = _kid(v, "connectionPointIn")
+        if cpin is None or not _kids(cpin, "connection"):
+            return None
+        val = self.point(cpin, blk, f"input {v.get('formalParameter')}")
+        if v.get("edge") in ("rising", "falling"):
+            val = self.trig(v.get("edge"), val, blk, ("p", blk.get("localId"),
+                                                       v.get("formalParameter")))
+        if _true(v.get("negated")):
+            val = f"NOT {val}" if val.replace("_", "").replace(".", "").isalnum() \
+                else f"NOT ({val})"
+        return val
+
+    def en(self, blk):
+        for v in self.pins(blk, "inputVariables"):
+            if v.get("formalParameter") == "EN":
+                return self.pin_value(blk, v)
+        return None
+
+    def block_output(self, blk, pin, conn):
+        inst = blk.get("instanceName")
+        outs = {v.get("formalParameter"): v for v in self.pins(blk, "outputVariables")}
+        outs.update({v.get("formalParameter"): v for v in self.pins(blk, "inOutVariables")})
+        if not pin:
+            real = [p for p in outs if p != "ENO"]
+            if len(real) != 1:
+                raise XmlRefusal(conn, f"connection to {self.label(blk)} in {self.ctx} does not "
+                                       f"name the output pin")
+            pin = real[0]
+        v = outs.get(pin)
+        if v is None and pin != "ENO":
+            raise XmlRefusal(conn, f"{self.label(blk)} in {self.ctx} has no output '{pin}'")
+        neg = v is not None and _true(v.get("negated"))
+        if pin == "ENO":
+            en = self.en(blk)
+            if inst:
+                val = en or "TRUE"
+            else:
+                if en is not None:
+                    self.refuse_fn_en(blk)
+                val = "TRUE"
+        elif inst:
+            val = f"{inst}.{pin}"
+        else:
+            val = self.call(blk, pin)
+        return f"NOT {val}" if neg else val
+
+    def refuse_fn_en(self, blk):
+        raise XmlRefusal(blk, f"EN of the function call {self.label(blk)} in {self.ctx} is "
+                              f"connected: a function's outputs without execution are not "
+                              f"defined (use an IF in ST, or leave EN unconnected)")
+
+    def call(self, blk, pin):
+        name = blk.get("typeName")
+        if self.en(blk) is not None:
+            self.refuse_fn_en(blk)
+        outs = [v.get("formalParameter") for v in self.pins(blk, "outputVariables")
+                if v.get("formalParameter") != "ENO"]
+        if outs != ["OUT"] or pin != "OUT" or self.pins(blk, "inOutVariables"):
+            raise XmlRefusal(blk, f"function call {self.label(blk)} in {self.ctx}: only "
+                                  f"functions with one output OUT are supported")
+        args = []
+        for v in self.pins(blk, "inputVariables"):
+            p = v.get("formalParameter")
+            if p == "EN":
+                continue
+            val = self.pin_value(blk, v)
+            if val is None:
+                if name.upper() in self.user:
+                    continue
+                raise XmlRefusal(v, f"input {p} of {self.label(blk)} in {self.ctx} is not "
+                                    f"connected")
+            args.append(f"{p} := {val}" if name.upper() in self.user else val)
+        return f"{name}({', '.join(args)})"
+
+    # -- statements
+    def statement(self, e):
+        """(lines, element) of one statement element."""
+        k = _local(e)
+        self.pre = []
+        lines = []
+        if k == "block":
+            inst = e.get("instanceName")
+            if not inst:
+                return []             # a function: evaluated where its output is read
+            args = []
+            for sec in ("inputVariables", "inOutVariables"):
+                for v in self.pins(e, sec):
+                    p = v.get("formalParameter")
+                    if p == "EN":
+                        continue
+                    val = self.pin_value(e, v)
+                    if val is not None:
+                        args.append(f"{p} := {val}")
+            en = self.en(e)
+            call = f"{inst}({', '.join(args)});"
+            lines = [call] if en is None else [f"IF {en} THEN", f"    {call}", "END_IF;"]
+        elif k in ("outVariable", "inOutVariable"):
+            target = _text(e, "expression")
+            val = self.point(_kid(e, "connectionPointIn"), e, "the input")
+            if _true(e.get("negated")):
+                val = f"NOT ({val})"
+            lines = self.store(e, target, val)
+        elif k == "coil":
+            target = _text(e, "variable")
+            val = self.point(_kid(e, "connectionPointIn"), e, "the left link")
+            if _true(e.get("negated")):
+                val = f"NOT ({val})" if val != "TRUE" else "FALSE"
+            lines = self.store(e, target, val)
+        elif k == "jump":
+            cond = self.point(_kid(e, "connectionPointIn"), e, "the condition")
+            lines = [f"IF {cond} THEN", f"    _JMP_ := {self.label_index[e.get('label')]};",
+                     "END_IF;"]
+        elif k == "return":
+            cond = self.point(_kid(e, "connectionPointIn"), e, "the condition")
+            lines = [f"IF {cond} THEN", "    RETURN;", "END_IF;"]
+        out = [(s, el) for s, el in self.pre] + [(s, e) for s in lines]
+        self.pre = []
+        return out
+
+    def store(self, e, target, val):
+        if not target:
+            raise XmlRefusal(e, f"{self.label(e)} in {self.ctx} names no variable")
+        st = e.get("storage")
+        edge = e.get("edge")
+        if edge in ("rising", "falling"):
+            val = self.trig(edge, val, e, ("s", e.get("localId")))
+            if st in ("set", "reset"):
+                raise XmlRefusal(e, f"{self.label(e)} in {self.ctx}: an edge and a storage "
+                                    f"together")
+        if st == "set":
+            return [f"IF {val} THEN", f"    {target} := TRUE;", "END_IF;"]
+        if st == "reset":
+            return [f"IF {val} THEN", f"    {target} := FALSE;", "END_IF;"]
+        return [f"{target} := {val};"]
+
+    # -- order
+    def deps(self, e):
+        """The statement elements whose results e reads (transitively
+        through functions, contacts, coils' flow and continuations)."""
+        out = set()
+        seen = set()
+
+        def walk(el):
+            for cpin in _kids(el, "connectionPointIn"):
+                for c in _kids(cpin, "connection"):
+                    src = self.els.get(c.get("refLocalId"))
+                    if src is None or id(src) in seen:
+                        continue
+                    seen.add(id(src))
+                    k = _local(src)
+                    if k == "block" and src.get("instanceName"):
+                        out.add(src.get("localId"))
+                    elif k == "inOutVariable":
+                        out.add(src.get("localId"))
+                    elif k == "continuation":
+                        con = self.connectors.get(src.get("name"))
+                        if con is not None:
+                            walk(con)
+                    else:
+                        walk(src)
+            for sec in ("inputVariables", "inOutVariables"):
+                for v in self.pins(el, sec) if _local(el) == "block" else []:
+                    walk(v)
+        walk(e)
+        out.discard(e.get("localId"))
+        return out
+
+    def order(self):
+        stmts = [e for e in _kids(self.body) if _local(e) in STATEMENTS]
+        labels = sorted((e for e in _kids(self.body) if _local(e) == "label"), key=_pos)
+        self.label_index = {}
+        for i, lab in enumerate(labels):
+            self.label_index[lab.get("label")] = i + 1
+
+        def segment(e):
+            y = _pos(e)[0]
+            return sum(1 for lab in labels if _pos(lab)[0] <= y)
+        for j in (e for e in stmts if _local(e) == "jump"):
+            target = self.label_index.get(j.get("label"))
+            if target is None:
+                raise XmlRefusal(j, f"{self.label(j)} in {self.ctx}: no label "
+                                    f"'{j.get('label')}' in the body")
+            if target <= segment(j):
+                raise XmlRefusal(j, f"{self.label(j)} in {self.ctx} jumps backward to label "
+                                    f"'{j.get('label')}': only forward jumps are supported")
+        ids = [int(e.get("executionOrderId") or 0) for e in stmts]
+        if stmts and all(i > 0 for i in ids):
+            ordered = [e for _, e in sorted(zip(ids, stmts), key=lambda p: p[0])]
+            return ordered, labels, segment
+
+        def key(e):
+            return (segment(e), int(e.get("executionOrderId") or 0), _pos(e),
+                    int(e.get("localId") or 0))
+        by_id = {e.get("localId"): e for e in stmts}
+        deps = {e.get("localId"): {d for d in self.deps(e) if d in by_id
+                                   and segment(by_id[d]) == segment(e)} for e in stmts}
+        ordered = []
+        left = {e.get("localId"): e for e in stmts}
+        while left:
+            ready = [e for lid, e in left.items() if not (deps[lid] & left.keys())]
+            if not ready:
+                # a feedback path: the first element of a cycle in position
+                # order goes first and reads the previous cycle's values
+                ready = [e for lid, e in left.items() if self.on_cycle(lid, deps, left)]
+            heap = [(key(e), i, e) for i, e in enumerate(ready)]
+            heapq.heapify(heap)
+            e = heap[0][2]
+            ordered.append(e)
+            del left[e.get("localId")]
+        return ordered, labels, segment
+
+    @staticmethod
+    def on_cycle(lid, deps, left):
+        seen, stack = set(), [d for d in deps[lid] if d in left]
+        while stack:
+            d = stack.pop()
+            if d == lid:
+                return True
+            if d not in seen:
+                seen.add(d)
+                stack += [x for x in deps[d] if x in left]
+        return False
+
+    def translate(self):
+        """[(line, element, ctx)] of the body's ST, and the hidden variables."""
+        ordered, labels, segment = self.order()
+        jumps = any(_local(e) == "jump" for e in ordered)
+        out = []
+        if jumps:
+            self.hidden.append(("_JMP_", "INT"))
+            out.append(("_JMP_ := 0;", self.body, None))
+        seg = 0
+        for e in ordered:
+            s = segment(e)
+            while jumps and seg < s:
+                seg += 1
+                lab = labels[seg - 1]
+                out.append((f"IF _JMP_ = {seg} THEN _JMP_ := 0; END_IF;", lab, self.label(lab)))
+            lines = self.statement(e)
+            if jumps and lines:
+                out.append(("IF _JMP_ = 0 THEN", e, self.label(e)))
+                out += [("    " + s_, el, self.label(el)) for s_, el in lines]
+                out.append(("END_IF;", e, self.label(e)))
+            else:
+                out += [(s_, el, self.label(el)) for s_, el in lines]
+        return out
