@@ -76,6 +76,7 @@ class Network:
         self.hidden = []                 # (name, type) to declare in the POU
         self.pre = []                    # statements a value needs first
         self.done_trig = {}              # key -> trig instance name
+        self.implied = set()             # blocks with EN known to run (enabled_value)
         for e in _kids(body):
             k = _local(e)
             if k not in KNOWN:
@@ -206,13 +207,7 @@ class Network:
             raise XmlRefusal(conn, f"{self.label(blk)} in {self.ctx} has no output '{pin}'")
         neg = v is not None and _true(v.get("negated"))
         if pin == "ENO":
-            en = self.en(blk)
-            if inst:
-                val = en or "TRUE"
-            else:
-                if en is not None:
-                    self.refuse_fn_en(blk)
-                val = "TRUE"
+            val = self.en(blk) or "TRUE"
         elif inst:
             val = f"{inst}.{pin}"
         else:
@@ -221,12 +216,14 @@ class Network:
 
     def refuse_fn_en(self, blk):
         raise XmlRefusal(blk, f"EN of the function call {self.label(blk)} in {self.ctx} is "
-                              f"connected: a function's outputs without execution are not "
-                              f"defined (use an IF in ST, or leave EN unconnected)")
+                              f"connected and its output feeds another block: only a variable "
+                              f"or a coil may take the output of a function with EN (it is "
+                              f"stored when EN is TRUE)")
 
-    def call(self, blk, pin):
+    def call(self, blk, pin, guarded=False):
         name = blk.get("typeName")
-        if self.en(blk) is not None:
+        if not guarded and blk.get("localId") not in self.implied and \
+                self.en(blk) is not None:
             self.refuse_fn_en(blk)
         outs = [v.get("formalParameter") for v in self.pins(blk, "outputVariables")
                 if v.get("formalParameter") != "ENO"]
@@ -252,6 +249,7 @@ class Network:
         """(lines, element) of one statement element."""
         k = _local(e)
         self.pre = []
+        self.implied = set()
         lines = []
         if k == "block":
             inst = e.get("instanceName")
@@ -269,18 +267,20 @@ class Network:
             en = self.en(e)
             call = f"{inst}({', '.join(args)});"
             lines = [call] if en is None else [f"IF {en} THEN", f"    {call}", "END_IF;"]
-        elif k in ("outVariable", "inOutVariable"):
-            target = _text(e, "expression")
-            val = self.point(_kid(e, "connectionPointIn"), e, "the input")
-            if _true(e.get("negated")):
-                val = f"NOT ({val})"
-            lines = self.store(e, target, val)
-        elif k == "coil":
-            target = _text(e, "variable")
-            val = self.point(_kid(e, "connectionPointIn"), e, "the left link")
+        elif k in ("outVariable", "inOutVariable", "coil"):
+            target = _text(e, "expression" if k != "coil" else "variable")
+            cpin = _kid(e, "connectionPointIn")
+            en, val = self.enabled_value(cpin, e)
+            if val is None:
+                val = self.point(cpin, e, "the input" if k != "coil" else "the left link")
             if _true(e.get("negated")):
                 val = f"NOT ({val})" if val != "TRUE" else "FALSE"
             lines = self.store(e, target, val)
+            if en is not None:
+                # IEC 61131-3 ed.2 2.5.1.2: with EN FALSE the block is not
+                # executed, so nothing it computes is stored (Beremiz: the
+                # value passes when ENO is TRUE)
+                lines = [f"IF {en} THEN"] + ["    " + x for x in lines] + ["END_IF;"]
         elif k == "jump":
             cond = self.point(_kid(e, "connectionPointIn"), e, "the condition")
             lines = [f"IF {cond} THEN", f"    _JMP_ := {self.label_index[e.get('label')]};",
@@ -291,6 +291,44 @@ class Network:
         out = [(s, el) for s, el in self.pre] + [(s, e) for s in lines]
         self.pre = []
         return out
+
+    def enabled_value(self, cpin, e):
+        """(EN, value) when cpin reads one output (not ENO) of a block whose
+        EN is connected, else (None, None)."""
+        conns = _kids(cpin, "connection") if cpin is not None else []
+        if len(conns) != 1:
+            return None, None
+        src = self.els.get(conns[0].get("refLocalId"))
+        pin = conns[0].get("formalParameter") or ""
+        if src is None or _local(src) != "block" or pin == "ENO":
+            return None, None
+        en = self.en(src)
+        if en is None:
+            return None, None
+        # the blocks that surely ran when this one did: those whose ENO is
+        # its EN, and so on up the chain (a chain of MOVEs, SUB -> LT -> SEL)
+        b = src
+        while b is not None and b.get("localId") not in self.implied:
+            self.implied.add(b.get("localId"))
+            env = next((v for v in self.pins(b, "inputVariables")
+                        if v.get("formalParameter") == "EN"), None)
+            cs = _kids(_kid(env, "connectionPointIn"), "connection") \
+                if env is not None and _kid(env, "connectionPointIn") is not None else []
+            b = None
+            if len(cs) == 1 and cs[0].get("formalParameter") == "ENO":
+                b = self.els.get(cs[0].get("refLocalId"))
+                if b is not None and _local(b) != "block":
+                    b = None
+        if src.get("instanceName"):
+            return en, self.block_output(src, pin, conns[0])
+        outs = [v.get("formalParameter") for v in self.pins(src, "outputVariables")
+                if v.get("formalParameter") != "ENO"]
+        val = self.call(src, pin or (outs[0] if len(outs) == 1 else ""), guarded=True)
+        v = next((v for v in self.pins(src, "outputVariables")
+                  if v.get("formalParameter") == (pin or "OUT")), None)
+        if v is not None and _true(v.get("negated")):
+            val = f"NOT {val}"
+        return en, val
 
     def store(self, e, target, val):
         if not target:

@@ -151,6 +151,7 @@ def translate(path: str) -> Translation:
         gen.project(root)
     except XmlRefusal as exc:
         _diag(tr, exc.line, "error", exc.message)
+    _beremiz_library(root, gen, tr)
     for name, line in gen.vendor.items():
         _diag(tr, line, "note", f"ignored: vendor data '{name}' (addData), no effect on execution")
     tr.text = "\n".join(gen.lines) + "\n"
@@ -205,6 +206,45 @@ def to_text(path: str):
     """`export --st`: the textual project and the XML's diagnostics."""
     tr = translate(path)
     return tr.text, tr.diags
+
+
+# Beremiz's runtime library blocks that IEC-only projects use.  LOGGER
+# writes a message to the runtime's log on a rising edge of TRIG: here the
+# message has no destination (a kernel module keeps no Beremiz log), so the
+# block is kept for its interface and does nothing else; a note says so.
+# Written from the block's documented interface, not from Beremiz's code.
+BEREMIZ_LIBRARY = {
+    "LOGLEVEL": ("TYPE", "TYPE\n    LOGLEVEL : (CRITICAL, WARNING, INFO, DEBUG) := INFO;\nEND_TYPE"),
+    "LOGGER": ("FUNCTION_BLOCK",
+               "FUNCTION_BLOCK LOGGER\n    VAR_INPUT\n        TRIG : BOOL;\n"
+               "        MSG : STRING;\n        LEVEL : LOGLEVEL := INFO;\n    END_VAR\n"
+               "    VAR\n        TRIG0 : BOOL;\n    END_VAR\nTRIG0 := TRIG;\n"
+               "END_FUNCTION_BLOCK"),
+}
+
+
+def _beremiz_library(root, gen, tr):
+    declared = {(e.get("name") or "").upper() for e in root.iter()
+                if isinstance(e.tag, str) and _local(e) in ("pou", "dataType")}
+    used = {}
+    for e in root.iter():
+        if not isinstance(e.tag, str):
+            continue
+        name = e.get("name") if _local(e) == "derived" else \
+            e.get("typeName") if _local(e) == "block" else None
+        if name and name.upper() in BEREMIZ_LIBRARY and name.upper() not in declared:
+            used.setdefault(name.upper(), e.sourceline or 1)
+    if "LOGGER" in used:
+        used.setdefault("LOGLEVEL", used["LOGGER"])
+    for name in ("LOGLEVEL", "LOGGER"):
+        if name in used:
+            line = used[name]
+            for text in BEREMIZ_LIBRARY[name][1].split("\n"):
+                gen.lines.append(text)
+                gen.smap.append((line, None, f"Beremiz library {name}"))
+            if name == "LOGGER":
+                _diag(tr, line, "note", "LOGGER (Beremiz runtime library): its messages have no "
+                                        "destination here and are dropped")
 
 
 # ----------------------------------------------------------------- generator

@@ -169,3 +169,20 @@ def test_runtime_fault_points_at_the_xml(tmp_path, capsys, engine):
     err = capsys.readouterr().err
     n = _line_of(lines, "(cycle - 3)")
     assert f"{p}:{n}: runtime error: division by zero in Main" in err, err
+
+
+def test_beremiz_logger_is_provided_with_a_note(tmp_path, capsys):
+    p, lines = _broken(tmp_path,
+                       ('<variable name="cycle"><type><INT/></type></variable>',
+                        '<variable name="cycle"><type><INT/></type></variable>\n'
+                        '            <variable name="log"><type><derived name="LOGGER"/></type>'
+                        '</variable>'),
+                       ("cycle := cycle + 1;", "cycle := cycle + 1; log(TRIG := cycle = 2, "
+                                               "MSG := 'two', LEVEL := WARNING);"))
+    assert main(["check", "--no-cache", str(p)]) == 0
+    err = capsys.readouterr().err
+    n = _line_of(lines, '<derived name="LOGGER"/>')
+    assert f"{p}:{n}:1: note: LOGGER (Beremiz runtime library): its messages have no " \
+           f"destination here and are dropped" in err
+    assert main(["sim", str(p), "--cycles", "3", "--engine", "interp",
+                 "--watch", "Res0.main.count"]) == 0
