@@ -4,6 +4,7 @@ examples and test projects (and OpenPLC Editor projects) through iec2kmod.
 
     python3 benchmarks/plcopen_corpus.py PATH [PATH...] [--cycles N]
                                          [--engines c,interp] [--list]
+    python3 benchmarks/plcopen_corpus.py --smoke   (tests/plcopen/projects, 3 cycles)
 
 PATH is a checkout the user fetched: a Beremiz repository (its
 ``exemples/*/plc.xml`` and ``tests/projects/*/plc.xml`` are taken, and its
@@ -115,11 +116,18 @@ def run_one(path: Path, cycles: int, engines: list[str]):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("paths", nargs="+", type=Path)
+    ap.add_argument("paths", nargs="*", type=Path)
     ap.add_argument("--cycles", type=int, default=20)
     ap.add_argument("--engines", default="c,interp")
     ap.add_argument("--list", action="store_true", help="print the first error of each project")
+    ap.add_argument("--smoke", action="store_true",
+                    help="this repository's tests/plcopen/projects, 3 cycles")
     args = ap.parse_args(argv)
+    if args.smoke:
+        args.paths = args.paths or [ROOT / "tests" / "plcopen" / "projects"]
+        args.cycles = 3
+    if not args.paths:
+        ap.error("name a Beremiz checkout or a directory of plc.xml projects")
     engines = [e.strip() for e in args.engines.split(",") if e.strip()]
     for p in args.paths:
         xsd = p / "plcopen" / "tc6_xml_v201.xsd"
