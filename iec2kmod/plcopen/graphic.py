@@ -45,6 +45,12 @@ STATEMENTS = ("block", "outVariable", "inOutVariable", "coil", "jump", "return")
 KNOWN = STATEMENTS + ("inVariable", "connector", "continuation", "label", "comment",
                       "leftPowerRail", "rightPowerRail", "contact", "addData",
                       "documentation", "actionBlock", "vendorElement")
+# the FBD/LD elements an SFC body may hold beside its chart (Beremiz)
+GRAPHIC = ("block", "inVariable", "outVariable", "inOutVariable", "contact", "coil",
+           "leftPowerRail", "rightPowerRail", "connector", "continuation")
+SFC_KINDS = ("step", "transition", "selectionDivergence", "selectionConvergence",
+             "simultaneousDivergence", "simultaneousConvergence", "jumpStep", "actionBlock",
+             "comment", "addData", "documentation")
 
 
 def _text(el, name):
@@ -65,7 +71,7 @@ def _true(v):
 
 
 class Network:
-    def __init__(self, gen, body, ctx, pou_kind, user_functions):
+    def __init__(self, gen, body, ctx, pou_kind, user_functions, sfc=False):
         self.gen = gen                   # the reader's _Generator (emit)
         self.body = body
         self.ctx = ctx
@@ -79,7 +85,12 @@ class Network:
         self.implied = set()             # blocks with EN known to run (enabled_value)
         for e in _kids(body):
             k = _local(e)
-            if k not in KNOWN:
+            if sfc and k in SFC_KINDS:
+                lid = e.get("localId")
+                if lid is not None:
+                    self.els[lid] = e
+                continue
+            if k not in (GRAPHIC if sfc else KNOWN):
                 raise XmlRefusal(e, f"element <{k}> (localId {e.get('localId')}) in the "
                                     f"{_local(body)} body of {ctx} is not supported")
             lid = e.get("localId")

@@ -456,19 +456,36 @@ class _Generator:
         body = _kid(pou, "body")
         if body is None:
             raise XmlRefusal(pou, f"{ctx} has no <body>")
-        graphic = [k for k in _kids(body) if _local(k) in ("FBD", "LD")]
-        net = None
-        if graphic:                       # translated first: it may need hidden variables
-            from .graphic import Network
-            net = Network(self, graphic[0], ctx, kind, self.user_functions)
-            net_lines = net.translate()
+        self.pou_transitions = {}
+        trs = _kid(pou, "transitions")
+        for t in _kids(trs, "transition") if trs is not None else []:
+            self.pou_transitions[t.get("name")] = t
+        # the body first, into its own buffer: an FBD/LD network may need
+        # hidden variables (edge detection, the jump guard) declared above it
+        self.hidden = []
+        self.pou_kind = kind
+        outer = (self.lines, self.smap)
+        self.lines, self.smap = [], []
+        try:
+            lang = self.body(body, ctx, pou)
+            acts = _kid(pou, "actions")
+            actions = _kids(acts, "action") if acts is not None else []
+            if actions and lang != "SFC":
+                raise XmlRefusal(actions[0], f"action '{actions[0].get('name')}' of {ctx}: "
+                                             f"actions of a {lang} body are not supported (only "
+                                             f"SFC bodies have actions)")
+            for a in actions:
+                self.action(a, f"action '{a.get('name')}' of {ctx}")
+        finally:
+            inner = (self.lines, self.smap)
+            self.lines, self.smap = outer
         self.doc(pou)
         self.emit(head, pou, ctx)
-        if net is not None and net.hidden:
-            self.emit("    VAR", graphic[0], ctx)
-            for name, typ in net.hidden:
-                self.emit(f"        {name} : {typ};", graphic[0], ctx)
-            self.emit("    END_VAR", graphic[0], ctx)
+        if self.hidden:
+            self.emit("    VAR", body, ctx)
+            for hname, typ in self.hidden:
+                self.emit(f"        {hname} : {typ};", body, ctx)
+            self.emit("    END_VAR", body, ctx)
         for sec in _kids(iface) if iface is not None else []:
             s = _local(sec)
             if s in VAR_SECTIONS:
@@ -478,24 +495,8 @@ class _Generator:
                                       f"configuration")
             elif s not in ("returnType", "addData", "documentation"):
                 raise XmlRefusal(sec, f"element <{s}> in the interface of {ctx} is not supported")
-        self.pou_transitions = {}
-        trs = _kid(pou, "transitions")
-        for t in _kids(trs, "transition") if trs is not None else []:
-            self.pou_transitions[t.get("name")] = t
-        if net is not None:
-            for text, el, lctx in net_lines:
-                self.emit(text, el, lctx)
-            lang = _local(graphic[0])
-        else:
-            lang = self.body(body, ctx, pou)
-        acts = _kid(pou, "actions")
-        actions = _kids(acts, "action") if acts is not None else []
-        if actions and lang != "SFC":
-            raise XmlRefusal(actions[0], f"action '{actions[0].get('name')}' of {ctx}: actions "
-                                         f"of a {lang} body are not supported (only SFC bodies "
-                                         f"have actions)")
-        for a in actions:
-            self.action(a, f"action '{a.get('name')}' of {ctx}")
+        self.lines += inner[0]
+        self.smap += inner[1]
         self.emit(f"END_{kw}", pou, ctx)
         self.emit("", pou)
 
@@ -509,10 +510,13 @@ class _Generator:
         if lang in ("ST", "IL"):
             self.emit_body(b, ctx)
         elif lang == "SFC":
-            self.sfc(b, ctx)
+            self.sfc(b, ctx, pou.get("pouType"))
         else:
-            raise XmlRefusal(b, f"<{lang}> body of {ctx}: {lang} is not supported yet "
-                                f"(ST, IL and SFC bodies are)")
+            from .graphic import Network
+            net = Network(self, b, ctx, pou.get("pouType"), self.user_functions)
+            for text, el, lctx in net.translate():
+                self.emit(text, el, lctx)
+            self.hidden += net.hidden
         return lang
 
     def action(self, a, ctx):
@@ -520,14 +524,30 @@ class _Generator:
         if body is None:
             raise XmlRefusal(a, f"{ctx} has no <body>")
         b = [k for k in _kids(body) if _local(k) in ("ST", "IL", "FBD", "LD", "SFC")]
-        if len(b) != 1 or _local(b[0]) not in ("ST", "IL"):
-            raise XmlRefusal(body, f"{ctx}: only ST and IL action bodies are supported")
+        if len(b) != 1 or _local(b[0]) not in ("ST", "IL", "FBD", "LD"):
+            raise XmlRefusal(body, f"{ctx}: only ST, IL, FBD and LD action bodies are supported")
         self.emit(f"ACTION {a.get('name')}:", a, ctx)
-        self.emit_body(b[0], ctx)
+        if _local(b[0]) in ("FBD", "LD"):
+            from .graphic import Network
+            net = Network(self, b[0], ctx, self.pou_kind, self.user_functions)
+            for text, el, lctx in net.translate():
+                self.emit(text, el, lctx)
+            self.hidden += net.hidden
+        else:
+            self.emit_body(b[0], ctx)
         self.emit("END_ACTION", a, ctx)
 
     # -- SFC
-    def sfc(self, sfc, ctx):
+    def sfc(self, sfc, ctx, kind):
+        from .graphic import GRAPHIC, STATEMENTS, Network
+        net = None
+        if any(_local(e) in GRAPHIC for e in _kids(sfc)):
+            # FBD/LD elements beside the chart (Beremiz): their blocks run in
+            # an action stored (S) by the initial step, so every cycle after
+            # the first activation, after the transitions; a transition's
+            # wired condition reads the network
+            net = Network(self, sfc, ctx, kind, self.user_functions, sfc=True)
+        compute = net is not None and any(_local(e) in STATEMENTS for e in _kids(sfc))
         els = {}
         refs = {}                       # localId -> elements whose input names it
         for e in _kids(sfc):
@@ -543,7 +563,7 @@ class _Generator:
                  "simultaneousDivergence", "simultaneousConvergence", "jumpStep",
                  "actionBlock", "comment", "addData", "documentation")
         for e in _kids(sfc):
-            if _local(e) not in known:
+            if _local(e) not in known and (net is None or _local(e) not in GRAPHIC):
                 raise XmlRefusal(e, f"element <{_local(e)}> (localId {e.get('localId')}) in the "
                                     f"SFC body of {ctx}: FBD/LD elements in SFC are not "
                                     f"supported yet")
@@ -593,6 +613,9 @@ class _Generator:
             kw = "INITIAL_STEP" if s.get("initialStep") in ("true", "1") else "STEP"
             sctx = f"step localId {s.get('localId')} '{name}'"
             self.emit(f"    {kw} {name}:", s, sctx)
+            if compute and kw == "INITIAL_STEP":
+                self.emit("        COMPUTE_FUNCTION_BLOCKS(S);", s, sctx)
+                compute = "done"
             for blk in refs.get(s.get("localId"), []):
                 if _local(blk) != "actionBlock":
                     continue
@@ -665,12 +688,15 @@ class _Generator:
                 body = _kid(td, "body")
                 lang = [k for k in _kids(body) if _local(k) in ("ST", "IL", "FBD", "LD")] \
                     if body is not None else []
-                if len(lang) != 1 or _local(lang[0]) not in ("ST", "IL"):
-                    raise XmlRefusal(td, f"transition '{rn}' of {ctx}: only ST and IL bodies "
-                                         f"are supported")
+                if len(lang) != 1:
+                    raise XmlRefusal(td, f"transition '{rn}' of {ctx} has no ST, IL, FBD or LD "
+                                         f"body")
                 rctx = f"transition '{rn}'"
                 self.emit(head, t, tctx)
-                if _local(lang[0]) == "ST":
+                if _local(lang[0]) in ("FBD", "LD"):
+                    self.emit(f"        := {self.graphic_condition(lang[0], rn, ctx)};",
+                              lang[0], rctx)
+                elif _local(lang[0]) == "ST":
                     text = _formatted(lang[0])[0].strip()
                     m = re.match(rf"^(?:{re.escape(rn)}\s*)?:=", text, re.I)
                     if not m:
@@ -680,10 +706,30 @@ class _Generator:
                 else:
                     self.emit("        :", td, rctx)
                     self.emit_body(lang[0], rctx)
+            elif _local(c) == "connectionPointIn" and net is not None:
+                net.pre = []
+                expr = net.point(c, t, "the condition")
+                if net.pre:
+                    raise XmlRefusal(c, f"wired condition of {tctx} in {ctx}: edge detection "
+                                        f"in a transition condition is not supported")
+                self.emit(head, t, tctx)
+                self.emit(f"        := {expr};", c, tctx)
             else:
-                raise XmlRefusal(c, f"condition <{_local(c)}> of {tctx} in {ctx}: a wired "
-                                    f"(FBD/LD) condition is not supported yet")
+                raise XmlRefusal(c, f"condition <{_local(c)}> of {tctx} in {ctx} is not "
+                                    f"supported")
             self.emit("    END_TRANSITION", t, tctx)
+        if compute == "done":
+            lines = net.translate()
+            self.hidden += net.hidden
+            self.emit("    ACTION COMPUTE_FUNCTION_BLOCKS:", sfc, ctx)
+            for text, el, lctx in lines:
+                self.emit("        " + text, el, lctx)
+            self.emit("    END_ACTION", sfc, ctx)
+        elif compute:
+            raise XmlRefusal(sfc, f"the SFC body of {ctx} has blocks but no initial step to "
+                                  f"run them")
+        elif net is not None:
+            self.hidden += net.hidden
         for an, inl, actx in inline:
             lang = [k for k in _kids(inl) if _local(k) in ("ST", "IL", "FBD", "LD")]
             if len(lang) != 1 or _local(lang[0]) not in ("ST", "IL"):
@@ -692,6 +738,28 @@ class _Generator:
             self.emit(f"    ACTION {an}:", inl, actx)
             self.emit_body(lang[0], actx)
             self.emit("    END_ACTION", inl, actx)
+
+    def graphic_condition(self, b, name, ctx):
+        """The condition of a named transition with an FBD/LD body: what
+        its outVariable or coil named like the transition receives."""
+        from .graphic import Network, _text
+        net = Network(self, b, ctx, self.pou_kind, self.user_functions)
+        sinks = [e for e in _kids(b) if (_local(e) == "outVariable" and
+                                         _text(e, "expression").upper() == name.upper()) or
+                 (_local(e) == "coil" and _text(e, "variable").upper() == name.upper())]
+        others = [e for e in _kids(b) if _local(e) in ("block", "outVariable", "coil",
+                                                       "inOutVariable", "jump", "return")
+                  and (_local(e) != "block" or e.get("instanceName")) and e not in sinks]
+        if len(sinks) != 1 or others:
+            raise XmlRefusal(b, f"transition '{name}' of {ctx}: an FBD/LD transition body must "
+                                f"compute one output named '{name}' and nothing else")
+        e = sinks[0]
+        net.pre = []
+        expr = net.point(_kid(e, "connectionPointIn"), e, "the input")
+        if net.pre:
+            raise XmlRefusal(b, f"transition '{name}' of {ctx}: edge detection in a transition "
+                                f"condition is not supported")
+        return f"NOT ({expr})" if e.get("negated") in ("true", "1") else expr
 
     # -- configurations
     def configuration(self, c):
