@@ -7,8 +7,11 @@ output pin, formalParameter).  The translation:
   * Values.  Every input point is an expression of what it is connected to:
     a variable (inVariable, inOutVariable), a function block instance's
     output (``inst.Q``), a function call (written in place, with its
-    inputs in the block's pin order; a function output read twice is
-    computed twice), a connector read through its continuation, the left
+    inputs in the block's pin order, when one element reads it; read by
+    several, or with EN feeding a block, it is a statement of its own into
+    a hidden variable of the output's type, inferred from its inputs, so
+    that it is evaluated once), a connector read through its continuation,
+    the left
     power rail (TRUE), a contact (``flow AND var``), a coil (its flow,
     passed through).  Several connections into one point are a wired OR
     (LD).  Negated pins and variables: NOT; an edge (rising/falling) on a
@@ -38,9 +41,19 @@ output pin, formalParameter).  The translation:
 from __future__ import annotations
 
 import heapq
+import re
 
 from .reader import XmlRefusal, _kid, _kids, _local
 
+ELEMENTARY_NAMES = ("BOOL", "BYTE", "WORD", "DWORD", "LWORD", "SINT", "INT", "DINT", "LINT",
+                    "USINT", "UINT", "UDINT", "ULINT", "REAL", "LREAL", "TIME", "DATE", "DT",
+                    "TOD", "STRING", "WSTRING")
+STD_FB_OUTPUTS = {("TON", "Q"): "BOOL", ("TON", "ET"): "TIME", ("TOF", "Q"): "BOOL",
+                  ("TOF", "ET"): "TIME", ("TP", "Q"): "BOOL", ("TP", "ET"): "TIME",
+                  ("CTU", "Q"): "BOOL", ("CTU", "CV"): "INT", ("CTD", "Q"): "BOOL",
+                  ("CTD", "CV"): "INT", ("CTUD", "QU"): "BOOL", ("CTUD", "QD"): "BOOL",
+                  ("CTUD", "CV"): "INT", ("R_TRIG", "Q"): "BOOL", ("F_TRIG", "Q"): "BOOL",
+                  ("SR", "Q1"): "BOOL", ("RS", "Q1"): "BOOL"}
 STATEMENTS = ("block", "outVariable", "inOutVariable", "coil", "jump", "return")
 KNOWN = STATEMENTS + ("inVariable", "connector", "continuation", "label", "comment",
                       "leftPowerRail", "rightPowerRail", "contact", "addData",
@@ -83,6 +96,7 @@ class Network:
         self.pre = []                    # statements a value needs first
         self.done_trig = {}              # key -> trig instance name
         self.implied = set()             # blocks with EN known to run (enabled_value)
+        self.temps = {}                  # localId -> variable holding a function's output
         for e in _kids(body):
             k = _local(e)
             if sfc and k in SFC_KINDS:
@@ -103,6 +117,7 @@ class Network:
             if k == "vendorElement":
                 raise XmlRefusal(e, f"<vendorElement> (localId {lid}) in {ctx}: vendor elements "
                                     f"are not supported")
+        self.plan_temps()
 
     # -- naming
     def label(self, e):
@@ -221,9 +236,134 @@ class Network:
             val = self.en(blk) or "TRUE"
         elif inst:
             val = f"{inst}.{pin}"
+        elif blk.get("localId") in self.temps:
+            val = self.temps[blk.get("localId")]
         else:
             val = self.call(blk, pin)
         return f"NOT {val}" if neg else val
+
+    # -- functions evaluated once
+    def plan_temps(self):
+        """A function whose output several elements read, or whose EN is
+        connected and whose output feeds a block, is evaluated once, as a
+        statement in the data-flow order, into a variable of its output
+        type (IEC 61131-3 4.1.3: each element is evaluated once); the
+        others are written where their one reader needs them."""
+        readers = {}
+        direct = {}
+        for c in self.body.iter():
+            if not isinstance(c.tag, str) or _local(c) != "connection":
+                continue
+            src = self.els.get(c.get("refLocalId"))
+            if src is None or _local(src) != "block" or src.get("instanceName") or \
+                    (c.get("formalParameter") or "OUT") == "ENO":
+                continue
+            lid = src.get("localId")
+            readers[lid] = readers.get(lid, 0) + 1
+            owner = c.getparent().getparent() if c.getparent() is not None else None
+            direct[lid] = owner is not None and _local(owner) in ("outVariable", "coil",
+                                                                  "inOutVariable")
+        for lid, n in readers.items():
+            blk = self.els[lid]
+            en = any(v.get("formalParameter") == "EN" and
+                     _kids(_kid(v, "connectionPointIn"), "connection")
+                     for v in self.pins(blk, "inputVariables")
+                     if _kid(v, "connectionPointIn") is not None)
+            if n < 2 and not (en and not direct[lid]):
+                continue
+            typ = self.infer(blk, set())
+            if typ is None:
+                if n >= 2:
+                    raise XmlRefusal(blk, f"the output of {self.label(blk)} in {self.ctx} is "
+                                          f"read {n} times and its type cannot be told from its "
+                                          f"inputs (give one input a typed literal or a "
+                                          f"variable)")
+                continue          # call() refuses the EN case by name
+            name = f"_TMP_{blk.get('typeName')}{lid}_OUT"
+            self.temps[lid] = name
+            self.hidden.append((name, typ))
+
+    def infer(self, blk, seen):
+        """The type of a function block's output, or None."""
+        name = (blk.get("typeName") or "").upper()
+        if blk.get("localId") in seen:
+            return None
+        seen = seen | {blk.get("localId")}
+        if name in ("GT", "GE", "EQ", "LE", "LT", "NE"):
+            return "BOOL"
+        m = re.match(r"^(?:[A-Z]+_)?TO_([A-Z]+)$|^[A-Z]+_TO_([A-Z]+)$", name)
+        if m and (m.group(1) or m.group(2)) in ELEMENTARY_NAMES:
+            return m.group(1) or m.group(2)
+        if name in self.gen.fn_returns:
+            return self.gen.fn_returns[name]
+        skip = {"SEL": ("G",), "MUX": ("K",), "LIMIT": (), "SHL": ("N",), "SHR": ("N",),
+                "ROL": ("N",), "ROR": ("N",)}.get(name, ())
+        if name in ("LEN", "FIND"):
+            return "INT"
+        for v in self.pins(blk, "inputVariables"):
+            if v.get("formalParameter") in ("EN",) + skip:
+                continue
+            cpin = _kid(v, "connectionPointIn")
+            for c in _kids(cpin, "connection") if cpin is not None else []:
+                t = self.infer_conn(c, seen)
+                if t is not None:
+                    return t
+        return None
+
+    def infer_conn(self, c, seen):
+        src = self.els.get(c.get("refLocalId"))
+        if src is None:
+            return None
+        k = _local(src)
+        if k in ("contact", "coil", "leftPowerRail"):
+            return "BOOL"
+        if k == "continuation":
+            con = self.connectors.get(src.get("name"))
+            cpin = _kid(con, "connectionPointIn") if con is not None else None
+            cs = _kids(cpin, "connection") if cpin is not None else []
+            return self.infer_conn(cs[0], seen) if cs else None
+        if k in ("inVariable", "inOutVariable"):
+            return self.var_type(_text(src, "expression"))
+        if k == "block":
+            pin = (c.get("formalParameter") or "").upper()
+            if pin == "ENO":
+                return "BOOL"
+            inst = src.get("instanceName")
+            if inst:
+                fb = (self.gen.var_types.get(inst.upper()) or "").upper()
+                return STD_FB_OUTPUTS.get((fb, pin)) or \
+                    self.gen.fb_outputs.get(fb, {}).get(pin)
+            return self.infer(src, seen)
+        return None
+
+    def var_type(self, expr):
+        e = expr.strip()
+        u = e.upper()
+        if u in ("TRUE", "FALSE"):
+            return "BOOL"
+        m = re.match(r"^([A-Z]+)#", u)
+        if m:
+            kind = {"T": "TIME", "TIME": "TIME", "D": "DATE", "DATE": "DATE", "TOD": "TOD",
+                    "TIME_OF_DAY": "TOD", "DT": "DT", "DATE_AND_TIME": "DT"}.get(m.group(1))
+            if kind:
+                return kind
+            if m.group(1) in ELEMENTARY_NAMES:
+                return m.group(1)
+            return None
+        if e.startswith("'"):
+            return "STRING"
+        parts = u.split(".")
+        if not all(re.match(r"^[A-Z_][A-Z0-9_]*$", p) for p in parts):
+            return None
+        t = self.gen.var_types.get(parts[0])
+        if t is None or len(parts) == 1:
+            return t if t is None or t.upper() in ELEMENTARY_NAMES or \
+                t.upper().startswith(("STRING", "WSTRING")) else t
+        if len(parts) == 2:
+            fb = t.upper()
+            return STD_FB_OUTPUTS.get((fb, parts[1])) or \
+                self.gen.fb_outputs.get(fb, {}).get(parts[1])
+        return None
 
     def refuse_fn_en(self, blk):
         raise XmlRefusal(blk, f"EN of the function call {self.label(blk)} in {self.ctx} is "
@@ -262,10 +402,15 @@ class Network:
         self.pre = []
         self.implied = set()
         lines = []
-        if k == "block":
-            inst = e.get("instanceName")
-            if not inst:
+        if k == "block" and not e.get("instanceName"):
+            tmp = self.temps.get(e.get("localId"))
+            if tmp is None:
                 return []             # a function: evaluated where its output is read
+            en = self.en(e)
+            line = f"{tmp} := {self.call(e, 'OUT', guarded=True)};"
+            lines = [line] if en is None else [f"IF {en} THEN", f"    {line}", "END_IF;"]
+        elif k == "block":
+            inst = e.get("instanceName")
             args = []
             for sec in ("inputVariables", "inOutVariables"):
                 for v in self.pins(e, sec):
@@ -334,7 +479,8 @@ class Network:
             return en, self.block_output(src, pin, conns[0])
         outs = [v.get("formalParameter") for v in self.pins(src, "outputVariables")
                 if v.get("formalParameter") != "ENO"]
-        val = self.call(src, pin or (outs[0] if len(outs) == 1 else ""), guarded=True)
+        val = self.temps.get(src.get("localId")) or \
+            self.call(src, pin or (outs[0] if len(outs) == 1 else ""), guarded=True)
         v = next((v for v in self.pins(src, "outputVariables")
                   if v.get("formalParameter") == (pin or "OUT")), None)
         if v is not None and _true(v.get("negated")):
@@ -372,7 +518,8 @@ class Network:
                         continue
                     seen.add(id(src))
                     k = _local(src)
-                    if k == "block" and src.get("instanceName"):
+                    if k == "block" and (src.get("instanceName") or
+                                         src.get("localId") in self.temps):
                         out.add(src.get("localId"))
                     elif k == "inOutVariable":
                         out.add(src.get("localId"))
@@ -390,7 +537,9 @@ class Network:
         return out
 
     def order(self):
-        stmts = [e for e in _kids(self.body) if _local(e) in STATEMENTS]
+        stmts = [e for e in _kids(self.body) if _local(e) in STATEMENTS and
+                 (_local(e) != "block" or e.get("instanceName") or
+                  e.get("localId") in self.temps)]
         labels = sorted((e for e in _kids(self.body) if _local(e) == "label"), key=_pos)
         self.label_index = {}
         for i, lab in enumerate(labels):

@@ -267,6 +267,8 @@ def _formatted(el):
 class _Generator:
     def __init__(self, tr: Translation):
         self.tr = tr
+        self.var_types, self.fn_returns, self.fb_outputs = {}, {}, {}
+        self.user_functions = set()
         self.lines: list[str] = []
         self.smap: list = []
         self.vendor: dict[str, int] = {}
@@ -328,6 +330,24 @@ class _Generator:
         self.user_functions = {p.get("name", "").upper() for p in
                                (_kids(pous, "pou") if pous is not None else [])
                                if p.get("pouType") == "function"}
+        # the types graphic.py infers a function's output from
+        self.fn_returns, self.fb_outputs = {}, {}
+        for p in _kids(pous, "pou") if pous is not None else []:
+            iface = _kid(p, "interface")
+            if iface is None:
+                continue
+            name = p.get("name", "").upper()
+            try:
+                rt = _kid(iface, "returnType")
+                if p.get("pouType") == "function" and rt is not None:
+                    self.fn_returns[name] = self.type_of(rt, name)
+                if p.get("pouType") == "functionBlock":
+                    self.fb_outputs[name] = {
+                        v.get("name", "").upper(): self.type_of(_kid(v, "type"), name)
+                        for sec in _kids(iface) if _local(sec) in ("outputVars", "inOutVars")
+                        for v in _kids(sec, "variable") if _kid(v, "type") is not None}
+            except XmlRefusal:
+                continue             # reported where the POU itself is translated
         for pou in _kids(pous, "pou") if pous is not None else []:
             self.pou(pou)
         inst = _kid(root, "instances")
@@ -464,6 +484,17 @@ class _Generator:
         # hidden variables (edge detection, the jump guard) declared above it
         self.hidden = []
         self.pou_kind = kind
+        self.var_types = {}
+        if kind == "function":
+            self.var_types[name.upper()] = head.split(" : ", 1)[1]
+        for sec in _kids(iface) if iface is not None else []:
+            for v in _kids(sec, "variable") if _local(sec) in VAR_SECTIONS else []:
+                if _kid(v, "type") is not None:
+                    try:
+                        self.var_types[v.get("name", "").upper()] = \
+                            self.type_of(_kid(v, "type"), name)
+                    except XmlRefusal:
+                        pass         # reported when the interface is written
         outer = (self.lines, self.smap)
         self.lines, self.smap = [], []
         try:

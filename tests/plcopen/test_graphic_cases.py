@@ -20,7 +20,9 @@ sys.path.insert(0, str(HERE.parent / "execution"))
 import runner  # noqa: E402
 
 pytestmark = pytest.mark.execution
-CASES = sorted((HERE / "cases").glob("*.xml"))
+# the project the QEMU tier also runs in the kernel (tests/qemu/test_plcopen_kernel.py)
+KERNEL_PROJECT = HERE.parent / "qemu" / "projects" / "plcopen_ld" / "plc.xml"
+CASES = sorted((HERE / "cases").glob("*.xml")) + [KERNEL_PROJECT]
 assert len(CASES) >= 1, f"only {len(CASES)} cases under {HERE / 'cases'}"
 
 
@@ -46,9 +48,11 @@ def load(path: Path) -> runner.Case:
 
 
 @pytest.mark.parametrize("engine", ["c", "vm"])
-@pytest.mark.parametrize("path", CASES, ids=[p.stem for p in CASES])
+@pytest.mark.parametrize("path", CASES, ids=[p.parent.name if p.stem == "plc" else p.stem
+                                             for p in CASES])
 def test_graphic_case(path, engine):
     case = load(path)
-    run = runner.run_group(f"plcopen_{path.stem}_{engine}", [case], engine=engine)
+    run = runner.run_group(f"plcopen_{path.parent.name}_{path.stem}_{engine}", [case],
+                           engine=engine)
     problems = runner.verify(case, run)
     assert not problems, f"{path}:\n  " + "\n  ".join(problems)
