@@ -271,7 +271,7 @@ class Network:
                      if _kid(v, "connectionPointIn") is not None)
             if n < 2 and not (en and not direct[lid]):
                 continue
-            typ = self.infer(blk, set())
+            typ = self.infer(blk, set()) or self.infer_from_readers(blk)
             if typ is None:
                 if n >= 2:
                     raise XmlRefusal(blk, f"the output of {self.label(blk)} in {self.ctx} is "
@@ -308,6 +308,45 @@ class Network:
                 t = self.infer_conn(c, seen)
                 if t is not None:
                     return t
+        return None
+
+    def infer_from_readers(self, blk):
+        """The type of a function's output from what reads it, when its own
+        inputs do not tell (literals only): a variable it is stored into,
+        or the other inputs of a function it feeds."""
+        lid = blk.get("localId")
+        for c in self.body.iter():
+            if not isinstance(c.tag, str) or _local(c) != "connection" or \
+                    c.get("refLocalId") != lid:
+                continue
+            cpin = c.getparent()
+            owner = cpin.getparent() if cpin is not None else None
+            if owner is None:
+                continue
+            if _local(owner) in ("outVariable", "inOutVariable"):
+                t = self.var_type(_text(owner, "expression"))
+                if t is not None:
+                    return t
+            if _local(owner) == "variable":          # a pin of a block
+                reader = owner.getparent().getparent()
+                if reader is None or _local(reader) != "block" or reader.get("instanceName"):
+                    continue
+                if (reader.get("typeName") or "").upper() in ("SEL", "MUX") and \
+                        owner.get("formalParameter") in ("G", "K"):
+                    continue
+                if (reader.get("typeName") or "").upper() not in (
+                        "ADD", "SUB", "MUL", "DIV", "MOD", "MAX", "MIN", "SEL", "MUX", "LIMIT",
+                        "GT", "GE", "EQ", "LE", "LT", "NE", "AND", "OR", "XOR", "MOVE"):
+                    continue
+                for v in self.pins(reader, "inputVariables"):
+                    if v is owner or v.get("formalParameter") in ("EN", "G", "K"):
+                        continue
+                    vin = _kid(v, "connectionPointIn")
+                    for c2 in _kids(vin, "connection") if vin is not None else []:
+                        if c2.get("refLocalId") != lid:
+                            t = self.infer_conn(c2, {lid})
+                            if t is not None:
+                                return t
         return None
 
     def infer_conn(self, c, seen):

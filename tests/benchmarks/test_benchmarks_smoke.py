@@ -48,6 +48,8 @@ HOST = {
                     r"^property verdicts .*: proved \d+"],
     "scale": [rf"^ +4 +\d+ +{NUM} +{NUM} +{NUM} +configuration x1: ",
               rf"^ +8 +\d+ +{NUM} +{NUM} +nan +not built$"],
+    "plcopen_fuzz": [r"^10 projects \(\d+ LD, \d+ FBD\) in \d+ s \(interp\): 10 agree, "
+                     r"0 disagree$"],
     "plcopen_corpus": [r"^mixed/plc\.xml +IEC only +runs \(", r"^IEC-only projects: 1$",
                        r"^ +1 +runs$"],
     "verify_encode_diff": [rf"^2 programs x 20 expressions, \d+ cycles compared, 0 differ, "
