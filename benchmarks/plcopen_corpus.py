@@ -20,6 +20,13 @@ extension (a ``NAME@KIND`` directory: py_ext, c_ext, svghmi, modbus, ...):
 those are the ones issue 28 asks to run; the others are reported apart
 since their refusals come from the extension's types and blocks.
 
+--generator (a full Beremiz checkout): Beremiz's own XML-to-ST generator
+(PLCGenerator, run headless in a subprocess with Beremiz's fake_wx and stub
+modules for the GUI's imports) writes its ST of every project that runs
+here; that ST is checked and simulated too (interpreter), and every
+variable the two have in common (hidden temporaries left out) is compared
+after every cycle: "same" or the first difference.
+
 Printed: one line per project (result or first error), then the counts by
 result and refusal cause, for the IEC-only projects and for the others.
 The exit status is 1 when an IEC-only project fails or two engines differ.
@@ -114,12 +121,92 @@ def run_one(path: Path, cycles: int, engines: list[str]):
     return "runs", "", "", time.perf_counter() - t0
 
 
+PLCGEN = r"""
+import importlib, sys, types
+bz, src, out = sys.argv[1:4]
+sys.path.insert(0, bz)
+import fake_wx
+
+
+class _Stub(types.ModuleType):
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return type(name, (), {"__init__": lambda self, *a, **k: None})
+
+
+for _ in range(40):
+    try:
+        importlib.import_module("ProjectController")
+        break
+    except ModuleNotFoundError as exc:
+        for k in [k for k in sys.modules if k.split(".")[0] in
+                  ("ProjectController", "dialogs", "controls", "editors", "graphics")]:
+            del sys.modules[k]
+        parts = exc.name.split(".")
+        for i in range(1, len(parts) + 1):
+            sys.modules.setdefault(".".join(parts[:i]), _Stub(".".join(parts[:i])))
+from PLCControler import PLCControler
+c = PLCControler()
+err = c.OpenXMLFile(src)
+if err:
+    print("open:", err)
+text, errors, warnings = c.GenerateProgram(out)
+for e in errors:
+    print("error:", e)
+sys.exit(1 if errors or not text else 0)
+"""
+
+
+def beremiz_st(beremiz: Path, proj: Path, out: Path):
+    """Beremiz's PLCGenerator's ST of proj, or (None, why)."""
+    import subprocess
+    p = subprocess.run([sys.executable, "-c", PLCGEN, str(beremiz), str(proj), str(out)],
+                       capture_output=True, text=True, timeout=300, cwd=str(beremiz))
+    if p.returncode != 0 or not out.is_file():
+        tail = (p.stdout + p.stderr).strip().splitlines()
+        return None, (tail[-1] if tail else f"exit {p.returncode}")[:200]
+    return out, None
+
+
+def compare_generator(beremiz: Path, proj: Path, cycles: int, workdir: Path) -> str:
+    """'same', or what differs between our translation and Beremiz's."""
+    from iec2kmod import frontend, interp
+    from iec2kmod.codegen.plan import build_plan
+    st, why = beremiz_st(beremiz, proj, workdir / (proj.parent.name + ".st"))
+    if st is None:
+        return f"Beremiz's generator failed: {why}"
+    theirs = frontend.run([str(st)], use_cache=False)
+    if not theirs.ok:
+        return "Beremiz's ST refused: " + cause(theirs.diags.errors[0].message)
+    ours = frontend.run([str(proj)], use_cache=False)
+    names_ours = {e.path.upper(): e.path for e in build_plan(ours.project).table}
+    common = [e.path for e in build_plan(theirs.project).table
+              if e.path.upper() in names_ours and
+              not any(part.startswith("_") for part in e.path.split("."))]
+    periods = [t.interval_ns for c in ours.project.configurations for r in c.resources
+               for t in r.tasks.values() if t.interval_ns]
+    step = min(periods)
+    a = interp.run(ours.project, step * (cycles - 1), watch=common)
+    b = interp.run(theirs.project, step * (cycles - 1), watch=common)
+    for k in range(cycles):
+        va, vb = a.values_at(k * step), b.values_at(k * step)
+        diff = [n for n in vb if va.get(n) != vb.get(n)]
+        if diff:
+            n = diff[0]
+            return (f"differ after cycle {k + 1}: {n} ours {va.get(n)!r}, Beremiz's "
+                    f"{vb.get(n)!r} ({len(diff)} variables)")
+    return f"same ({len(common)} variables, {cycles} cycles)"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("paths", nargs="*", type=Path)
     ap.add_argument("--cycles", type=int, default=20)
     ap.add_argument("--engines", default="c,interp")
     ap.add_argument("--list", action="store_true", help="print the first error of each project")
+    ap.add_argument("--generator", action="store_true",
+                    help="compare with Beremiz's PLCGenerator's ST (a full Beremiz checkout)")
     ap.add_argument("--smoke", action="store_true",
                     help="this repository's tests/plcopen/projects, 3 cycles")
     args = ap.parse_args(argv)
@@ -135,6 +222,7 @@ def main(argv=None) -> int:
             os.environ["IEC2KMOD_TC6_XSD"] = str(xsd)
     print(f"schema: {os.environ.get('IEC2KMOD_TC6_XSD') or 'none (structural checks only)'}")
     counts = {True: Counter(), False: Counter()}
+    gen_counts = Counter()
     failed = False
     for root in args.paths:
         for proj in projects(root):
@@ -147,6 +235,13 @@ def main(argv=None) -> int:
             print(f"{str(rel):50} {tag:28} {result}{': ' + why if why else ''} ({secs:.1f} s)")
             if args.list and detail:
                 print(f"    {detail}")
+            if args.generator and result in ("runs", "runs (faults)") and \
+                    (root / "PLCGenerator.py").is_file():
+                import tempfile
+                with tempfile.TemporaryDirectory() as tmp:
+                    verdict = compare_generator(root, proj, args.cycles, Path(tmp))
+                gen_counts[verdict.split(" (")[0].split(":")[0]] += 1
+                print(f"    Beremiz's generator: {verdict}")
             if iec and result not in ("runs", "runs (faults)", "no configuration") or \
                     result == "engines differ":
                 failed = True
@@ -155,6 +250,9 @@ def main(argv=None) -> int:
         print(f"\n{'IEC-only projects' if iec else 'projects with extensions'}: {total}")
         for (result, why), n in sorted(counts[iec].items(), key=lambda kv: (-kv[1], kv[0])):
             print(f"  {n:3}  {result}{': ' + why if why else ''}")
+    if gen_counts:
+        print("\nagainst Beremiz's generator: " +
+              ", ".join(f"{n} {k}" for k, n in sorted(gen_counts.items())))
     return 1 if failed else 0
 
 
