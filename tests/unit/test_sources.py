@@ -34,4 +34,5 @@ def test_a_txt_named_on_the_command_line_is_refused(tmp_path, capsys):
     rc = cli.main(["check", str(tmp_path / "p.txt")])
     err = capsys.readouterr().err
     assert rc == 2
-    assert f"{tmp_path / 'p.txt'}: not a source file (sources are .st, .il or .iec files)" in err
+    assert f"{tmp_path / 'p.txt'}: not a source file (sources are .st, .il or .iec files, " \
+           f"or a PLCopen .xml project)" in err
