@@ -215,7 +215,8 @@ class Network:
     def en(self, blk):
         for v in self.pins(blk, "inputVariables"):
             if v.get("formalParameter") == "EN":
-                return self.pin_value(blk, v)
+                val = self.pin_value(blk, v)
+                return None if val == "TRUE" else val      # EN on the power rail
         return None
 
     def block_output(self, blk, pin, conn):
