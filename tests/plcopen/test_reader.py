@@ -186,3 +186,14 @@ def test_beremiz_logger_is_provided_with_a_note(tmp_path, capsys):
            f"destination here and are dropped" in err
     assert main(["sim", str(p), "--cycles", "3", "--engine", "interp",
                  "--watch", "Res0.main.count"]) == 0
+
+
+def test_verify_takes_an_ld_project(tmp_path, capsys):
+    ld = HERE / "cases" / "ld_rungs.xml"
+    assert main(["verify", str(ld), "--instance", "res.inst", "-p", "NOT (Motor AND Stop)",
+                 "-p", "Idle = NOT Motor", "--depth", "6"]) == 0
+    out = capsys.readouterr().out
+    assert "property 1        proved" in out and "property 2        proved" in out
+    assert main(["verify", str(ld), "--instance", "res.inst", "-p", "NOT Motor", "--depth", "6",
+                 "--cex-dir", str(tmp_path)]) == 3
+    assert "violated" in capsys.readouterr().out
