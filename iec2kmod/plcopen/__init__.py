@@ -14,7 +14,8 @@ the element (a block's localId and name), not at the generated text.
 
 Schema validation: lxml against the TC6 2.01 XSD when one is found
 ($IEC2KMOD_TC6_XSD, or plcopen/tc6_xml_v201.xsd beside a Beremiz checkout
-named by $IEC2KMOD_BEREMIZ); the XSD is not vendored here (see reader.py).
+named by $IEC2KMOD_BEREMIZ, or the copy scripts/setup.sh downloads into
+$IEC2KMOD_CACHE/tc6/); the XSD is not vendored here (see reader.py).
 The reader's own structural checks always run and name the element and its
 line."""
 

