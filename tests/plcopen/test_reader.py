@@ -10,7 +10,6 @@ project's code and the SFC rules of iec2kmod/interp/sfc.py's docstring
 scan, P1 once at activation), before running it."""
 
 import csv
-import os
 from pathlib import Path
 
 import pytest
