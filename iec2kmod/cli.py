@@ -277,10 +277,10 @@ def cmd_gen(args) -> int:
         return EXIT_USAGE
     try:
         comp = compile_project(project, args.selective)
+        manifest = generate_tree(comp, out)
     except CompileError as exc:
         print(f"iec2kmod: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    manifest = generate_tree(comp, out)
     print(f"wrote {out}: {len(manifest['modules'])} modules "
           f"({', '.join(m['name'] for m in manifest['modules'])})")
     return EXIT_OK

@@ -44,6 +44,7 @@ class InputError(Exception):
 
 
 SOURCE_SUFFIXES = (".st", ".il", ".iec")
+MAP_SUFFIXES = (".iomap",)        # the I/O map (iec2kmod/iomap.py), read after the checks
 
 
 def collect_files(paths, ignored=None) -> list[str]:
@@ -58,6 +59,7 @@ def collect_files(paths, ignored=None) -> list[str]:
         elif path.is_dir():
             files = sorted(f for f in path.rglob("*") if f.is_file())
             found = [str(f) for f in files if f.suffix.lower() in SOURCE_SUFFIXES]
+            maps = [str(f) for f in files if f.suffix.lower() in MAP_SUFFIXES]
             if ignored is not None:
                 # the files a project directory also holds (notes, a
                 # README.txt): only a name that looks like text is worth a
@@ -65,18 +67,19 @@ def collect_files(paths, ignored=None) -> list[str]:
                 ignored += [str(f) for f in files if f.suffix.lower() == ".txt"]
             if not found:
                 raise InputError(f"{p}: no .st, .il or .iec files in this directory")
-            out += found
+            out += found + maps
         elif path.is_file():
-            if path.suffix.lower() not in SOURCE_SUFFIXES + (".xml",):
+            if path.suffix.lower() not in SOURCE_SUFFIXES + MAP_SUFFIXES + (".xml",):
                 raise InputError(f"{p}: not a source file (sources are .st, .il or .iec files, "
-                                 f"or a PLCopen .xml project)")
+                                 f"or a PLCopen .xml project); an I/O map is a .iomap file")
             out.append(str(path))
         elif path.exists():
             raise InputError(f"{p}: not a regular file")
         else:
             raise InputError(f"{p}: no such file or directory")
-    if not out:
-        raise InputError("no input files")
+    if not out or all(Path(f).suffix.lower() in MAP_SUFFIXES for f in out):
+        raise InputError("no input files" if not out else
+                         "no source files: an I/O map binds the located variables of sources")
     return out
 
 
@@ -366,7 +369,8 @@ def _run(paths, use_cache, jobs) -> FrontEndResult:
     diags = Diagnostics()
     diags.items.extend(notes)
     t = time.perf_counter()
-    parsed = parse_all(sources, jobs)
+    maps = [s for s in sources if Path(s.path).suffix.lower() in MAP_SUFFIXES]
+    parsed = parse_all([s for s in sources if s not in maps], jobs)
     timings["parse"] = time.perf_counter() - t
     units = []
     for unit, items in parsed:
@@ -386,6 +390,11 @@ def _run(paths, use_cache, jobs) -> FrontEndResult:
         gc.disable()
         try:
             project = check_project(units, diags, timings)
+            if maps and project is not None and not diags.errors:
+                from .iomap import check_maps
+                t = time.perf_counter()
+                check_maps(project, maps, diags)
+                timings["iomap"] = time.perf_counter() - t
         finally:
             if gc_was_enabled:
                 gc.enable()

@@ -111,9 +111,12 @@ def _in_scope(t, resource: Optional[str]) -> bool:
 
 def fault_text(t) -> str:
     """'division by zero in Faulty line 15'; a fault of the task itself (the
-    watchdog's overruns) has no place."""
+    watchdog's overruns) has no place; an I/O fault names its channel and no
+    line ('I/O device error in io daq.0.0 %IW0 errno 19')."""
     if t.fault_pou in (None, "", "?") and not t.fault_line:
         return f"{t.fault}"
+    if not t.fault_line:
+        return f"{t.fault} in {t.fault_pou}"
     return f"{t.fault} in {t.fault_pou} line {t.fault_line}"
 
 

@@ -135,6 +135,9 @@ class ConfigChecker:
         self.check_address_rules(src)
         self.check_completed(cfg)
         cfg.addresses = {a: p for a, p in self.paths.items() if not a.endswith("*")}
+        # address -> (type, resources declaring or using it), for the I/O map
+        cfg.located = {a: (e[0][6], frozenset(e[0][5] | ({e[0][1]} if e[0][1] else set())))
+                       for a, e in self.addresses.items() if not a.endswith("*")}
         return cfg
 
     def resource(self, rnode, cfg) -> ResourceInfo:
@@ -409,7 +412,7 @@ class ConfigChecker:
         value = conn.value
         if isinstance(value, ast.Direct):
             self.note_direct(value.address, r.name, src, value.pos,
-                             f"connection of {inst.name}.{conn.name}")
+                             f"connection of {inst.name}.{conn.name}", typ=param.type)
             check_address_type(self.decl, src, value.pos, value.address, param.type)
         elif conn.direction == "out":
             if not isinstance(value, ast.Ref) or value.accessors:
@@ -644,9 +647,10 @@ class ConfigChecker:
         if v.location:
             self.note_direct(v.location, resource, src, v.pos, f"'{v.name}'", var=v)
 
-    def note_direct(self, addr, resource, src, pos, who, var=None):
-        # [who, declaring resource, src, pos, variable, resources using it]
-        self.addresses.setdefault(addr, []).append([who, resource, src, pos, var, set()])
+    def note_direct(self, addr, resource, src, pos, who, var=None, typ=None):
+        # [who, declaring resource, src, pos, variable, resources using it, type]
+        self.addresses.setdefault(addr, []).append(
+            [who, resource, src, pos, var, set(), typ if var is None else var.type])
 
     def note_global_use(self, g, r, src, pos):
         """A located configuration global used by a program of resource r."""

@@ -132,6 +132,12 @@ class ConfigInfo:
     # VAR_CONFIG path of a completed %I* location); the tools take an
     # address wherever they take this path (sim, interpreter, plc-manager)
     addresses: dict = field(default_factory=dict)
+    # address -> (type, frozenset of the resource names declaring or using
+    # it): what the I/O map (iec2kmod/iomap.py) checks a binding against
+    located: dict = field(default_factory=dict)
+    # resource name (upper) -> iomap.ResourceIO: the devices and bindings of
+    # the project's .iomap files
+    io: dict = field(default_factory=dict)
 
 
 @dataclass(eq=False)

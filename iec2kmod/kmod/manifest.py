@@ -58,6 +58,9 @@ def manifest_of(cfg, plan, config_mod, prog_modules, res_modules, source_hash, i
         # a located variable's address names it too (plc-manager read %IW2)
         "addresses": {a: p for a, p in sorted(getattr(cfg, "addresses", {}).items())
                       if p.upper() in {v["path"].upper() for v in variables}},
+        # the I/O map (iec2kmod/iomap.py): per resource, its devices and bindings
+        "io": {io.resource: io.manifest()
+               for _, io in sorted((getattr(cfg, "io", None) or {}).items())},
     }
 
 

@@ -215,6 +215,7 @@ def _resource_source(env, comp, rm):
     pe = comp.emitter
     by_c = _globals_by_c(plan)
     c_of = _global_c_names(plan)
+    io = _io_of(cfg, plan, r)
     for tp in rm.tasks:
         used: dict[str, tuple] = {}   # global C name -> (read, write)
 
@@ -263,7 +264,12 @@ def _resource_source(env, comp, rm):
             tp, lambda ip: [f"if (iec2kmod_run_program({slot_of[ip.pou.key]}, &{ip.c_name}, ctx))",
                             "\treturn;"],
             image=lambda c, n=tp.index: f"task{n}_image.{c}", owner=pe.ie.body_emitter().pou)
+        io_in = [i for i, b in enumerate(io["binds"] if io else []) if b["input"] and
+                 used.get(b["c_name"], (False, False))[0]]
+        io_out = [i for i, b in enumerate(io["binds"] if io else []) if not b["input"] and
+                  used.get(b["c_name"], (False, False))[1]]
         tasks.append({"index": tp.index, "name": tp.name, "interval": tp.interval_ns or 0,
+                      "io_in": io_in, "io_out": io_out,
                       "priority": tp.priority,
                       "single_event": single_events[id(tp.single.var)] if tp.single else -1,
                       "loop_budget": LOOP_BUDGET, "image": image,
@@ -290,7 +296,54 @@ def _resource_source(env, comp, rm):
         vars=vars_out, enum_sets=_enum_sets(enums), cpu=rm.cpu, init_decls=f.decls,
         needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init,
         source_hash=mp.source_hash, iface_hash=mp.iface_hash,
-        unbound_check=unbound_pointer_check(instances))
+        unbound_check=unbound_pointer_check(instances), io=io)
+
+
+# the C enum of iec_io.c for a subdevice kind of the I/O map
+_IO_KINDS = {"AI", "AO", "DI", "DO", "DIO"}
+
+
+def _io_of(cfg, plan, r):
+    """The template's view of resource r's I/O map (iec2kmod/iomap.py), or
+    None: its devices, and per binding the C lvalue of its located
+    variable (a global of the configuration or the resource, or a direct
+    address of a program connection)."""
+    from ..compilation import CompileError
+    rio = (getattr(cfg, "io", None) or {}).get(r.name.upper())
+    if rio is None or not rio.bindings:
+        return None
+    devs = list(rio.devices.values())
+    index = {d.name.upper(): i for i, d in enumerate(devs)}
+    by_path = {g.path.upper(): g for g in plan.globals}
+    binds = []
+    for b in rio.bindings:
+        if b.address in plan.directs:
+            c_name = plan.directs[b.address][0]
+            lvalue = f"iec2kmod_image.{c_name}"
+        else:
+            g = by_path.get((cfg.addresses.get(b.address) or "").upper())
+            if g is None:
+                raise CompileError(f"{b.place}: {b.address} is a program's located variable "
+                                   f"({cfg.addresses.get(b.address)}): the kernel binds devices "
+                                   "to globals and program connections only; declare it in "
+                                   "the resource's VAR_GLOBAL")
+            c_name = g.c_name
+            lvalue = f"res_image.{c_name}" if g.resource else f"iec2kmod_image.{c_name}"
+        if b.scale == "phys":
+            raise CompileError(f"{b.place}: {b.address} is {b.type}: the kernel runtime does "
+                               "not scale to REAL yet; bind an integer variable (the raw "
+                               "sample)")
+        assert b.kind in _IO_KINDS
+        maxdata = 1 if b.scale == "bit" else (1 << b.bits) - 1
+        safe = 0 if b.safe in (None, "HOLD") else int(b.safe)
+        binds.append({"address": b.address, "channel": f"{b.device}.{b.subdevice}.{b.channel}",
+                      "dev": index[b.device.upper()], "subdev": b.subdevice, "chan": b.channel,
+                      "kind": b.kind, "input": int(b.address[1] == "I"), "range": b.range,
+                      "hold": int(b.safe == "HOLD"), "maxdata": maxdata, "safe": safe,
+                      "lvalue": lvalue, "c_name": c_name,
+                      "signed": int(b.type in ("SINT", "INT", "DINT", "LINT"))})
+    return {"devs": [{"name": d.name, "provider": d.provider, "minor": d.minor} for d in devs],
+            "binds": binds, "comedi": any(d.provider == "comedi" for d in devs)}
 
 
 def _write_module(out, mod, files, objs, fp_objs, runtime):

@@ -182,10 +182,18 @@ struct iec_task {
 	s64 watchdog_ns;
 	u32 watchdog_overruns;
 	u32 task_id;		/* index in the configuration: its frame areas */
-	/* generated: copy in, run the programs, copy out */
-	void (*copy_in)(void);
+	/*
+	 * generated: copy in, run the programs, copy out.  A copy with bound
+	 * I/O (iec_io.c) reads its devices before copy-in's image lock and
+	 * writes them after copy-out's; a device error raises IEC_FAULT_IO on
+	 * the task's ctx, and run() is skipped.
+	 */
+	void (*copy_in)(struct iec_task *t);
 	void (*run)(struct iec_ctx *ctx);
-	void (*copy_out)(void);
+	void (*copy_out)(struct iec_task *t);
+	/* NULL, or: drives the task's bound outputs to their safe state
+	 * (the thread calls it when it goes idle: stop and fault) */
+	void (*io_safe)(struct iec_task *t);
 	/*
 	 * The GFT slots whose bodies run() calls, ascending: the grace
 	 * period of one slot waits only for the tasks that run it, so a

@@ -130,6 +130,25 @@ static void iec_watchdog_check(struct iec_task *t, ktime_t release)
 	}
 }
 
+/* The task stops on the fault its ctx holds; the status names it. */
+static void iec_task_fault(struct iec_task *t)
+{
+	t->stats.faults++;
+	t->stats.fault_code = t->ctx.fault;
+	t->stats.fault_pou = t->ctx.fault_pou;
+	/* the POU name lives in a program module, which may go */
+	strscpy(t->stats.fault_pou_name,
+		t->ctx.fault_pou ? t->ctx.fault_pou : "?",
+		sizeof(t->stats.fault_pou_name));
+	t->stats.fault_line = t->ctx.fault_line;
+	t->stats.fault_time = ktime_get_real();
+	smp_store_release(&t->state, IEC_TASK_FAULT);
+	pr_warn("iec2kmod: task %s.%s stopped: %s in %s line %d\n",
+		t->res->name, t->name, iec_fault_name(t->ctx.fault),
+		t->ctx.fault_pou ? t->ctx.fault_pou : "?",
+		t->ctx.fault_line);
+}
+
 /*
  * One cycle.  The programs' clock (timers) reads the cycle's release time,
  * not the moment the thread got the CPU: time advances by exactly one
@@ -144,27 +163,17 @@ static void iec_task_cycle(struct iec_task *t, ktime_t release)
 		hrtimer_start(&t->watchdog, ns_to_ktime(t->watchdog_ns),
 			      HRTIMER_MODE_REL_HARD);
 	iec2kmod_cycle_begin(t);	/* forces; the manager waits from here */
-	t->copy_in();
-	t->run(&t->ctx);
+	t->copy_in(t);
+	if (t->ctx.fault == IEC_FAULT_NONE)	/* an input device failed */
+		t->run(&t->ctx);
 	iec_watchdog_check(t, release);
 	if (t->ctx.fault != IEC_FAULT_NONE) {
 		/* the task stops; its results of this cycle are not written */
-		t->stats.faults++;
-		t->stats.fault_code = t->ctx.fault;
-		t->stats.fault_pou = t->ctx.fault_pou;
-		/* the POU name lives in a program module, which may go */
-		strscpy(t->stats.fault_pou_name,
-			t->ctx.fault_pou ? t->ctx.fault_pou : "?",
-			sizeof(t->stats.fault_pou_name));
-		t->stats.fault_line = t->ctx.fault_line;
-		t->stats.fault_time = ktime_get_real();
-		smp_store_release(&t->state, IEC_TASK_FAULT);
-		pr_warn("iec2kmod: task %s.%s stopped: %s in %s line %d\n",
-			t->res->name, t->name, iec_fault_name(t->ctx.fault),
-			t->ctx.fault_pou ? t->ctx.fault_pou : "?",
-			t->ctx.fault_line);
+		iec_task_fault(t);
 	} else {
-		t->copy_out();
+		t->copy_out(t);
+		if (t->ctx.fault != IEC_FAULT_NONE)	/* an output device failed */
+			iec_task_fault(t);
 	}
 	iec2kmod_cycle_end(t);
 	iec_task_account(t, ktime_to_ns(ktime_sub(start, release)),
@@ -223,6 +232,8 @@ static void iec_wait_stop(void)
  */
 static void iec_task_idle(struct iec_task *t)
 {
+	if (t->io_safe)
+		t->io_safe(t);	/* its bound outputs: safe state (iec_io.c) */
 	module_put(THIS_MODULE);
 	iec2kmod_task_idle(t);
 }

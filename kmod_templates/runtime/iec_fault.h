@@ -56,6 +56,7 @@ enum iec_fault_code {
 	IEC_FAULT_WATCHDOG,	/* the cycle ran longer than its watchdog time */
 	IEC_FAULT_OVERRUN,	/* too many cycles in a row ended late */
 	IEC_FAULT_FRAME,	/* frame area too small (never, by construction) */
+	IEC_FAULT_IO,		/* a bound I/O device failed (iec_io.c) */
 	IEC_FAULT__COUNT
 };
 
@@ -164,6 +165,8 @@ static inline const char *iec_fault_name(enum iec_fault_code code)
 		return "overruns (cycles in a row that ended after the next release)";
 	case IEC_FAULT_FRAME:
 		return "frame area exhausted";
+	case IEC_FAULT_IO:
+		return "I/O device error";
 	default:
 		return "unknown fault";
 	}

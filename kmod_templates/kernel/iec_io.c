@@ -1,0 +1,291 @@
+// SPDX-License-Identifier: GPL-2.0-only OR MIT
+/*
+ * iec_io.c - bound I/O of a resource module: the provider interface and
+ * the copy of device channels into and out of the process image.
+ * Included by a generated resource module whose resource has an I/O map
+ * (iec2kmod/iomap.py); its functions are static.
+ *
+ * Where the device access happens.  Copy-in and copy-out hold the image
+ * lock, a raw spinlock: nothing may sleep there, while a provider may
+ * (comedi takes the device's mutex).  So a task's cycle is:
+ *
+ *   1. iec_io_read():   every input the task reads, from its device, into
+ *                       the task's staging array (its thread, preemptible,
+ *                       no lock held);
+ *   2. copy-in:         under the image lock, the staged inputs are stored
+ *                       into their located variables (forced ones are
+ *                       forced again), then the task's image is copied in;
+ *   3. the programs run;
+ *   4. copy-out:        under the image lock, the task's results go to the
+ *                       image, the forces are applied, and the value of
+ *                       each output the task writes is staged;
+ *   5. iec_io_write():  the staged outputs to their devices (no lock held).
+ *
+ * Consistency: a task's programs see all its bound inputs sampled in one
+ * burst just before the cycle's copy-in (not one instant: the samples are
+ * taken one after the other, in the order of the I/O map), together with
+ * the rest of the image as of that copy-in; its outputs reach the devices
+ * right after the copy-out that produced them, with the forced value of a
+ * forced output.  The image never holds a half-updated input: the store
+ * happens under the same lock as the copy.  Each task stages into its own
+ * array, so two tasks never share a staging slot.
+ *
+ * Errors.  A device missing or different from the I/O map at load refuses
+ * the load, naming the device (iec_io_open()).  A read or write that fails
+ * during a cycle raises IEC_FAULT_IO on the task, located at
+ * "io <device>.<subdevice>.<channel> <address> errno <n>"; the cycle's
+ * programs do not run (input) or its other outputs are not written
+ * (output), and the task stops.  When a task goes idle (stop or fault) the
+ * outputs it writes go to their safe state: the SAFE value of the I/O map,
+ * 0/FALSE by default, nothing for SAFE HOLD.  At load and unload every
+ * bound output goes to its safe state.
+ *
+ * Scaling (the generator accepts only these): a digital channel is 0/1 in
+ * a BOOL; an analog channel's raw sample 0..maxdata is the value of an
+ * integer variable.  An output's value is clamped to 0..maxdata before it
+ * is written.
+ */
+#include <linux/errno.h>
+#include <linux/kernel.h>
+#include <linux/minmax.h>
+#include <linux/string.h>
+
+#include "iec_kmod.h"
+
+enum iec_io_kind { IEC_IO_AI, IEC_IO_AO, IEC_IO_DI, IEC_IO_DO, IEC_IO_DIO };
+
+struct iec_io_dev;
+struct iec_io_bind;
+
+/* A provider: how a kind of device is reached. */
+struct iec_io_provider {
+	const char *name;
+	/* module init, process context, may sleep: 0 or -errno (why: text) */
+	int (*open)(struct iec_io_dev *d, const char **why);
+	void (*close)(struct iec_io_dev *d);
+	/* module init: does the device have this channel as the map says? */
+	int (*check)(struct iec_io_dev *d, const struct iec_io_bind *b,
+		     const char **why);
+	/* task thread, preemptible, no lock held: one sample */
+	int (*read)(struct iec_io_dev *d, const struct iec_io_bind *b, u32 *raw);
+	int (*write)(struct iec_io_dev *d, const struct iec_io_bind *b, u32 raw);
+};
+
+struct iec_io_dev {
+	const char *name;		/* the I/O map's device name */
+	const struct iec_io_provider *prov;
+	unsigned int minor;
+	void *handle;			/* the provider's */
+};
+
+struct iec_io_bind {
+	const char *address;		/* %IW2 */
+	const char *channel;		/* daq.0.3 */
+	u16 dev;			/* index in the devices */
+	u16 subdev;
+	u16 chan;
+	u8 kind;			/* enum iec_io_kind */
+	u8 input;
+	u8 range;
+	u8 hold;			/* SAFE HOLD */
+	u32 maxdata;			/* 1 for a digital channel */
+	u32 safe;			/* raw safe value */
+	void *var;			/* the located variable */
+	u8 size;			/* its size: 1, 2, 4 or 8 */
+	u8 is_signed;
+};
+
+struct iec_io {
+	const char *resource;
+	struct iec_io_dev *devs;
+	u32 ndevs;
+	const struct iec_io_bind *binds;
+	u32 nbinds;
+	u32 nopen;			/* devices opened so far */
+	/* per task: the text its IEC_FAULT_IO points at */
+	char (*fault_text)[64];
+};
+
+static u32 iec_io_get(const struct iec_io_bind *b)
+{
+	s64 v;
+
+	switch (b->size) {
+	case 1:
+		v = b->is_signed ? *(s8 *)b->var : *(u8 *)b->var;
+		break;
+	case 2:
+		v = b->is_signed ? *(s16 *)b->var : *(u16 *)b->var;
+		break;
+	case 4:
+		v = b->is_signed ? *(s32 *)b->var : *(u32 *)b->var;
+		break;
+	default:
+		if (b->is_signed)
+			v = *(s64 *)b->var;
+		else
+			v = (s64)min_t(u64, *(u64 *)b->var, U32_MAX);
+		break;
+	}
+	if (b->maxdata == 1)
+		return v != 0;
+	return (u32)clamp_t(s64, v, 0, b->maxdata);
+}
+
+static void iec_io_put(const struct iec_io_bind *b, u32 raw)
+{
+	switch (b->size) {
+	case 1:
+		*(u8 *)b->var = (u8)raw;
+		break;
+	case 2:
+		*(u16 *)b->var = (u16)raw;
+		break;
+	case 4:
+		*(u32 *)b->var = raw;
+		break;
+	default:
+		*(u64 *)b->var = raw;
+		break;
+	}
+}
+
+static void iec_io_fault(struct iec_io *io, struct iec_task *t,
+			 const struct iec_io_bind *b, int err)
+{
+	char *text = io->fault_text[t - t->res->tasks];
+
+	if (t->ctx.fault != IEC_FAULT_NONE)
+		return;
+	snprintf(text, sizeof(io->fault_text[0]), "io %s %s errno %d",
+		 b->channel, b->address, -err);
+	iec_fault_raise(&t->ctx, IEC_FAULT_IO);
+	iec_fault_locate(&t->ctx, text, 0);
+}
+
+/* Step 1: the task's inputs into raw[]; false (and a fault) on an error. */
+static bool iec_io_read(struct iec_io *io, struct iec_task *t,
+			const u16 *idx, u32 *raw, u32 n)
+{
+	u32 i;
+
+	for (i = 0; i < n; i++) {
+		const struct iec_io_bind *b = &io->binds[idx[i]];
+		struct iec_io_dev *d = &io->devs[b->dev];
+		int ret = d->prov->read(d, b, &raw[i]);
+
+		if (ret < 0) {
+			iec_io_fault(io, t, b, ret);
+			return false;
+		}
+	}
+	return true;
+}
+
+/* Step 2, under the image lock: the staged inputs into their variables. */
+static void iec_io_store(struct iec_io *io, const u16 *idx, const u32 *raw,
+			 u32 n)
+{
+	u32 i;
+
+	for (i = 0; i < n; i++)
+		iec_io_put(&io->binds[idx[i]], raw[i]);
+}
+
+/* Step 4, under the image lock: the task's outputs into raw[]. */
+static void iec_io_stage(struct iec_io *io, const u16 *idx, u32 *raw, u32 n)
+{
+	u32 i;
+
+	for (i = 0; i < n; i++)
+		raw[i] = iec_io_get(&io->binds[idx[i]]);
+}
+
+/* Step 5: raw[] to the devices; a fault on the first error. */
+static void iec_io_write(struct iec_io *io, struct iec_task *t,
+			 const u16 *idx, const u32 *raw, u32 n)
+{
+	u32 i;
+
+	for (i = 0; i < n; i++) {
+		const struct iec_io_bind *b = &io->binds[idx[i]];
+		struct iec_io_dev *d = &io->devs[b->dev];
+		int ret = d->prov->write(d, b, raw[i]);
+
+		if (ret < 0) {
+			iec_io_fault(io, t, b, ret);
+			return;
+		}
+	}
+}
+
+/* Outputs idx[] (all outputs: idx NULL) to their safe state; best effort. */
+static void iec_io_safe(struct iec_io *io, const u16 *idx, u32 n)
+{
+	u32 i;
+
+	if (!idx)
+		n = io->nbinds;
+	for (i = 0; i < n; i++) {
+		const struct iec_io_bind *b = &io->binds[idx ? idx[i] : i];
+		struct iec_io_dev *d = &io->devs[b->dev];
+
+		if (b->input || b->hold || b->dev >= io->nopen)
+			continue;
+		if (d->prov->write(d, b, b->safe) < 0)
+			pr_warn_ratelimited("iec2kmod: resource %s: %s %s: safe value not written\n",
+					    io->resource, b->channel, b->address);
+	}
+}
+
+static void iec_io_close(struct iec_io *io)
+{
+	while (io->nopen) {
+		struct iec_io_dev *d = &io->devs[--io->nopen];
+
+		d->prov->close(d);
+	}
+}
+
+/* Module init: every device present and as the map says, or -errno. */
+static int iec_io_open(struct iec_io *io)
+{
+	const char *why = "";
+	u32 i;
+	int ret;
+
+	for (i = 0; i < io->ndevs; i++) {
+		struct iec_io_dev *d = &io->devs[i];
+
+		ret = d->prov->open(d, &why);
+		if (ret) {
+			pr_err("iec2kmod: resource %s: device %s (%s minor %u): %s; not loading\n",
+			       io->resource, d->name, d->prov->name, d->minor, why);
+			goto err;
+		}
+		io->nopen = i + 1;
+	}
+	for (i = 0; i < io->nbinds; i++) {
+		const struct iec_io_bind *b = &io->binds[i];
+		struct iec_io_dev *d = &io->devs[b->dev];
+
+		ret = d->prov->check(d, b, &why);
+		if (ret) {
+			pr_err("iec2kmod: resource %s: device %s: %s of %s: %s; not loading\n",
+			       io->resource, d->name, b->channel, b->address, why);
+			goto err;
+		}
+	}
+	iec_io_safe(io, NULL, 0);	/* outputs start in their safe state */
+	return 0;
+err:
+	iec_io_close(io);
+	return ret;
+}
+
+/* Module exit, the threads stopped: safe state, then the devices go. */
+static void iec_io_exit(struct iec_io *io)
+{
+	iec_io_safe(io, NULL, 0);
+	iec_io_close(io);
+}

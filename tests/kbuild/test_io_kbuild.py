@@ -1,0 +1,35 @@
+"""kbuild tier, issue 26: a resource module with an I/O map (the comedi
+provider, kmod_templates/kernel/iec_io*.c) builds against the 6.1
+PREEMPT_RT headers with W=1 and sparse, zero warnings, and links against
+kcomedilib (the project the QEMU test tests/qemu/test_io_comedi.py runs)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+PROJECT = ROOT / "tests" / "qemu" / "projects" / "io_comedi"
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "iec2kmod.cli", *args], cwd=ROOT,
+                          capture_output=True, text=True, timeout=1800)
+
+
+@pytest.mark.kbuild
+def test_an_io_resource_builds_with_zero_warnings(tmp_path):
+    p = _cli("gen", str(PROJECT), "-o", str(tmp_path / "t"))
+    assert p.returncode == 0, p.stderr
+    main = (tmp_path / "t" / "iec_rig_r_bench" / "main.c").read_text()
+    assert '#include "iec_io_comedi.c"' in main
+    p = _cli("build", str(tmp_path / "t"), "--sparse")
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "sparse: 0 warnings" in p.stdout, p.stdout
+    ko = tmp_path / "t" / "iec_rig_r_bench" / "iec_rig_r_bench.ko"
+    info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
+                          text=True, timeout=60).stdout
+    assert "kcomedilib" in info.split("\n")[0].split(","), info
