@@ -8,7 +8,7 @@ import os
 import re
 
 from .. import ast
-from ..literals import LiteralError, parse_duration
+from ..parse.literals import LiteralError, parse_duration
 from .body import BodyChecker
 from .declare import ConstError, address_span, check_address_type
 from .symbols import (Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo,

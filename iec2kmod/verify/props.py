@@ -111,7 +111,7 @@ def _pou_spans(text):
 def parse_expr(text: str, src: SourceFile, start: int, diags: Diagnostics):
     """The expression AST of ``text`` (found at offset ``start`` of src),
     its positions those of src; None after a syntax error (in diags)."""
-    from ..parser import parse_source
+    from ..parse.parser import parse_source
     synth = SourceFile(src.path, HEADER + text + "\n;\nEND_FUNCTION\n")
     d = Diagnostics()
     unit = parse_source(synth, d)
