@@ -30,10 +30,6 @@ _WATCHDOG_ANY = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\
                            r"(\{\s*watchdog\b[^}]*\})", re.S | re.I)
 
 
-def is_watchdog_pragma(text: str) -> bool:
-    return re.match(r"\{\s*watchdog\b", text, re.I) is not None
-
-
 
 class _Scope:
     """The globals in scope, innermost first, looked up through the layers

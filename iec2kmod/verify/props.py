@@ -40,11 +40,6 @@ POU_SPAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[
 HEADER = "FUNCTION F__ : BOOL F__ := "
 
 
-def is_verify_pragma(text: str) -> bool:
-    """True for the text of a {verify ...} or {assume ...} pragma."""
-    return re.match(r"\{\s*(verify|assume)\b", text, re.I) is not None
-
-
 @dataclass
 class Prop:
     kind: str            # property | assume
