@@ -65,7 +65,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from iec2kmod import frontend  # noqa: E402
+from iec2kmod.parse import frontend  # noqa: E402
 
 import importlib.util  # noqa: E402
 

@@ -53,7 +53,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 HERE = Path(__file__).resolve().parent / "scan_cost"
 
-from iec2kmod import frontend  # noqa: E402
+from iec2kmod.parse import frontend  # noqa: E402
 from iec2kmod.codegen import generate  # noqa: E402
 from iec2kmod.codegen.pou import frame_need  # noqa: E402
 from iec2kmod.resources import templates_root  # noqa: E402

@@ -48,7 +48,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from iec2kmod import frontend, sim  # noqa: E402
+from iec2kmod import sim  # noqa: E402
+from iec2kmod.parse import frontend  # noqa: E402
 from iec2kmod.compilation import Compilation  # noqa: E402
 
 _spec = importlib.util.spec_from_file_location("selbench", ROOT / "benchmarks" / "selective.py")

@@ -54,7 +54,7 @@ def main(argv=None):
     if args.smoke:
         args.depth, args.only = 3, "traffic_light,crossing_latched_green"
     from iec2kmod.diagnostics import Diagnostics
-    from iec2kmod.frontend import run
+    from iec2kmod.parse.frontend import run
     from iec2kmod.verify import build
     from iec2kmod.verify.engine import check
     from iec2kmod.verify.encode import Refuse

@@ -138,6 +138,19 @@ class Call(Expr):
 # files can travel between worker processes and into the parse cache.
 
 
+class CR(Expr):
+    """The current result of an IL instruction list used as an expression
+    (IL's ``ADD x`` is ``CR + x``): made by the IL checker, read by every
+    back end."""
+
+    __slots__ = ("cr_type",)
+
+    def __init__(self, pos, t):
+        super().__init__(pos)
+        self.cr_type = t
+        self.type = t
+
+
 class Node:
     __slots__ = ("pos",)
     fields: tuple = ()

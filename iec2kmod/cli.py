@@ -140,7 +140,7 @@ def print_diagnostics(diags, stream=None) -> None:
 
 
 def cmd_check(args) -> int:
-    from .frontend import run
+    from .parse.frontend import run
     result = run(args.files, use_cache=not args.no_cache, jobs=args.jobs, strict=args.strict)
     print_diagnostics(result.diags)
     if args.timings:
@@ -155,7 +155,7 @@ def cmd_check(args) -> int:
 
 def front_end(files, strict=False):
     """Checked project or None (diagnostics printed)."""
-    from .frontend import run
+    from .parse.frontend import run
     result = run(files, use_cache=False, strict=strict)
     print_diagnostics(result.diags)
     if not result.ok:
@@ -326,7 +326,7 @@ OPTIONAL_MODULES = {"z3": ("z3-solver", "verify"), "docker": ("docker", "contain
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
-    from .frontend import InputError
+    from .parse.frontend import InputError
     try:
         return COMMANDS[args.command](args)
     except InputError as exc:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 from . import __version__
 from .checks.types import Elementary, EnumT, SubrangeT, concrete
-from .literals import LiteralError, classify, parse_duration
+from .parse.literals import LiteralError, classify, parse_duration
 from .located import name_index
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 from .. import ast
 from ..diagnostics import INPUT_WRITE_RULE
 from . import stdlib
-from .il import ILChecks, _CR
+from .il import ILChecks
 from .symbols import POUInfo, Var
 from .types import (BOOL, ELEMENTARY, ERROR, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, assignable, cat, common,
@@ -426,7 +426,7 @@ class BodyChecker(ILChecks):
             return self.unop(e)
         if isinstance(e, ast.Call):
             return self.call(e, statement=False)
-        if isinstance(e, _CR):
+        if isinstance(e, ast.CR):
             return e.cr_type
         if isinstance(e, ast.Direct):
             self.error(e.pos, f"directly represented variable {e.address} used in a POU: "

@@ -8,7 +8,7 @@ import os
 import re
 
 from .. import ast
-from ..literals import LiteralError, parse_duration
+from ..parse.literals import LiteralError, parse_duration
 from .body import BodyChecker
 from .declare import ConstError, address_span, check_address_type
 from .symbols import (Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo,
@@ -28,10 +28,6 @@ WATCHDOG_MAX_OVERRUNS = 1_000_000
 _WATCHDOG_PRAGMA = re.compile(r"\{\s*watchdog\b([^}]*)\}\s*\Z", re.I)
 _WATCHDOG_ANY = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
                            r"(\{\s*watchdog\b[^}]*\})", re.S | re.I)
-
-
-def is_watchdog_pragma(text: str) -> bool:
-    return re.match(r"\{\s*watchdog\b", text, re.I) is not None
 
 
 

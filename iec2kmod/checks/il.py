@@ -12,7 +12,7 @@ from .types import BOOL, ERROR, ErrorT, FBType, LiteralT, common, concrete, is_b
 
 IL_LOGIC = {"AND": "AND", "ANDN": "AND", "OR": "OR", "ORN": "OR", "XOR": "XOR", "XORN": "XOR"}
 IL_ARITH = {"ADD": "ADD", "SUB": "SUB", "MUL": "MUL", "DIV": "DIV", "MOD": "MOD"}
-IL_COMPARE = {"GT", "GE", "EQ", "NE", "LE", "LT"}
+IL_COMPARE = set(stdlib.COMPARE_FAMILIES)
 IL_FB_INPUT_OPS = {"S1", "R1", "CLK", "CU", "CD", "PV", "IN", "PT", "S", "R", "LD"}
 
 
@@ -104,7 +104,7 @@ class ILChecks:
             tt = self.lvalue(i.operand)
             if op == "STN" and not isinstance(cr, ErrorT) and not is_bit(cr):
                 self.error(i.pos, f"STN needs BOOL or a bit string, not {cr.name}")
-            self.check_assign(cr, tt, _CR(i.pos, cr), i.operand)
+            self.check_assign(cr, tt, ast.CR(i.pos, cr), i.operand)
             return cr
         if op in ("S", "R") and isinstance(i.operand, ast.Ref):
             sym = self.lookup(i.operand.name, i.operand.pos, report=False)
@@ -195,7 +195,7 @@ class ILChecks:
         if param is None or param.section != "VAR_INPUT":
             self.error(i.pos, f"function block {v.type.name} has no input {op}")
             return cr
-        self.check_assign(cr, param.type, _CR(i.pos, cr), None, what=f"input {op}")
+        self.check_assign(cr, param.type, ast.CR(i.pos, cr), None, what=f"input {op}")
         return cr
 
     def il_apply(self, i, op, cr, t, pos):
@@ -232,7 +232,7 @@ class ILChecks:
         else:
             args = []
             if cr is not None:
-                args.append(ast.Arg(i.pos, "pos", None, _CR(i.pos, cr)))
+                args.append(ast.Arg(i.pos, "pos", None, ast.CR(i.pos, cr)))
             else:
                 self.error(i.pos, f"{i.fn}: no current result to pass as first argument")
                 return ERROR
@@ -271,15 +271,3 @@ class _Conflict(ErrorT):
         self.label = label
         self.a = a
         self.b = b
-
-
-class _CR(ast.Expr):
-    """The IL current result used as an expression (for type checks)."""
-
-    __slots__ = ("cr_type",)
-
-    def __init__(self, pos, t):
-        super().__init__(pos)
-        self.cr_type = t
-        self.type = t
-

@@ -27,6 +27,46 @@ class StdFunc:
         self.standard = True
 
 
+# ------------------------------------------------------------ families
+# The families of StdFunc.family that back ends treat alike: one table.
+ARITH_FAMILIES = ("ADD", "SUB", "MUL", "DIV", "MOD")
+COMPARE_FAMILIES = ("GT", "GE", "EQ", "LE", "LT", "NE")
+TIME_FAMILIES = frozenset({"ADD_TIME", "SUB_TIME", "MUL_TIME", "DIV_TIME", "ADD_TOD_TIME",
+                           "ADD_DT_TIME", "SUB_TOD_TIME", "SUB_DT_TIME", "SUB_DATE_DATE",
+                           "SUB_TOD_TOD", "SUB_DT_DT", "CONCAT_DATE_TOD"})
+# TIME_FAMILIES but ADD_TIME, SUB_TIME, MUL_TIME, DIV_TIME: date and time of
+# day arithmetic on fixed parameter types
+DATE_TIME_FAMILIES = TIME_FAMILIES - {"ADD_TIME", "SUB_TIME", "MUL_TIME", "DIV_TIME"}
+# the families whose untyped-literal result stays untyped without a context
+# (computed exactly on the literals)
+LITERAL_FAMILIES = ARITH_FAMILIES + ("EXPT",)
+
+
+def call_types(fres: StdFunc, ctx_t=None):
+    """The types a call of standard function *fres* is computed in, given
+    the type its context wants (*ctx_t*, None when nothing does): (result,
+    parameter types).  A call on untyped literals (ABS(-3), 1 + 2) takes the
+    context's type; without one, ADD/SUB/MUL/DIV/MOD/EXPT stay untyped (a
+    LiteralT: computed exactly on the values) and any other family takes the
+    literal's own type (DINT, LINT or LREAL).  Comparisons, MUX and the time
+    functions convert their operands to the parameters' common type, not the
+    result's.  Every back end (interp, verify, codegen) reads this one rule."""
+    fam = fres.family
+    pts = list(fres.param_types)
+    res = fres.result
+    if isinstance(res, LiteralT):
+        res = ctx_t if ctx_t is not None and not isinstance(ctx_t, LiteralT) else res
+    res = concrete(res) if not isinstance(res, LiteralT) else res
+    if isinstance(res, LiteralT) and fam not in LITERAL_FAMILIES:
+        res = concrete(res)
+    if fam in COMPARE_FAMILIES or fam == "MUX" or fam in TIME_FAMILIES:
+        ptypes = [concrete(pt) for pt in pts]
+    else:
+        ptypes = [res if isinstance(pt, LiteralT) and not isinstance(res, LiteralT)
+                  else pt for pt in pts]
+    return res, ptypes
+
+
 # ------------------------------------------------------------------ helpers
 
 

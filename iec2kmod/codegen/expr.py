@@ -12,7 +12,6 @@ from __future__ import annotations
 from .. import ast
 from ..checks import stdlib
 from ..checks.body import EnumValue
-from ..checks.il import _CR
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, FBType,
                             LiteralT, StringT, StructT, SubrangeT, common, concrete)
@@ -30,7 +29,7 @@ class BindingError(CodegenError):
     a bug of ours, never emitted as code (exit 70)."""
 
 
-class CRNode(_CR):
+class CRNode(ast.CR):
     """The IL current result at a nesting depth, usable as an expression."""
 
     __slots__ = ("depth",)
@@ -207,7 +206,7 @@ class ExprEmitter:
             return self.call(f, e, t)
         if isinstance(e, CRNode):
             return self.body.cr_var(e.cr_type, e.depth)
-        if isinstance(e, _CR):
+        if isinstance(e, ast.CR):
             return self.body.cr_var(e.cr_type, self.body.cr_depth)
         if isinstance(e, Raw):
             return e.code
@@ -428,11 +427,9 @@ class ExprEmitter:
     def std_apply(self, f, fres: stdlib.StdFunc, args, t):
         fam = fres.family
         pts = fres.param_types
-        res = concrete(fres.result)
-        if isinstance(fres.result, LiteralT) and t is not None:
-            res = concrete(t)
+        res = concrete(stdlib.call_types(fres, t)[0])
         tag = lambda ty: N.type_tag(ty)
-        if fam in ("ADD", "SUB", "MUL", "DIV", "MOD"):
+        if fam in stdlib.ARITH_FAMILIES:
             vs = self.seq(f, [(a, res) for a in args])
             if scalar_kind(res) == "real":
                 if fam == "MOD":
@@ -453,8 +450,7 @@ class ExprEmitter:
         if fam in ("ADD_TIME", "SUB_TIME"):
             a, b = self.seq(f, [(x, res) for x in args])
             return f"iec_{fam.lower().replace('_time', '')}_{tag(res)}({a}, {b})"
-        if fam in ("ADD_TOD_TIME", "ADD_DT_TIME", "SUB_TOD_TIME", "SUB_DT_TIME",
-                   "SUB_DATE_DATE", "SUB_TOD_TOD", "SUB_DT_DT", "CONCAT_DATE_TOD"):
+        if fam in stdlib.DATE_TIME_FAMILIES:
             a, b = self.seq(f, [(args[0], pts[0]), (args[1], pts[1])])
             return f"iec_{fam.lower()}({a}, {b})"
         if fam in ("MUL_TIME", "DIV_TIME"):
@@ -528,7 +524,7 @@ class ExprEmitter:
             for i in range(n - 2, -1, -1):
                 out = f"({sel} == {i} ? {vs[i]} : {out})"
             return out
-        if fam in ("GT", "GE", "EQ", "LE", "LT", "NE"):
+        if fam in stdlib.COMPARE_FAMILIES:
             c = concrete(pts[0])
             sym = {"GT": ">", "GE": ">=", "EQ": "==", "LE": "<=", "LT": "<", "NE": "!="}[fam]
             if isinstance(c, StringT):

@@ -181,11 +181,6 @@ _PRAGMA = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^
                      r"(\{\s*selective\b([^}]*)\})", re.S | re.I)
 
 
-def is_selective_pragma(text: str) -> bool:
-    """Is a ``{...}`` pragma one of this pass's (the parser does not warn)?"""
-    return re.match(r"\{\s*selective\b", text, re.I) is not None
-
-
 @dataclass
 class BlockInfo:
     """A FUNCTION_BLOCK or PROGRAM type as a block."""

@@ -15,7 +15,6 @@ from __future__ import annotations
 from .. import ast
 from ..checks import stdlib
 from ..checks.body import EnumValue
-from ..checks.il import _CR
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
                             StructT, SubrangeT, common, concrete)
@@ -32,9 +31,6 @@ RETURN = 2
 CONTINUE = 3        # the rest of the loop's iteration is skipped (ed.3)
 REF_SECTIONS = ("VAR_EXTERNAL", "VAR_IN_OUT")
 ARITH = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD"}
-TIME_FAMILIES = {"ADD_TIME", "SUB_TIME", "MUL_TIME", "DIV_TIME", "ADD_TOD_TIME", "ADD_DT_TIME",
-                 "SUB_TOD_TIME", "SUB_DT_TIME", "SUB_DATE_DATE", "SUB_TOD_TOD", "SUB_DT_DT",
-                 "CONCAT_DATE_TOD"}
 
 
 def _const(v):
@@ -274,7 +270,7 @@ class PouCompiler:
             return self.unop(e)
         if isinstance(e, ast.Call):
             return self.call_expr(e)
-        if isinstance(e, _CR):
+        if isinstance(e, ast.CR):
             return lambda env: env.cr
         if isinstance(e, _Slot):
             n = e.n
@@ -451,21 +447,7 @@ class PouCompiler:
     def apply_std(self, fres, args, ctx_t):
         """f(env) computing standard function ``fres`` on argument exprs."""
         fam = fres.family
-        pts = list(fres.param_types)
-        res = fres.result
-        if isinstance(res, LiteralT):
-            res = ctx_t if ctx_t is not None and not isinstance(ctx_t, LiteralT) else res
-        res = concrete(res) if not isinstance(res, LiteralT) else res
-        if isinstance(res, LiteralT) and fam not in ("ADD", "SUB", "MUL", "DIV", "MOD", "EXPT"):
-            # ABS(-3), MAX(1, 2) ... of untyped literals where nothing gives a
-            # type: the literal's own type (DINT, LINT or LREAL)
-            res = concrete(res)
-        if fam in std.COMPARE or fam == "MUX" or fam in TIME_FAMILIES:
-            # the operands' common type, not the (BOOL) result's
-            ptypes = [concrete(pt) for pt in pts]
-        else:
-            ptypes = [res if isinstance(pt, LiteralT) and not isinstance(res, LiteralT)
-                      else pt for pt in pts]
+        res, ptypes = stdlib.call_types(fres, ctx_t)
         if isinstance(res, LiteralT):
             # a computation on untyped literals: exact, in Python
             return self._literal_std(fam, args, res)
@@ -473,11 +455,11 @@ class PouCompiler:
         def vals():
             return [self.expr_as(a, concrete(pt)) for a, pt in zip(args, ptypes)]
 
-        if fam in ("ADD", "SUB", "MUL", "DIV", "MOD"):
+        if fam in stdlib.ARITH_FAMILIES:
             fs = [self.expr_as(a, res) for a in args]
             op = std.arith(fam, res)
             return _fold(op, fs)
-        if fam in TIME_FAMILIES:
+        if fam in stdlib.TIME_FAMILIES:
             return self._time_fn(fam, args, ptypes, res)
         if fam == "EXPT":
             base_t, exp_t = concrete(ptypes[0]), concrete(ptypes[1])
@@ -1150,7 +1132,7 @@ class PouCompiler:
                     y = nf(y)
                 return fn(x, y)
             return logic
-        if base in ("ADD", "SUB", "MUL", "DIV", "MOD"):
+        if base in stdlib.ARITH_FAMILIES:
             fres = stdlib.resolve(base, [cr_t, op_t])
             holder = _Holder()
             fargs = [_Slot(0, cr_t), _Slot(1, op_t)]

@@ -15,7 +15,7 @@ import math
 import re
 
 from ..checks.types import Elementary, StringT
-from ..literals import LiteralError, classify, days_from_civil
+from ..parse.literals import LiteralError, classify, days_from_civil
 from .values import base_of, f32_safe, wrap, wrap64
 from .std import NS_PER_DAY, round_half_even, sat_i64
 

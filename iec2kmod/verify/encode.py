@@ -28,7 +28,7 @@ import z3
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.body import EnumValue, _CR
+from ..checks.body import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
                             StructT, SubrangeT, common, concrete)
@@ -628,7 +628,7 @@ class Encoder:
             return self.read(e, frame, g)
         if isinstance(e, ast.Direct):
             return self.sym.direct_value(e.address)
-        if isinstance(e, _CR):
+        if isinstance(e, ast.CR):
             return self.cr_get(frame, e.type)
         if isinstance(e, _SlotVal):
             return e.value
@@ -713,18 +713,7 @@ class Encoder:
     def apply_std(self, fres, args, ctx_t, frame, g, pos):
         fam = fres.family
         pou = frame.pou
-        pts = list(fres.param_types)
-        res = fres.result
-        if isinstance(res, LiteralT):
-            res = ctx_t if ctx_t is not None and not isinstance(ctx_t, LiteralT) else res
-        res = concrete(res) if not isinstance(res, LiteralT) else res
-        if isinstance(res, LiteralT) and fam not in ("ADD", "SUB", "MUL", "DIV", "MOD", "EXPT"):
-            res = concrete(res)
-        if fam in _COMPARE or fam == "MUX" or fam in _TIME_FAMILIES:
-            ptypes = [concrete(pt) for pt in pts]
-        else:
-            ptypes = [res if isinstance(pt, LiteralT) and not isinstance(res, LiteralT)
-                      else pt for pt in pts]
+        res, ptypes = stdlib.call_types(fres, ctx_t)
         if isinstance(res, LiteralT):
             vals = [literal_int(self.expr(a, frame, g), a) for a in args]
             return self.literal_arith(fam, vals, res, frame, g, pos)
@@ -738,7 +727,7 @@ class Encoder:
         def vals():
             return [self.expr_as(a, concrete(pt), frame, g) for a, pt in zip(args, ptypes)]
 
-        if fam in ("ADD", "SUB", "MUL", "DIV", "MOD"):
+        if fam in stdlib.ARITH_FAMILIES:
             fs = [self.expr_as(a, res, frame, g) for a in args]
             acc = fs[0]
             for b in fs[1:]:
@@ -768,7 +757,7 @@ class Encoder:
                 return a * b
             self.fault(g, b == bv_lit(0, 64), DIV_ZERO, frame, pos)
             return z3.If(b == bv_lit(0, 64), bv_lit(0, 64), a / b)
-        if fam in _TIME_FAMILIES:
+        if fam in stdlib.TIME_FAMILIES:
             a = self.expr_as(args[0], concrete(ptypes[0]), frame, g)
             b = self.expr_as(args[1], concrete(ptypes[1]), frame, g)
             if fam in ("ADD_TOD_TIME", "SUB_TOD_TIME"):
@@ -857,7 +846,7 @@ class Encoder:
                 out = ite(c, fs[i], out)
             self.fault(g, lnot(lor(*conds)), MUX, frame, pos)
             return out
-        if fam in _COMPARE:
+        if fam in stdlib.COMPARE_FAMILIES:
             ct = concrete(ptypes[0])
             fs = [self.expr_as(a, ct, frame, g) for a in args]
             if fam == "NE":
@@ -1633,7 +1622,7 @@ class Encoder:
             if neg:
                 y = z3.Not(y) if z3.is_bool(y) else ~y
             return logic(base, x, y)
-        if base in ("ADD", "SUB", "MUL", "DIV", "MOD"):
+        if base in stdlib.ARITH_FAMILIES:
             fres = stdlib.resolve(base, [cr_t, op_t])
             ctx = fres.result if not isinstance(fres.result, LiteralT) else \
                 concrete(fres.result)
@@ -1757,10 +1746,6 @@ def real_to_int(a, db, mode):
                              z3.fpToUBV(z3.RTZ(), r, z3.BitVecSort(w)))))
 
 
-_COMPARE = ("GT", "GE", "EQ", "LE", "LT", "NE")
-_TIME_FAMILIES = {"ADD_TIME", "SUB_TIME", "MUL_TIME", "DIV_TIME", "ADD_TOD_TIME", "ADD_DT_TIME",
-                  "SUB_TOD_TIME", "SUB_DT_TIME", "SUB_DATE_DATE", "SUB_TOD_TOD", "SUB_DT_DT",
-                  "CONCAT_DATE_TOD"}
 
 
 ELEM_LINT = _E["LINT"]

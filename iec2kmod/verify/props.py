@@ -40,11 +40,6 @@ POU_SPAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[
 HEADER = "FUNCTION F__ : BOOL F__ := "
 
 
-def is_verify_pragma(text: str) -> bool:
-    """True for the text of a {verify ...} or {assume ...} pragma."""
-    return re.match(r"\{\s*(verify|assume)\b", text, re.I) is not None
-
-
 @dataclass
 class Prop:
     kind: str            # property | assume
@@ -111,7 +106,7 @@ def _pou_spans(text):
 def parse_expr(text: str, src: SourceFile, start: int, diags: Diagnostics):
     """The expression AST of ``text`` (found at offset ``start`` of src),
     its positions those of src; None after a syntax error (in diags)."""
-    from ..parser import parse_source
+    from ..parse.parser import parse_source
     synth = SourceFile(src.path, HEADER + text + "\n;\nEND_FUNCTION\n")
     d = Diagnostics()
     unit = parse_source(synth, d)

@@ -43,7 +43,7 @@ from xml.sax.saxutils import escape
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.body import EnumValue, _CR
+from ..checks.body import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, Elementary, EnumT, FBType, LiteralT, StructT, SubrangeT,
                             common, concrete)
@@ -263,7 +263,7 @@ class Exporter:
             return self.place_name(e, frame)
         if isinstance(e, ast.Direct):
             return self.name_of(self.sym.direct_value(e.address), pou, e.pos)
-        if isinstance(e, _CR):
+        if isinstance(e, ast.CR):
             return self.acc(e.type)
         if isinstance(e, ast.UnOp):
             t = concrete(e.type)
@@ -331,7 +331,7 @@ class Exporter:
         if fam == "CONVERT":
             src = concrete(f.param_types[0])
             return self.conv(self.expr(args[0], frame, src), src, res)
-        if fam in ("GT", "GE", "EQ", "LE", "LT", "NE") and len(args) == 2:
+        if fam in stdlib.COMPARE_FAMILIES and len(args) == 2:
             ct = concrete(f.param_types[0])
             a, b = self.expr(args[0], frame, ct), self.expr(args[1], frame, ct)
             op = {"GT": ">", "GE": ">=", "EQ": "==", "LE": "<=", "LT": "<", "NE": "!="}[fam]
@@ -673,7 +673,7 @@ class Exporter:
                 return f"({a} {({'AND': '&&', 'OR': '||', 'XOR': '!='})[base]} {b})"
             self._refuse(pou, pos, f"{op} on integers")
         t = concrete(common(at, bt)) if not isinstance(common(at, bt), LiteralT) else INT16
-        if base in ("GT", "GE", "EQ", "NE", "LE", "LT"):
+        if base in stdlib.COMPARE_FAMILIES:
             o = {"GT": ">", "GE": ">=", "EQ": "==", "NE": "!=", "LE": "<=", "LT": "<"}[base]
             return f"({a} {o} {self.conv(b, bt, t)})"
         o = {"ADD": "+", "SUB": "-", "MUL": "*", "DIV": "/", "MOD": "%"}.get(base)

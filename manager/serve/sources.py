@@ -14,7 +14,7 @@ from .model import AccessPath
 
 def read(sources: str, manifest: dict) -> Tuple[List[AccessPath], Dict[str, str]]:
     try:
-        from iec2kmod import frontend
+        from iec2kmod.parse import frontend
     except ImportError:
         raise UsageError("--sources needs the iec2kmod package (the compiler's front end) "
                          "to read the access paths") from None

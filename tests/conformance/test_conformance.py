@@ -24,10 +24,10 @@ sys.path.insert(0, str(ROOT / "tests" / "execution"))
 
 import runner  # noqa: E402
 
-from iec2kmod import frontend  # noqa: E402
+from iec2kmod.parse import frontend  # noqa: E402
 from iec2kmod.checks import check_project  # noqa: E402
 from iec2kmod.diagnostics import Diagnostics, SourceFile  # noqa: E402
-from iec2kmod.parser import metamodel, parse_source  # noqa: E402
+from iec2kmod.parse.parser import metamodel, parse_source  # noqa: E402
 
 
 def _sources(d: Path) -> list[Path]:

@@ -47,7 +47,8 @@ for _p in (str(HERE), str(ROOT)):
 
 import progen  # noqa: E402
 
-from iec2kmod import frontend, sim  # noqa: E402
+from iec2kmod import sim  # noqa: E402
+from iec2kmod.parse import frontend  # noqa: E402
 from iec2kmod.codegen.plan import build_plan  # noqa: E402
 
 ULP_TOLERANCE = 4

@@ -21,7 +21,8 @@ import random
 
 import pytest
 
-from iec2kmod import frontend, sim
+from iec2kmod import sim
+from iec2kmod.parse import frontend
 from iec2kmod.codegen.plan import build_plan
 from iec2kmod.compilation import selective_plan
 

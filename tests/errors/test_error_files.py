@@ -9,7 +9,7 @@ import pytest
 
 from iec2kmod.checks import check_project
 from iec2kmod.diagnostics import Diagnostics, SourceFile
-from iec2kmod.parser import parse_source
+from iec2kmod.parse.parser import parse_source
 
 HERE = Path(__file__).resolve().parent
 CASES = sorted(HERE.glob("*.st"))

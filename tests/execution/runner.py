@@ -55,10 +55,11 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from iec2kmod import frontend, sim
+from iec2kmod import sim
+from iec2kmod.parse import frontend
 from iec2kmod.codegen.plan import build_plan
 from iec2kmod.checks.types import Elementary, EnumT, StringT, SubrangeT, concrete
-from iec2kmod.literals import LiteralError, classify
+from iec2kmod.parse.literals import LiteralError, classify
 
 HERE = Path(__file__).resolve().parent
 CASES = HERE / "cases"

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from iec2kmod import frontend, sim
+from iec2kmod import sim
+from iec2kmod.parse import frontend
 from iec2kmod.codegen import generate
 from iec2kmod.codegen.plan import build_plan
 from iec2kmod.compilation import selective_plan

@@ -85,7 +85,8 @@ def test_a_module_with_an_unbound_pointer_refuses_to_load(guest, guest_workdir):
     tree = Path(guest_workdir) / "fb_unbound"
     script = f"""
 import sys
-from iec2kmod import frontend, kmod
+from iec2kmod import kmod
+from iec2kmod.parse import frontend
 from iec2kmod.checks import config as C
 from iec2kmod.codegen import plan as P
 real = C.ConfigChecker._bind

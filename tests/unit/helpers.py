@@ -5,7 +5,7 @@ from __future__ import annotations
 from iec2kmod import ast
 from iec2kmod.checks import check_project
 from iec2kmod.diagnostics import Diagnostics, SourceFile
-from iec2kmod.parser import parse_source
+from iec2kmod.parse.parser import parse_source
 
 
 def parse(text: str, path: str = "t.st"):

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from iec2kmod import cli, frontend, sim
+from iec2kmod import cli, sim
+from iec2kmod.parse import frontend
 from iec2kmod.checks import config as checks_config
 from iec2kmod.codegen import plan as plan_mod
 from iec2kmod.codegen.pou import pointer_members

@@ -20,7 +20,7 @@ assert len(EXAMPLES) >= 12, f"only {len(EXAMPLES)} example projects under {ROOT 
 
 _GEN = r"""
 import hashlib, json, sys
-from iec2kmod import frontend
+from iec2kmod.parse import frontend
 from iec2kmod.codegen import generate, source_names
 from iec2kmod.sim import render_sim
 out = {}
@@ -101,7 +101,7 @@ def test_generated_c_names_its_sources(two_runs):
 def test_alias_types_carry_their_initial_value():
     from iec2kmod.checks import check_project
     from iec2kmod.diagnostics import Diagnostics, SourceFile
-    from iec2kmod.parser import parse_source
+    from iec2kmod.parse.parser import parse_source
     text = """
 TYPE
     Count : DINT := 42;
@@ -142,7 +142,7 @@ def test_frame_need_of_many_callees_stays_small_after_preprocessing(tmp_path):
     from iec2kmod.checks import check_project
     from iec2kmod.codegen import generate
     from iec2kmod.diagnostics import Diagnostics, SourceFile
-    from iec2kmod.parser import parse_source
+    from iec2kmod.parse.parser import parse_source
     k = 20
     funcs = "".join(f"FUNCTION F{i} : INT\n  VAR_INPUT a : INT; END_VAR\n"
                     f"  VAR t : ARRAY[1..4] OF INT; END_VAR\n  t[1] := a; F{i} := t[1] + {i};\n"

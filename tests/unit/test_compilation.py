@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from iec2kmod import cli, compilation, execmodel, frontend
+from iec2kmod import cli, compilation, execmodel
+from iec2kmod.parse import frontend
 from iec2kmod.codegen import plan as plan_mod
 
 pytestmark = pytest.mark.unit
@@ -117,7 +118,7 @@ def test_generating_selective_code_loads_no_solver():
     neither the verifier, the interpreter nor z3 with them."""
     code = (
         "import sys\n"
-        "from iec2kmod import frontend\n"
+        "from iec2kmod.parse import frontend\n"
         "from iec2kmod.codegen import generate\n"
         "from iec2kmod.codegen.plan import build_plan\n"
         "from iec2kmod.codegen.selective import SelectivePlan\n"

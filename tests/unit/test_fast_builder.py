@@ -6,7 +6,7 @@ diagnostics, so a fast path can never silently diverge:
 - the fast model builder (parser.FastBuilder) against textX's own
   model_from_str;
 - the grammar with its fast-path tokens (SIMPLE_OPERAND) and the
-  hand-written statement parser (iec2kmod/stfast.py) against the grammar
+  hand-written statement parser (iec2kmod/parse/stfast.py) against the grammar
   without them."""
 
 import random
@@ -18,7 +18,7 @@ import pytest
 
 from iec2kmod import ast
 from iec2kmod.diagnostics import Diagnostics, SourceFile
-from iec2kmod.parser import fast_paths, metamodel, parse_source
+from iec2kmod.parse.parser import fast_paths, metamodel, parse_source
 
 pytestmark = pytest.mark.unit
 ROOT = Path(__file__).resolve().parents[2]
@@ -130,7 +130,7 @@ SNIPPETS = [
     "PROGRAM p\n f(a, b c);\nEND_PROGRAM\n",
     "PROGRAM p\n IF a THEN ELSIF b THEN ELSE END_IF;\n WHILE a DO END_WHILE;\n CASE x OF 1: END_CASE;"
     "\nEND_PROGRAM\n",
-    # the statements iec2kmod.stfast parses, and their edges
+    # the statements iec2kmod.parse.stfast parses, and their edges
     "PROGRAM p\nVAR a : INT; END_VAR\n a := 1;; ; IF a THEN ELSIF b THEN ; ELSE END_IF\n b := 2;"
     "\n if a then x := 1; elsif b then x := 2; else x := 3; end_if;\n IF a THEN x := 1; END_IF; ;"
     "\nEND_PROGRAM\n",
@@ -206,7 +206,7 @@ def test_parallel_parse_is_the_sequential_parse():
     cyclic garbage collector as it found it."""
     import gc
 
-    from iec2kmod.frontend import parse_all
+    from iec2kmod.parse.frontend import parse_all
     sys.path.insert(0, str(ROOT / "benchmarks"))
     try:
         from gen_project import project
@@ -258,10 +258,10 @@ def test_same_model_on_random_programs():
 
 
 def test_the_statement_parser_takes_expression_dense_code():
-    """iec2kmod.stfast parses every statement of the dense benchmark POU
+    """iec2kmod.parse.stfast parses every statement of the dense benchmark POU
     (textX sees only its declarations), with textX's own result."""
-    from iec2kmod.parser import statement_parser
-    from iec2kmod.stfast import fast_statements
+    from iec2kmod.parse.parser import statement_parser
+    from iec2kmod.parse.stfast import fast_statements
     sys.path.insert(0, str(ROOT / "benchmarks"))
     try:
         from gen_project import dense_pou

@@ -112,7 +112,7 @@ def test_keyword_function_forms_check():
 def _project(text):
     from iec2kmod.checks import check_project
     from iec2kmod.diagnostics import Diagnostics, SourceFile
-    from iec2kmod.parser import parse_source
+    from iec2kmod.parse.parser import parse_source
     diags = Diagnostics()
     unit = parse_source(SourceFile("t.st", text), diags)
     project = check_project([unit], diags)
@@ -246,7 +246,7 @@ def test_trunc_result_type_comes_from_the_context():
 def _checked(text):
     from iec2kmod.checks import check_project
     from iec2kmod.diagnostics import Diagnostics
-    from iec2kmod.parser import SourceFile, parse_source
+    from iec2kmod.parse.parser import SourceFile, parse_source
     diags = Diagnostics()
     unit = parse_source(SourceFile("t.st", text), diags)
     project = check_project([unit], diags)

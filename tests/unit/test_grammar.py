@@ -369,7 +369,7 @@ END_FUNCTION_BLOCK
 @pytest.mark.parametrize("reference", [False, True], ids=["fast", "textx"])
 def test_matiec_inline_c_pragma_is_one_pragma(reference):
     from iec2kmod.diagnostics import Diagnostics, SourceFile
-    from iec2kmod.parser import parse_source
+    from iec2kmod.parse.parser import parse_source
     diags = Diagnostics()
     unit = parse_source(SourceFile("t.st", MATIEC_INLINE_C), diags, reference=reference)
     assert unit is not None and not diags.errors, [d.format() for d in diags.items]

@@ -2,7 +2,7 @@
 
 import pytest
 
-from iec2kmod.literals import LiteralError, classify, days_from_civil
+from iec2kmod.parse.literals import LiteralError, classify, days_from_civil
 
 NS_S = 1_000_000_000
 

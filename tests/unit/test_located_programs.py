@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from iec2kmod import frontend
+from iec2kmod.parse import frontend
 from iec2kmod.located import name_index
 
 pytestmark = pytest.mark.unit

@@ -7,7 +7,8 @@ import json
 
 import pytest
 
-from iec2kmod import frontend, kmod
+from iec2kmod import kmod
+from iec2kmod.parse import frontend
 
 pytestmark = pytest.mark.unit
 

@@ -15,7 +15,7 @@ from iec2kmod.checks import check_project
 from iec2kmod.checks.sfc import STEP_T
 from iec2kmod.codegen import generate
 from iec2kmod.diagnostics import Diagnostics, SourceFile
-from iec2kmod.parser import parse_source
+from iec2kmod.parse.parser import parse_source
 
 pytestmark = pytest.mark.unit
 ROOT = Path(__file__).resolve().parents[2]

@@ -7,7 +7,7 @@ parse's result too."""
 
 import pytest
 
-from iec2kmod import frontend
+from iec2kmod.parse import frontend
 from iec2kmod.diagnostics import SourceFile
 
 from test_fast_builder import dump

@@ -1,5 +1,5 @@
-"""The textX internals iec2kmod/parser.py (FastBuilder, fast_paths) and
-iec2kmod/stfast.py rely on are there.  pyproject.toml pins textX to the
+"""The textX internals iec2kmod/parse/parser.py (FastBuilder, fast_paths) and
+iec2kmod/parse/stfast.py rely on are there.  pyproject.toml pins textX to the
 range they were verified on; a textX outside it that lacks one fails here,
 naming what is missing, before any parse goes wrong in a subtler way
 (tests/unit/test_fast_builder.py then compares the models built)."""
@@ -33,7 +33,7 @@ def missing_internals() -> list[str]:
     except ImportError as exc:
         return [f"import: {exc}"]
 
-    from iec2kmod.parser import FAST_PATHS, metamodel
+    from iec2kmod.parse.parser import FAST_PATHS, metamodel
     mm = metamodel()
     need(hasattr(mm, "_obj_processors"), "metamodel._obj_processors")
     need(hasattr(getattr(mm, "_parser_blueprint", None), "clone"),
@@ -78,14 +78,14 @@ def test_textx_internals_present():
     missing = missing_internals()
     version = metadata.version("textX")
     assert not missing, (
-        f"textX {version} lacks internals iec2kmod/parser.py and iec2kmod/stfast.py use: "
+        f"textX {version} lacks internals iec2kmod/parse/parser.py and iec2kmod/parse/stfast.py use: "
         f"{', '.join(missing)}.  pyproject.toml pins textX to the versions verified; install "
         f"one of them (pip install 'textX>=4.0,<4.5') or port FastBuilder to this version.")
 
 
 def test_the_check_sees_a_missing_internal(monkeypatch):
     """Removing one internal is reported by name (the check can fail)."""
-    from iec2kmod.parser import FAST_PATHS, metamodel
+    from iec2kmod.parse.parser import FAST_PATHS, metamodel
     cls = metamodel()[FAST_PATHS[0]]
     monkeypatch.delattr(cls, "_tx_peg_rule")
     assert f"class {FAST_PATHS[0]}._tx_peg_rule (fast_paths)" in missing_internals()

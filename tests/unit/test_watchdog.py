@@ -20,7 +20,8 @@ from pathlib import Path
 
 import pytest
 
-from iec2kmod import frontend, interp, sim
+from iec2kmod import interp, sim
+from iec2kmod.parse import frontend
 from iec2kmod.checks.config import WATCHDOG_DEFAULT_NS
 from iec2kmod.execmodel import SIM_ITERATION_NS
 

@@ -51,7 +51,7 @@ def test_export_parses_and_replays(case, capsys, tmp_path):
     from pyuppaal import UModel
     import shutil
     import uppaal_net
-    from iec2kmod.frontend import run
+    from iec2kmod.parse.frontend import run
     from iec2kmod.interp import run as vm_run
     from iec2kmod.interp.machine import Machine
     from iec2kmod.verify.uppaal import Exporter, ident

@@ -420,7 +420,7 @@ def test_bad_properties_are_diagnosed(tmp_path, capsys):
 
 # ----------------------------------------------------------- differential
 def _check(paths, cycles, seeds):
-    from iec2kmod.frontend import run
+    from iec2kmod.parse.frontend import run
     import diffverify
     r = run([str(p) for p in paths], use_cache=False)
     assert r.ok, [d.format() for d in r.diags.errors]

@@ -1,7 +1,7 @@
 """The front end as a pipeline of named passes:
 
     parse       files -> iec2kmod.ast units (textX; the common ST statements by
-                the hand-written iec2kmod/stfast.py), in parallel over files
+                the hand-written iec2kmod/parse/stfast.py), in parallel over files
     declare     build the symbol tables: types, POUs, configurations
     resolve     name resolution and type checking of every POU body
     configure   configurations, resources, tasks, program instances
@@ -21,8 +21,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import __version__
-from .diagnostics import Diagnostic, Diagnostics, SourceFile
+from .. import __version__
+from ..diagnostics import Diagnostic, Diagnostics, SourceFile
 from .stfast import POU_END, body_tokens, statement_cuts
 
 
@@ -202,7 +202,7 @@ def _merge_statements(src: SourceFile, results):
 
 def _merge(src: SourceFile, results):
     """One unit from the parsed parts of a file, pointing at the real text."""
-    from . import ast
+    from .. import ast
     items = []
     unit = ast.SourceUnit(0, src=src, types=[], pous=[], configurations=[])
     ok = True
@@ -223,7 +223,7 @@ def _merge(src: SourceFile, results):
 def _fingerprint() -> str:
     """Identifies this compiler build: its version and its sources."""
     h = hashlib.sha256(__version__.encode())
-    root = Path(__file__).resolve().parent
+    root = Path(__file__).resolve().parent.parent      # the iec2kmod package
     for f in sorted(root.rglob("*")):
         if f.suffix in (".py", ".tx") and "__pycache__" not in f.parts:
             h.update(f.name.encode())
@@ -382,7 +382,7 @@ def _run(paths, use_cache, jobs) -> FrontEndResult:
     project = None
     if not diags.errors:
         import gc
-        from .checks import check_project
+        from ..checks import check_project
         # the checks allocate as they walk the millions of parsed objects,
         # which the cyclic collector would rescan again and again (half of
         # the check time of a 10,000-line POU); they make no garbage cycles

@@ -15,8 +15,8 @@ from textx import metamodel_from_file
 from textx.const import MULT_ASSIGN_ERROR
 from textx.exceptions import TextXSyntaxError, TextXSemanticError
 
-from . import ast
-from .diagnostics import Diagnostics, SourceFile
+from .. import ast
+from ..diagnostics import Diagnostics, SourceFile
 from .literals import LiteralError, classify
 
 # Arpeggio descends about 16 Python frames per parenthesis, 28 per nested
@@ -461,7 +461,7 @@ FAST_PATHS = ("SIMPLE_OPERAND",)
 _NEVER = re.compile(r"(?!)")
 
 
-# ... and the hand-written statement parser (iec2kmod/stfast.py), on or off
+# ... and the hand-written statement parser (iec2kmod/parse/stfast.py), on or off
 # with them
 _ST_FAST = [True]
 

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import re
 
-from . import ast
+from .. import ast
 from .literals import LiteralError, classify
 
 # tokens of an ST body that matter for cutting it between statements;
