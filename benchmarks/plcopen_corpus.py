@@ -92,7 +92,7 @@ def simulate(project, cycles, engine):
 
 
 def run_one(path: Path, cycles: int, engines: list[str]):
-    from iec2kmod import frontend
+    from iec2kmod.parse import frontend
     t0 = time.perf_counter()
     res = frontend.run([str(path)], use_cache=False)
     errors = res.diags.errors
@@ -171,7 +171,8 @@ def beremiz_st(beremiz: Path, proj: Path, out: Path):
 
 def compare_generator(beremiz: Path, proj: Path, cycles: int, workdir: Path) -> str:
     """'same', or what differs between our translation and Beremiz's."""
-    from iec2kmod import frontend, interp
+    from iec2kmod import interp
+    from iec2kmod.parse import frontend
     from iec2kmod.codegen.plan import build_plan
     st, why = beremiz_st(beremiz, proj, workdir / (proj.parent.name + ".st"))
     if st is None:

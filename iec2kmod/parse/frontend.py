@@ -85,7 +85,7 @@ def collect_files(paths, ignored=None) -> list[str]:
 
 def _read(path: str) -> SourceFile:
     if path.lower().endswith(".xml"):           # PLCopen TC6 XML: iec2kmod/plcopen
-        from .plcopen import read_xml
+        from ..plcopen import read_xml
         return read_xml(path)
     try:
         data = Path(path).read_bytes()
@@ -328,7 +328,7 @@ def run(paths, use_cache: bool = True, jobs: int | None = None,
     the warnings of diagnostics.STRICT_RULES are errors."""
     result = _run(paths, use_cache, jobs)
     if any(str(p).lower().endswith(".xml") for p in collect_files(paths)):
-        from .plcopen import remap            # generated lines -> the XML's (issue 28)
+        from ..plcopen import remap            # generated lines -> the XML's (issue 28)
         result.diags.items = [remap(d) for d in result.diags.items]
     if strict:
         result.diags.make_strict()
@@ -346,7 +346,7 @@ def _run(paths, use_cache, jobs) -> FrontEndResult:
     notes = [Diagnostic(p, 1, 1, "note", "ignored: not a source file (sources are .st, .il "
                                          "or .iec files)") for p in ignored]
     if any(s.path.lower().endswith(".xml") for s in sources):
-        from .plcopen import xml_diagnostics
+        from ..plcopen import xml_diagnostics
         notes += xml_diagnostics([s.path for s in sources])
         if any(d.severity == "error" for d in notes):
             diags = Diagnostics()
@@ -391,7 +391,7 @@ def _run(paths, use_cache, jobs) -> FrontEndResult:
         try:
             project = check_project(units, diags, timings)
             if maps and project is not None and not diags.errors:
-                from .iomap import check_maps
+                from ..iomap import check_maps
                 t = time.perf_counter()
                 check_maps(project, maps, diags)
                 timings["iomap"] = time.perf_counter() - t

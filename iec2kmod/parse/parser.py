@@ -54,7 +54,7 @@ def _expression(obj):
 
 def climb(operands, ops):
     """The precedence tree of a flat operand/operator sequence (the
-    Expression rule's, and iec2kmod.stfast's)."""
+    Expression rule's, and iec2kmod.parse.stfast's)."""
     if not ops:
         return operands[0]
     # precedence climbing over the flat sequence
@@ -135,7 +135,7 @@ def _path_ref(path, pos):
     return ast.Ref(pos, name, accessors)
 
 
-path_ref = _path_ref  # for iec2kmod.stfast
+path_ref = _path_ref  # for iec2kmod.parse.stfast
 
 
 def _signed_number(obj):
@@ -468,7 +468,7 @@ _ST_FAST = [True]
 
 @contextmanager
 def fast_paths(enabled: bool):
-    """Switches the grammar's fast-path tokens and iec2kmod.stfast on or off
+    """Switches the grammar's fast-path tokens and iec2kmod.parse.stfast on or off
     (process-wide, for the parses inside the ``with`` block)."""
     statement_parser()  # takes the tokens' expressions while they are on
     rules = [metamodel()[name]._tx_peg_rule for name in FAST_PATHS]
@@ -681,7 +681,7 @@ def _unsupported_hint(text: str, offset: int) -> str:
 
 
 def _parse_with_fast_statements(src: SourceFile, diags: Diagnostics):
-    """The unit of src with iec2kmod.stfast taking the statements it knows
+    """The unit of src with iec2kmod.parse.stfast taking the statements it knows
     and textX the rest; None when stfast takes nothing or textX does not
     agree (see the module docstring of stfast): then textX parses it all."""
     from .stfast import fast_statements

@@ -10,7 +10,7 @@ from pathlib import Path
 def run_export_st(args) -> int:
     from ..cli import EXIT_OK, EXIT_SOURCE, EXIT_USAGE, print_diagnostics
     from ..diagnostics import Diagnostics
-    from ..frontend import InputError, collect_files
+    from ..parse.frontend import InputError, collect_files
     from .reader import is_xml, to_text
     files = collect_files(args.files)
     xml = [f for f in files if is_xml(f)]

@@ -174,7 +174,7 @@ def translate(path: str) -> Translation:
 def read_xml(path: str) -> SourceFile:
     """The generated text as the SourceFile of `path`; the translation is
     kept for remap() and xml_diagnostics()."""
-    from ..frontend import InputError
+    from ..parse.frontend import InputError
     try:
         tr = translate(path)
     except OSError as exc:

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from iec2kmod import frontend, interp, sim
+from iec2kmod import interp, sim
+from iec2kmod.parse import frontend
 
 STEP = 10_000_000
 

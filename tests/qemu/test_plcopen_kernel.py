@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from iec2kmod import frontend, sim
+from iec2kmod import sim
+from iec2kmod.parse import frontend
 from kmod_helpers import gen_and_build, loaded_modules, status
 
 pytestmark = pytest.mark.qemu

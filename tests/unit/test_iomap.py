@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from iec2kmod import frontend
+from iec2kmod.parse import frontend
 
 pytestmark = pytest.mark.unit
 ROOT = Path(__file__).resolve().parents[2]

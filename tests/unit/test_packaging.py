@@ -153,8 +153,9 @@ def test_extras():
     assert groups["core"] & {"z3-solver", "docker", "pyroute2", "pyuppaal", "pytest"} == set()
     assert groups["verify"] == {"z3-solver"}
     assert "docker" in groups["container"] and groups["manager"] == {"pyroute2"}
+    assert groups["plcopen"] == {"lxml"}
     assert groups["all"] == (groups["verify"] | groups["container"] | groups["manager"] |
-                             groups["serve"])
+                             groups["serve"] | groups["plcopen"])
     assert {"asyncua", "pymodbus"} <= groups["serve"]
     assert {"pytest", "hypothesis", "ruff", "pyuppaal"} <= groups["test"]
     reqs = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
