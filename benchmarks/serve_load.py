@@ -107,7 +107,7 @@ try:
     res["alone"] = {"cycles": c1 - c0, "overruns": o1 - o0}
     log = open(os.path.join(os.path.dirname(build), "serve.log"), "w")
     p = subprocess.Popen([sys.executable, "-m", "plc_manager.cli", "serve", "--opcua",
-                          "opc.tcp://127.0.0.1:4850", "--sources", src, "--users", users,
+                          "opc.tcp://127.0.0.1:4850", "--users", users,
                           "--cert-dir", pki, "--period-min", "100"], stdout=log,
                          stderr=subprocess.STDOUT)
     logp = os.path.join(os.path.dirname(build), "serve.log")

@@ -3,9 +3,9 @@
 configuration (long-running; SIGTERM or SIGINT stops it cleanly).
 
 The address space and the Modbus map come from the running build's
-manifest (the copy plc-manager saved at load, or --project DIR), the
-access paths and the addresses of named located variables from the
-project's sources (--sources DIR).  A poller reads every published
+manifest alone (the copy plc-manager saved at load, or --project DIR):
+its variables, tasks, access paths (VAR_ACCESS) and the addresses of
+named located variables.  A poller reads every published
 variable and the tasks' status at the fastest task's rate (not faster
 than --period-min) and updates the OPC UA nodes that changed, so
 subscriptions see each change; Modbus requests read the kernel
@@ -43,7 +43,7 @@ def _hostport(text: str, default_port: int):
         raise UsageError(f"{text}: not HOST:PORT") from None
 
 
-def load_model(project: Optional[str], sources: Optional[str]):
+def load_model(project: Optional[str]):
     from .. import ops
     from ..project import Project
     from .model import Model
@@ -63,11 +63,11 @@ def load_model(project: Optional[str], sources: Optional[str]):
             raise UsageError("the running configuration was not loaded by plc-manager (or "
                              "was swapped since by hand): give its build with --project DIR")
         manifest = s.manifest
-    access, located = [], {}
-    if sources:
-        from . import sources as src
-        access, located = src.read(sources, manifest)
-    return c, Model.from_manifest(manifest, access, located)
+    try:
+        return c, Model.from_manifest(manifest)
+    except BaseException:
+        c.close()
+        raise
 
 
 async def serve(a) -> int:
@@ -93,7 +93,7 @@ async def serve(a) -> int:
     t_start = time.monotonic()
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="netlink")
     try:
-        kernel = Kernel.open(pool, lambda: load_model(a.project, a.sources))
+        kernel = Kernel.open(pool, lambda: load_model(a.project))
     except BaseException:
         pool.shutdown()
         raise
@@ -264,8 +264,6 @@ def add_parsers(sub) -> None:
     s.add_argument("--modbus", metavar="HOST:PORT", help="Modbus TCP address")
     s.add_argument("--project", metavar="DIR", help="the running build (default: the copy "
                                                     "saved at load)")
-    s.add_argument("--sources", metavar="DIR", help="the project's sources: access paths "
-                                                    "(VAR_ACCESS) and named located variables")
     s.add_argument("--writable", action="store_true",
                    help="without access paths, clients may write what the kernel lets write "
                         "(default: read-only)")

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """What `plc-manager serve` publishes, built from the running build's
-manifest (and, for the access paths and the addresses of named located
-variables, the project's sources): no kernel and no network here, so the
+manifest alone (its variables, tasks, access paths and the addresses of
+named located variables): no kernel and no network here, so the
 address and type mappings are unit-tested on the host.
 
 Modbus (OpenPLC's mapping, so its HMIs work unchanged; OpenPLC
@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from .. import values
+from ..errors import UsageError
 from ..values import VarType
 
 MW_BASE, MD_BASE, ML_BASE, ACCESS_BASE = 1024, 2048, 4096, 8192
@@ -254,8 +255,14 @@ class Model:
     located: Dict[str, str] = field(default_factory=dict)   # %MW100 -> path
 
     @classmethod
-    def from_manifest(cls, m: dict, access: Sequence[AccessPath] = (),
-                      located: Optional[Dict[str, str]] = None) -> "Model":
+    def from_manifest(cls, m: dict) -> "Model":
+        """The model of a manifest: its variables, tasks, the access paths
+        ("access": VAR_ACCESS, an aggregate's path gives one access path
+        per member, NAME.member) and the addresses of named located
+        variables ("addresses")."""
+        if "access" not in m:
+            raise UsageError("the build's manifest has no access paths (made by an iec2kmod "
+                             "older than plc-manager serve): build the project again")
         vs: Dict[str, VarType] = {}
         order = []
         for v in m["variables"]:
@@ -271,10 +278,20 @@ class Model:
         for v in m["variables"]:
             if v.get("owner") == "direct":
                 loc[v["path"].upper()] = v["path"]
-        for addr, path in (located or {}).items():
+        for addr, path in m.get("addresses", {}).items():
             if path.lower() in vs:
                 loc.setdefault(addr.upper(), vs[path.lower()].path)
-        acc = [a for a in access if a.path.lower() in vs]
+        acc = []
+        for a in m["access"]:
+            rw = a["access"] == "READ_WRITE"
+            p = a["path"].lower()
+            if p in vs:
+                acc.append(AccessPath(name=a["name"], path=vs[p].path, read_write=rw))
+                continue
+            for q in order:
+                if q.lower().startswith((p + ".", p + "[")):
+                    acc.append(AccessPath(name=a["name"] + q[len(p):], path=q,
+                                          read_write=rw))
         return cls(configuration=m["configuration"], interface_hash=m.get("interface_hash", ""),
                    source_hash=m.get("source_hash", ""), variables=vs, order=order,
                    resources=[r["name"] for r in m.get("resources", [])], tasks=tasks,

@@ -68,7 +68,7 @@ def test_serve_with_real_clients(guest, station):
     try:
         r = guest.run(
             f"{py} -m plc_manager.cli serve --modbus 127.0.0.1:5020 "
-            f"--opcua opc.tcp://127.0.0.1:4841 --sources {PROJECT} --users {users} "
+            f"--opcua opc.tcp://127.0.0.1:4841 --users {users} "
             f"--cert-dir {pki} >{log} 2>&1 & echo $! >{pidf}", 30, chroot=True, cwd=str(ROOT))
         assert r.exit_code == 0, r.output
         deadline = time.monotonic() + 120

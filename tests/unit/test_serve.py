@@ -23,7 +23,6 @@ import pytest
 from plc_manager import values
 from plc_manager.netlink import KernelError, Resource, Status, Task, VarValue
 from plc_manager.serve import model as M
-from plc_manager.serve import sources as S
 from plc_manager.serve.kernel import Kernel
 
 pytestmark = pytest.mark.unit
@@ -52,8 +51,7 @@ def pki(tmp_path_factory):
 
 def _model(manifests, ex):
     m = manifests[ex]
-    acc, loc = S.read(str(ROOT / "examples" / ex), m)
-    return M.Model.from_manifest(m, acc, loc)
+    return M.Model.from_manifest(m)
 
 
 # ---------------------------------------------------------------------------
@@ -72,7 +70,7 @@ def test_openplc_places(addr, place):
 def test_modbus_map_of_two_resources(manifests):
     mo = _model(manifests, "two_resources")
     mm = M.modbus_map(mo)
-    # named located variables come from the sources
+    # named located variables come from the manifest
     assert mm.discrete[7].path == "cpu0.estop_filler"
     assert mm.discrete[32].path == "cpu1.guard_door_open"
     assert mm.inputs[10].path == "%IW10"
@@ -95,6 +93,53 @@ def test_modbus_map_named_located(manifests):
     assert mm.holding[1124].path == "plc.belt_count"        # belt_count AT %MW100
     assert mm.holding[1126].path == "%MW102"
     assert [mm.coils[i].path for i in range(6)] == [f"%QX0.{i}" for i in range(6)]
+
+
+AGG = """
+TYPE Pt : STRUCT x : INT; y : REAL; END_STRUCT; END_TYPE
+PROGRAM P
+VAR_OUTPUT n : INT; END_VAR
+VAR here AT %MW7 : INT; END_VAR
+n := n + 1; here := n;
+END_PROGRAM
+CONFIGURATION C
+    VAR_GLOBAL pos : Pt; tab : ARRAY[1..2] OF INT; END_VAR
+    RESOURCE r ON CPU0
+        TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+        PROGRAM p WITH t : P;
+    END_RESOURCE
+    VAR_ACCESS
+        N   : r.p.n : INT READ_ONLY;
+        POS : pos : Pt READ_WRITE;
+        TAB : tab : ARRAY[1..2] OF INT READ_ONLY;
+        HERE : %MW7 : INT READ_WRITE;
+    END_VAR
+END_CONFIGURATION
+"""
+
+
+def test_model_from_the_manifest_alone(tmp_path):
+    """`serve` needs no sources: the manifest the compiler writes carries the
+    access paths (their access and type; an aggregate's members one path
+    each) and the addresses of named located variables."""
+    (tmp_path / "agg.st").write_text(AGG)
+    subprocess.run([sys.executable, "-m", "iec2kmod", "gen", str(tmp_path), "-o",
+                    str(tmp_path / "b")], check=True, capture_output=True)
+    m = json.loads((tmp_path / "b" / "manifest.json").read_text())
+    assert {"name": "N", "path": "r.p.n", "access": "READ_ONLY", "type": "INT"} in m["access"]
+    assert m["addresses"]["%MW7"] == "r.p.here"
+    mo = M.Model.from_manifest(m)
+    got = {a.name: (a.path, a.read_write) for a in mo.access}
+    assert got == {"N": ("r.p.n", False), "POS.x": ("pos.x", True),
+                   "POS.y": ("pos.y", True), "TAB[1]": ("tab[1]", False),
+                   "TAB[2]": ("tab[2]", False), "HERE": ("r.p.here", True)}, got
+    assert mo.located["%MW7"] == "r.p.here"
+    assert M.modbus_map(mo).holding[1024 + 7].path == "r.p.here"
+    # a manifest of an older compiler: a clear error, not a model without access paths
+    old = dict(m)
+    del old["access"]
+    with pytest.raises(M.UsageError, match="build the project again"):
+        M.Model.from_manifest(old)
 
 
 def _vt(kind, size, base=None, **kw):
