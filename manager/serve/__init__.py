@@ -171,12 +171,14 @@ class PollStats:
         self.total = 0.0
         self.max = 0.0
         self.late = 0
+        self.sampled = 0
 
     def text(self) -> str:
         if not self.polls:
             return "no polls"
         return (f"{self.polls} polls, {1000 * self.total / self.polls:.1f} ms mean, "
-                f"{1000 * self.max:.1f} ms max, {self.late} longer than the period")
+                f"{1000 * self.max:.1f} ms max, {self.late} longer than the period, "
+                f"{self.sampled} values sampled")
 
 
 GONE_AFTER = 3.0      # seconds without an answer from the kernel: the configuration is gone
@@ -185,20 +187,25 @@ EXIT_RELOAD = 75      # EX_TEMPFAIL: the configuration changed; start serve agai
 
 async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
                 stats: PollStats) -> Optional[str]:
-    """Reads every variable (when OPC UA is served) and the status each
-    *period* (Modbus only: each second); a poll that takes longer than
-    the period is followed by a pause as long as itself (at most half the
-    server's time goes to polling, the clients get the rest).
+    """Each *period* (the fastest task's interval, at least --period-min;
+    Modbus only: each second) reads the tasks' status and, for every task
+    that ended a cycle since its variables were last sampled and whose
+    interval has passed, the variables of it that a client subscribes to
+    (globals with the fastest task); a poll that takes longer than the
+    period is followed by a pause as long as itself (at most half the
+    server's time goes to polling, the clients get the rest).  Variables
+    nobody subscribes to are not read (a client's Read asks the kernel
+    itself; Modbus requests too).
 
-    Returns why it ended other than by *stop*: the kernel runs another
-    configuration or another interface (a load, a swap that changed the
-    interface: the address space and the map no longer fit), or it has
-    not answered for GONE_AFTER seconds (stopped)."""
-    from .opcua import now
-    paths = list(model.order)
+    When the kernel does not answer, every value says BadServerHalted at
+    once.  Returns why it ended other than by *stop*: the kernel runs
+    another configuration or another interface (a load, a swap that
+    changed the interface: the address space and the map no longer fit),
+    or it has not answered for GONE_AFTER seconds (stopped)."""
     failing_since = None
     if ua is None:
         period = max(period, 1.0)
+    sampled: dict = {}       # 'res.task' -> (cycles, monotonic time) of its last sample
     while not stop.is_set():
         t0 = time.monotonic()
         try:
@@ -209,8 +216,18 @@ async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
                         f"not what is served ({model.configuration}, interface "
                         f"{model.interface_hash})")
             if ua is not None:
-                snap = await kernel.read(paths)
-                await ua.update(snap, st, now())
+                due = set()
+                for t in st.tasks():
+                    key = t.path.lower()
+                    cyc, when = sampled.get(key, (None, -1e9))
+                    if t.cycles != cyc and t0 - when >= (t.interval_ns or 0) / 1e9 - period / 2:
+                        due.add(key)
+                        sampled[key] = (t.cycles, t0)
+                paths = [p for p in ua.wanted()
+                         if (ua._task_of(p) in due) or (ua._task_of(p) is None and due)]
+                stats.sampled += len(paths)
+                snap = await kernel.read(paths) if paths else {}
+                await ua.update(snap, st)
             if failing_since is not None:
                 print("serve: the kernel answers again", file=sys.stderr, flush=True)
             failing_since = None
@@ -218,6 +235,8 @@ async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
             if failing_since is None:
                 print(f"serve: cannot read the kernel: {e}", file=sys.stderr, flush=True)
                 failing_since = t0
+                if ua is not None:
+                    await ua.halt()
             elif t0 - failing_since >= GONE_AFTER:
                 return f"no answer from the kernel for {GONE_AFTER:.0f} s: {e}"
         took = time.monotonic() - t0

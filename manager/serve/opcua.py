@@ -241,6 +241,10 @@ class OpcUaServer:
         self.nodes: Dict[str, object] = {}     # path -> node
         self.last: Dict[str, object] = {}
         self.task_nodes: Dict[str, Dict[str, object]] = {}
+        self.path_of: Dict[object, str] = {}   # node id -> lower path
+        self.flagged: Dict[str, int] = {}      # lower path -> the bad status it shows
+        self.halted = False
+        self.fresh_reads = 0
         self.writes = 0
         self.refused = 0
 
@@ -278,6 +282,8 @@ class OpcUaServer:
         self.server = s
         await self._build()
         self._hook_writes()
+        from asyncua.common.callback import CallbackType
+        s.subscribe_server_callback(CallbackType.PreRead, self._pre_read)
         try:
             await s.start()
         except OSError as e:
@@ -357,6 +363,7 @@ class OpcUaServer:
                                     ua.Variant(t.length, ua.VariantType.UInt32))
         self.nodes.setdefault(path.lower(), [])
         self.nodes[path.lower()].append(node)
+        self.path_of[node.nodeid] = path.lower()
 
     # -- writes ----------------------------------------------------------
     def _hook_writes(self) -> None:
@@ -418,6 +425,47 @@ class OpcUaServer:
         self.writes += 1
         return ua.StatusCode()
 
+    # -- what is sampled ------------------------------------------------
+    def wanted(self) -> List[str]:
+        """The variables some client subscribes to now (a data change
+        monitored item on one of its nodes): only these are polled."""
+        from asyncua import ua
+        aspace = self.server.iserver.aspace
+        out = []
+        for path, nodes in self.nodes.items():
+            for node in nodes:
+                nd = aspace.get(node.nodeid)
+                if nd is not None and \
+                        nd.attributes[ua.AttributeIds.Value].datachange_callbacks:
+                    out.append(path)
+                    break
+        return out
+
+    async def _pre_read(self, event, _dispatcher) -> None:
+        """A client reads values: the kernel's, fresh (they are not polled
+        unless subscribed)."""
+        from asyncua import ua
+        params = getattr(event, "request_params", None)
+        if params is None or self.halted or not getattr(event, "is_external", True):
+            return
+        paths = set()
+        for rv in params.NodesToRead:
+            if rv.AttributeId == ua.AttributeIds.Value and \
+                    rv.NodeId.NamespaceIndex == self.ns:
+                p = self.path_of.get(rv.NodeId)
+                if p is not None:
+                    paths.add(p)
+        if not paths:
+            return
+        self.fresh_reads += 1
+        try:
+            st = await self.kernel.status()
+            snap = await self.kernel.read(sorted(paths))
+        except PLCError as e:
+            log.warning("opcua read: %s", e)
+            return
+        await self.update(snap, st)
+
     # -- updates ----------------------------------------------------------
     def _task_of(self, path: str) -> Optional[str]:
         """'res.task' running the program instance *path* belongs to."""
@@ -429,38 +477,54 @@ class OpcUaServer:
             return None
         return f"{inst['resource']}.{inst['task']}".lower()
 
-    async def update(self, snapshot: Dict[str, object], status, stamp) -> int:
-        """New values of the variables that changed; returns how many.  The
-        variables of a program instance whose task is stopped on a fault
-        keep their last value with status UncertainLastUsableValue (a Bad
-        status would void the value: OPC UA part 4, 7.7.1), Good again once
-        the task runs."""
+    @staticmethod
+    def stamp_of(status, task: Optional[str]):
+        """The source timestamp of a value of *task* ('res.task', None: a
+        global): the end of the task's last cycle, as the kernel tells it
+        (CLOCK_REALTIME; a global: the latest end among the tasks), else
+        now (a kernel without it)."""
+        import datetime
+        ends = {t.path.lower(): t.last_end_ns for t in status.tasks()} if status else {}
+        ns = ends.get(task) if task else max(ends.values(), default=0)
+        if not ns:
+            return now()
+        return datetime.datetime.fromtimestamp(ns / 1e9, datetime.timezone.utc)
+
+    async def update(self, snapshot: Dict[str, object], status) -> int:
+        """New values of the variables that changed; returns how many.
+        Each value is stamped with the end of its task's last cycle (the
+        cycle whose values these are).  The variables of a program instance
+        whose task is stopped on a fault are flagged BadOutOfService (the
+        value then goes out null, OPC UA part 4, 7.7.1: clients keep the
+        last one they had, frozen; its task's State and Fault say why),
+        Good again once the task runs."""
         from asyncua import ua
         faulted = set()
         if status is not None:
             faulted = {t.path.lower() for t in status.tasks() if t.state == "fault"}
-        if not hasattr(self, "flagged"):
-            self.flagged = set()
+        stamps: Dict[Optional[str], object] = {}
         n = 0
         for path, val in snapshot.items():
             if val is None:
                 continue
-            bad = bool(faulted) and self._task_of(path) in faulted
-            if bad == (path in self.flagged) and self.last.get(path) == val:
+            path = path.lower()
+            task = self._task_of(path)
+            bad = ua.StatusCodes.BadOutOfService if task in faulted else ua.StatusCodes.Good
+            if self.flagged.get(path, ua.StatusCodes.Good) == bad and \
+                    self.last.get(path) == val:
                 continue
-            self.last[path] = val
-            t = self.model.var(path)
-            code = ua.StatusCode(ua.StatusCodes.UncertainLastUsableValue if bad
-                                 else ua.StatusCodes.Good)
-            if bad:
-                self.flagged.add(path)
-            else:
-                self.flagged.discard(path)
-            dv = ua.DataValue(ua.Variant(to_ua(t, val), _vtype(t)), StatusCode=code,
-                              SourceTimestamp=stamp, ServerTimestamp=stamp)
-            for node in self.nodes.get(path.lower(), ()):
-                await self.server.write_attribute_value(node.nodeid, dv)
+            if task not in stamps:
+                stamps[task] = self.stamp_of(status, task)
+            await self._set(path, val, bad, stamps[task])
             n += 1
+        # frozen: the variables of a faulted task not in this snapshot
+        for path in list(self.last):
+            if "/" in path:
+                continue
+            task = self._task_of(path)
+            if task in faulted and \
+                    self.flagged.get(path) != ua.StatusCodes.BadOutOfService:
+                await self._set(path, self.last[path], ua.StatusCodes.BadOutOfService, now())
         if status is not None:
             for task in status.tasks():
                 nodes = self.task_nodes.get(task.path.lower())
@@ -476,12 +540,48 @@ class OpcUaServer:
                                     ("Faults", ua.VariantType.UInt64, task.faults),
                                     ("Fault", ua.VariantType.String, fault)):
                     key = f"{task.path}/{name}"
-                    if self.last.get(key) != v:
+                    if self.last.get(key) != v or self.halted:
                         self.last[key] = v
                         await self.server.write_attribute_value(
                             nodes[name].nodeid, ua.DataValue(ua.Variant(v, vt),
-                                                             SourceTimestamp=stamp))
+                                                             SourceTimestamp=now()))
+        self.halted = False
         return n
+
+    async def _set(self, path: str, val, code: int, stamp) -> None:
+        from asyncua import ua
+        self.last[path] = val
+        t = self.model.var(path)
+        if code == ua.StatusCodes.Good:
+            self.flagged.pop(path, None)
+        else:
+            self.flagged[path] = code
+        dv = ua.DataValue(ua.Variant(to_ua(t, val), _vtype(t)),
+                          StatusCode=ua.StatusCode(code),
+                          SourceTimestamp=stamp, ServerTimestamp=now())
+        for node in self.nodes.get(path, ()):
+            await self.server.write_attribute_value(node.nodeid, dv)
+
+    async def halt(self) -> None:
+        """The kernel does not answer (the configuration stopped or is being
+        loaded): every value and the tasks' state say BadServerHalted until
+        it answers again."""
+        from asyncua import ua
+        if self.halted:
+            return
+        self.halted = True
+        code = ua.StatusCode(ua.StatusCodes.BadServerHalted)
+        stamp = now()
+        for path, nodes in self.nodes.items():
+            self.flagged[path] = ua.StatusCodes.BadServerHalted
+            for node in nodes:
+                await self.server.write_attribute_value(
+                    node.nodeid, ua.DataValue(StatusCode=code, SourceTimestamp=stamp,
+                                              ServerTimestamp=stamp))
+        for nodes in self.task_nodes.values():
+            await self.server.write_attribute_value(
+                nodes["State"].nodeid, ua.DataValue(ua.Variant("halted", ua.VariantType.String),
+                                                    SourceTimestamp=stamp))
 
     async def stop(self) -> None:
         if self.server is not None and getattr(self, "started", False):

@@ -266,8 +266,12 @@ class FakeClient:
         self.sets = []
         self.manifest = manifest
         self.fault = None           # 'res.task' stopped on a fault
+        self.cycles = {}            # 'res.task' -> its cycle count (default 7)
+        self.ends = {}              # 'res.task' -> end of its last cycle (CLOCK_REALTIME ns)
+        self.got = []               # the paths of each var_get
 
     def var_get(self, paths):
+        self.got.append(list(paths))
         out = []
         for p in paths:
             t = self.types[p.lower()]
@@ -291,11 +295,14 @@ class FakeClient:
                 Task(name=t["name"], resource=r["name"],
                      state="fault" if f"{r['name']}.{t['name']}" == self.fault else "running",
                      interval_ns=t["interval_ns"] or 0, priority=t["priority"], last_cpu=0,
-                     cycles=7, overruns=0, faults=0, exec_min_ns=0, exec_avg_ns=0,
-                     exec_max_ns=0, latency_avg_ns=0, latency_max_ns=0, histogram=[])
+                     cycles=self.cycles.get(f"{r['name']}.{t['name']}", 7), overruns=0,
+                     faults=0, exec_min_ns=0, exec_avg_ns=0, exec_max_ns=0, latency_avg_ns=0,
+                     latency_max_ns=0, histogram=[],
+                     last_end_ns=self.ends.get(f"{r['name']}.{t['name']}", 0))
                 for t in r["tasks"]]))
         return Status(abi=1, configuration=self.manifest["configuration"], module="m",
-                      source_hash="", interface_hash="", now_ns=0, forced=0,
+                      source_hash="", interface_hash=self.manifest["interface_hash"],
+                      now_ns=0, forced=0,
                       resources=res, slots=[])
 
     def set(self, path, value):
@@ -429,7 +436,7 @@ def test_opcua_server(manifests, tmp_path, pki):
         try:
             fake.set("bottles_filled", 42)
             fake.set("cpu0.fill_rate", 2.5)
-            await srv.update(kernel.read_now(mo.order), fake.status(), now())
+            await srv.update(kernel.read_now(mo.order), fake.status())
             ns = srv.ns
             async with Client(url) as c:          # anonymous: refused
                 pytest.fail("anonymous session accepted")
@@ -469,17 +476,19 @@ def test_opcua_server(manifests, tmp_path, pki):
                 # a task stopped on a fault: its instances' values frozen, flagged
                 fake.fault = "cpu1.slow1"
                 fake.set("cpu1.monitor.in_transit", 5)
-                await srv.update(kernel.read_now(mo.order), fake.status(), now())
+                await srv.update(kernel.read_now(mo.order), fake.status())
                 transit = c.get_node(ua.NodeId("cpu1.monitor.in_transit", ns))
                 dv = await transit.read_data_value(raise_on_bad_status=False)
-                assert dv.StatusCode.value == ua.StatusCodes.UncertainLastUsableValue
-                assert dv.Value.Value == 5
+                # Bad: the value goes out null (OPC UA part 4, 7.7.1); clients keep
+                # the last one they had (frozen)
+                assert dv.StatusCode.value == ua.StatusCodes.BadOutOfService
+                assert dv.Value.Value is None
                 assert await c.get_node(ua.NodeId("cpu1.slow1/State", ns)).read_value() \
                     == "fault"
                 dv = await rate.read_data_value()
                 assert dv.StatusCode.is_good()                # another task's variable
                 fake.fault = None
-                await srv.update(kernel.read_now(mo.order), fake.status(), now())
+                await srv.update(kernel.read_now(mo.order), fake.status())
                 dv = await transit.read_data_value()
                 assert dv.StatusCode.is_good() and dv.Value.Value == 5
                 # subscription: a change in the kernel reaches the client
@@ -493,7 +502,7 @@ def test_opcua_server(manifests, tmp_path, pki):
                 await sub.subscribe_data_change(ap)
                 assert await asyncio.wait_for(got.get(), 5) == 42
                 fake.set("bottles_filled", 43)
-                await srv.update(kernel.read_now(mo.order), None, now())
+                await srv.update(kernel.read_now(mo.order), None)
                 assert await asyncio.wait_for(got.get(), 5) == 43
             finally:
                 await c.disconnect()
@@ -557,6 +566,130 @@ def test_poller_ends_when_the_configuration_changes(manifests, monkeypatch):
 
 
 
+def test_poller_samples_what_is_subscribed(manifests, pki):
+    """The poller reads only variables a client subscribes to, each task's
+    when it ended a cycle since the last sample, and stamps each value
+    with the end of its task's cycle (the kernel's IEC_A_LAST_END_NS):
+    latency is measured from there, not from the poll.  A client's Read
+    asks the kernel for what it reads."""
+    import datetime
+    import plc_manager.serve as serve
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer
+    mo = _model(manifests, "two_resources")
+    fake = FakeClient(manifests["two_resources"])
+    kernel = Kernel(mo, fake)
+    url = f"opc.tcp://127.0.0.1:{_port()}"
+    end = 1_700_000_000_123_456_000          # ns, CLOCK_REALTIME
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=False, users={},
+                          allow_anonymous=True, security="none", cert_dir=pki)
+        await srv.start()
+        stop = asyncio.Event()
+        stats = serve.PollStats()
+        poll = asyncio.ensure_future(serve._poll(kernel, mo, srv, 0.02, stop, stats))
+        try:
+            async with Client(url) as c:
+                for _ in range(250):
+                    if stats.polls >= 3 or poll.done():
+                        break
+                    await asyncio.sleep(0.02)
+                assert not poll.done(), poll.result()
+                assert fake.got == [] and stats.polls >= 3    # nothing subscribed
+                got = asyncio.Queue()
+
+                class H:
+                    def datachange_notification(self, node, val, data):
+                        got.put_nowait(data.monitored_item.Value)
+
+                sub = await c.create_subscription(20, H())
+                transit = c.get_node(ua.NodeId("cpu1.monitor.in_transit", srv.ns))
+                await sub.subscribe_data_change(transit)
+                fake.set("cpu1.monitor.in_transit", 3)
+                fake.ends["cpu1.slow1"] = end
+                fake.cycles["cpu1.slow1"] = 8
+                while True:
+                    dv = await asyncio.wait_for(got.get(), 5)
+                    if dv.Value.Value == 3:
+                        break
+                assert dv.SourceTimestamp == datetime.datetime.fromtimestamp(
+                    end / 1e9, datetime.timezone.utc).replace(tzinfo=None) or \
+                    dv.SourceTimestamp == datetime.datetime.fromtimestamp(
+                        end / 1e9, datetime.timezone.utc)
+                polled = {p for g in fake.got for p in g}
+                assert polled == {"cpu1.monitor.in_transit"}, polled
+                # the task ends no cycle: its variable is not read again
+                fake.got.clear()
+                await asyncio.sleep(0.3)
+                assert fake.got == [], fake.got
+                fake.cycles["cpu1.slow1"] = 9         # read again, at slow1's 1 s rate
+                for _ in range(100):
+                    if fake.got:
+                        break
+                    await asyncio.sleep(0.02)
+                assert fake.got and {p for g in fake.got for p in g} == \
+                    {"cpu1.monitor.in_transit"}
+                # a Read of an unsubscribed variable: the kernel's value, fresh
+                fake.got.clear()
+                fake.set("bottles_filled", 77)
+                assert await c.get_node(ua.NodeId("access:FILLED", srv.ns)).read_value() == 77
+                assert ["bottles_filled"] in fake.got
+        finally:
+            stop.set()
+            await poll
+            await srv.stop()
+
+    asyncio.run(go())
+
+
+def test_kernel_gone_values_halted(manifests, pki):
+    """The kernel stops answering (a stop, a load under way): every value
+    says BadServerHalted at once, a write answers BadServerHalted, the
+    tasks' State says halted; values come back Good when it answers."""
+    import plc_manager.serve as serve
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer
+    mo = _model(manifests, "two_resources")
+    fake = FakeClient(manifests["two_resources"])
+    kernel = Kernel(mo, fake)
+    url = f"opc.tcp://127.0.0.1:{_port()}"
+    status, var_get, var_set = fake.status, fake.var_get, fake.var_set
+
+    def gone(*_a):
+        raise KernelError(errno.ENOENT, "no such family")
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=True, users={},
+                          allow_anonymous=True, security="none", cert_dir=pki)
+        await srv.start()
+        stop = asyncio.Event()
+        poll = asyncio.ensure_future(serve._poll(kernel, mo, srv, 0.02, stop,
+                                                 serve.PollStats()))
+        try:
+            async with Client(url) as c:
+                node = c.get_node(ua.NodeId("bottles_filled", srv.ns))
+                fake.set("bottles_filled", 5)
+                assert await node.read_value() == 5
+                fake.status = fake.var_get = fake.var_set = gone
+                await asyncio.sleep(0.2)
+                dv = await node.read_data_value(raise_on_bad_status=False)
+                assert dv.StatusCode.value == ua.StatusCodes.BadServerHalted
+                state = c.get_node(ua.NodeId("cpu0.fast0/State", srv.ns))
+                assert await state.read_value() == "halted"
+                fake.status, fake.var_get, fake.var_set = status, var_get, var_set
+                await asyncio.sleep(0.2)
+                dv = await node.read_data_value()
+                assert dv.StatusCode.is_good() and dv.Value.Value == 5
+                assert await state.read_value() == "running"
+        finally:
+            stop.set()
+            await poll
+            await srv.stop()
+
+    asyncio.run(go())
+
+
 def test_ports_taken(manifests, pki):
     """A port in use: one line, no traceback."""
     from plc_manager.errors import PLCError
@@ -597,7 +730,7 @@ def test_opcua_50_clients(manifests, pki):
         await srv.start()
         try:
             fake.set("bottles_filled", 7)
-            await srv.update(kernel.read_now(mo.order), fake.status(), now())
+            await srv.update(kernel.read_now(mo.order), fake.status())
 
             async def one(i):
                 c = Client(url, timeout=30)
