@@ -98,6 +98,8 @@ async def serve(a) -> int:
         pool.shutdown()
         raise
     model = kernel.model
+    from .. import ops
+    kernel.connect = lambda: ops.connect("serve")
     t_model = time.monotonic() - t_start
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
@@ -144,7 +146,7 @@ async def serve(a) -> int:
                      f"{t_model:.1f} s)")
         print("\n".join(lines), flush=True)
         serving[0] = True
-        gone = await _poll(kernel, model, ua, period, stop, stats)
+        gone = await _poll(kernel, model, ua, period, stop, stats, a.gone_after)
     except asyncio.CancelledError:
         print("serve: stopped while starting", flush=True)
     finally:
@@ -181,12 +183,12 @@ class PollStats:
                 f"{self.sampled} values sampled")
 
 
-GONE_AFTER = 3.0      # seconds without an answer from the kernel: the configuration is gone
+GONE_AFTER = 30.0     # seconds without an answer from the kernel: the configuration is gone
 EXIT_RELOAD = 75      # EX_TEMPFAIL: the configuration changed; start serve again
 
 
 async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
-                stats: PollStats) -> Optional[str]:
+                stats: PollStats, gone_after: Optional[float] = None) -> Optional[str]:
     """Each *period* (the fastest task's interval, at least --period-min;
     Modbus only: each second) reads the tasks' status and, for every task
     that ended a cycle since its variables were last sampled and whose
@@ -203,6 +205,7 @@ async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
     changed the interface: the address space and the map no longer fit),
     or it has not answered for GONE_AFTER seconds (stopped)."""
     failing_since = None
+    gone_after = GONE_AFTER if gone_after is None else gone_after
     if ua is None:
         period = max(period, 1.0)
     sampled: dict = {}       # 'res.task' -> (cycles, monotonic time) of its last sample
@@ -237,8 +240,8 @@ async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
                 failing_since = t0
                 if ua is not None:
                     await ua.halt()
-            elif t0 - failing_since >= GONE_AFTER:
-                return f"no answer from the kernel for {GONE_AFTER:.0f} s: {e}"
+            elif t0 - failing_since >= gone_after:
+                return f"no answer from the kernel for {gone_after:.0f} s: {e}"
         took = time.monotonic() - t0
         stats.polls += 1
         stats.total += took
@@ -294,6 +297,10 @@ def add_parsers(sub) -> None:
                         "an unencrypted endpoint")
     s.add_argument("--cert-dir", default="/var/lib/plc-manager/opcua", metavar="DIR",
                    help="the server's certificate and key (generated when missing)")
+    s.add_argument("--gone-after", type=float, default=GONE_AFTER, metavar="S",
+                   help="a kernel that does not answer for so long (a stop; a load takes "
+                        "seconds) ends serve with exit 75 (default 30 s); until then values "
+                        "say BadServerHalted")
     s.add_argument("--period-min", type=float, default=20.0, metavar="MS",
                    help="the poller's shortest period (default 20 ms)")
     s.set_defaults(func=main_serve)

@@ -25,8 +25,11 @@ MIN_64B_RANGE 4096):
 
 Multi-register values are big-endian, most significant word first (as
 OpenPLC stores %MD/%ML); REAL/LREAL are IEEE 754 in 2/4 registers; a
-16-bit register holds the two's complement of INT/SINT.  Strings are not
-on Modbus (OPC UA has them).
+16-bit register holds the two's complement of INT/SINT.  A STRING[n]
+access path takes 1 + ceil(n/2) registers: its current length, then two
+characters (Latin-1) a register, the first in the high byte, zeros after
+the end; a WSTRING[n] 1 + n: its length, then one UTF-16 unit a register.
+A write of a length over the capacity is exception 03.
 """
 
 from __future__ import annotations
@@ -63,9 +66,13 @@ class Refused(Exception):
 # registers
 
 def registers_of(var: VarType) -> int:
-    """How many 16-bit registers *var* takes on Modbus (0: not on Modbus)."""
+    """How many 16-bit registers *var* takes on Modbus (0: not on Modbus).
+    STRING[n]: 1 + ceil(n/2) (its length, then two characters a register);
+    WSTRING[n]: 1 + n (its length, then one UTF-16 unit a register)."""
     if var.kind in "sw":
-        return 0
+        if var.length is None:
+            return 0
+        return 1 + (var.length if var.kind == "w" else (var.length + 1) // 2)
     if var.kind == "b":
         return 1
     size = var.size or (8 if var.kind == "t" else 4)
@@ -77,6 +84,14 @@ def to_registers(var: VarType, value) -> List[int]:
     n = registers_of(var)
     if var.kind == "b":
         return [1 if value else 0]
+    if var.kind == "s":
+        raw = value.encode("latin-1", "replace")
+        raw += b"\0" * (2 * (n - 1) - len(raw))
+        return [len(value)] + [raw[i] << 8 | raw[i + 1] for i in range(0, 2 * (n - 1), 2)]
+    if var.kind == "w":
+        units = value.encode("utf-16-be")
+        regs = [int.from_bytes(units[i:i + 2], "big") for i in range(0, len(units), 2)]
+        return [len(regs)] + regs + [0] * (n - 1 - len(regs))
     if var.kind == "f":
         raw = struct.pack(">d" if n == 4 else ">f", value)
         return [int.from_bytes(raw[i:i + 2], "big") for i in range(0, len(raw), 2)]
@@ -97,6 +112,19 @@ def from_registers(var: VarType, regs: Sequence[int]):
         if regs[0] not in (0, 1):
             raise Refused("range", f"{var.path}: a BOOL register is 0 or 1")
         return bool(regs[0])
+    if var.kind in "sw":
+        length = regs[0]
+        if length > var.length:
+            raise Refused("range", f"{var.path}: length {length} is over the capacity "
+                                   f"{var.length}")
+        if var.kind == "s":
+            raw = b"".join(r.to_bytes(2, "big") for r in regs[1:])[:length]
+            return check(var, raw.decode("latin-1"))
+        raw = b"".join(r.to_bytes(2, "big") for r in regs[1:1 + length])
+        try:
+            return check(var, raw.decode("utf-16-be"))
+        except UnicodeDecodeError:
+            raise Refused("range", f"{var.path}: not UTF-16") from None
     raw = b"".join(r.to_bytes(2, "big") for r in regs)
     if var.kind == "f":
         v = struct.unpack(">d" if n == 4 else ">f", raw)[0]
@@ -418,7 +446,7 @@ def modbus_map(model: Model, writable_all: bool = False) -> ModbusMap:
         t = model.var(a.path)
         n = registers_of(t)
         if n == 0:
-            mm.skipped.append(f"access path {a.name} ({t.shown}): strings are not on Modbus")
+            mm.skipped.append(f"access path {a.name} ({t.shown}): no capacity known")
             continue
         w = a.read_write and t.writable
         for i in range(n):

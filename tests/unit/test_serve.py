@@ -317,6 +317,117 @@ class FakeClient:
         pass
 
 
+STR = """
+PROGRAM P
+VAR_OUTPUT n : INT; END_VAR
+n := n + 1;
+END_PROGRAM
+CONFIGURATION C
+    VAR_GLOBAL label : STRING[5] := 'ab'; wide : WSTRING[3]; END_VAR
+    RESOURCE r ON CPU0
+        TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+        PROGRAM p WITH t : P;
+    END_RESOURCE
+    VAR_ACCESS
+        LABEL : label : STRING[5] READ_WRITE;
+        WIDE  : wide : WSTRING[3] READ_WRITE;
+        N     : r.p.n : INT READ_ONLY;
+    END_VAR
+END_CONFIGURATION
+"""
+
+
+def _gen(tmp_path, text, name="b"):
+    src = tmp_path / f"src_{name}"
+    src.mkdir()
+    (src / "p.st").write_text(text)
+    subprocess.run([sys.executable, "-m", "iec2kmod", "gen", str(src), "-o",
+                    str(tmp_path / name)], check=True, capture_output=True)
+    return json.loads((tmp_path / name / "manifest.json").read_text())
+
+
+def test_strings_on_modbus(tmp_path):
+    """STRING[n]: its length, then two Latin-1 characters a register (the
+    first in the high byte); WSTRING[n]: its length, then one UTF-16 unit a
+    register; access paths at 8192.. like the others."""
+    s5 = values.VarType(path="s", kind="s", size=7, base="STRING", length=5)
+    w3 = values.VarType(path="w", kind="w", size=8, base="WSTRING", length=3)
+    assert M.registers_of(s5) == 4 and M.registers_of(w3) == 4
+    assert M.to_registers(s5, "abc") == [3, 0x6162, 0x6300, 0]
+    assert M.from_registers(s5, [3, 0x6162, 0x6300, 0]) == "abc"
+    assert M.from_registers(s5, [2, 0x6162, 0x6364, 0x6500]) == "ab"
+    assert M.to_registers(w3, "ét") == [2, 0xE9, 0x74, 0]
+    assert M.from_registers(w3, [2, 0xE9, 0x74, 0]) == "ét"
+    with pytest.raises(M.Refused) as e:
+        M.from_registers(s5, [6, 0, 0, 0])
+    assert e.value.why == "range"
+    with pytest.raises(M.Refused):
+        M.from_registers(w3, [1, 0xD800, 0, 0])            # a lone surrogate
+    mo = M.Model.from_manifest(_gen(tmp_path, STR))
+    mm = M.modbus_map(mo)
+    assert [mm.holding[8192 + i].path for i in range(9)] == \
+        ["label"] * 4 + ["wide"] * 4 + ["r.p.n"]
+    assert mm.holding[8192].writable and not mm.holding[8200].writable
+    assert not mm.skipped, mm.skipped
+
+    fake = FakeClient(mo_manifest := _gen(tmp_path, STR, "b2"))
+    kernel = Kernel(M.Model.from_manifest(mo_manifest), fake)
+    port = _port()
+
+    async def go():
+        from pymodbus.client import AsyncModbusTcpClient
+        from plc_manager.serve import modbus
+        srv = await modbus.start(kernel, mm, "127.0.0.1", port)
+        cl = AsyncModbusTcpClient("127.0.0.1", port=port)
+        await cl.connect()
+        try:
+            fake.set("label", "pump")
+            r = await cl.read_holding_registers(8192, count=4)
+            assert r.registers == [4, 0x7075, 0x6D70, 0]
+            r = await cl.write_registers(8192, [2, 0x6F6B, 0, 0])
+            assert not r.isError() and fake.get("label") == "ok"
+            r = await cl.write_registers(8192, [9, 0, 0, 0])          # over the capacity
+            assert r.isError() and r.exception_code == 3
+            assert fake.get("label") == "ok"
+            r = await cl.write_registers(8196, [1, 0x263A, 0, 0])
+            assert not r.isError() and fake.get("wide") == "\u263a"
+        finally:
+            cl.close()
+            await srv.shutdown()
+
+    asyncio.run(go())
+
+
+def test_swap_keeps_node_ids(tmp_path, pki):
+    """A new body with the same interface (a swap): the same interface hash,
+    so serve goes on, and the address space has the same node ids; a new
+    variable changes the interface (serve exits 75 for a restart)."""
+    from plc_manager.serve.opcua import OpcUaServer
+    body = AGG.replace("n := n + 1;", "n := n + 2;")
+    m1, m2 = _gen(tmp_path, AGG, "one"), _gen(tmp_path, body, "two")
+    m3 = _gen(tmp_path, AGG.replace("VAR_OUTPUT n : INT;", "VAR_OUTPUT n : INT; k : INT;"),
+              "three")
+    assert m1["source_hash"] != m2["source_hash"]
+    assert m1["interface_hash"] == m2["interface_hash"] != m3["interface_hash"]
+
+    async def ids(m):
+        mo = M.Model.from_manifest(m)
+        srv = OpcUaServer(mo, Kernel(mo, FakeClient(m)), f"opc.tcp://127.0.0.1:{_port()}",
+                          writable_all=False, users={}, allow_anonymous=True,
+                          security="none", cert_dir=pki)
+        await srv.start()
+        try:
+            return {n.Identifier for n in srv.server.iserver.aspace.keys()
+                    if n.NamespaceIndex == srv.ns}
+        finally:
+            await srv.stop()
+
+    a, b, c = (asyncio.run(ids(m)) for m in (m1, m2, m3))
+    assert a == b and len(a) > 20
+    assert "r.p.n" in a and "access:POS.x" in a and "pos.x" in a
+    assert "r.p.k" in c - a
+
+
 def _port():
     s = socket.socket()
     s.bind(("127.0.0.1", 0))
@@ -677,8 +788,13 @@ def test_kernel_gone_values_halted(manifests, pki):
                 assert dv.StatusCode.value == ua.StatusCodes.BadServerHalted
                 state = c.get_node(ua.NodeId("cpu0.fast0/State", srv.ns))
                 assert await state.read_value() == "halted"
-                fake.status, fake.var_get, fake.var_set = status, var_get, var_set
-                await asyncio.sleep(0.2)
+                # loaded again: a new module, a new netlink family, a new client
+                fresh = FakeClient(manifests["two_resources"])
+                fresh.data = dict(fake.data)
+                fresh.status, fresh.var_get, fresh.var_set = status, var_get, var_set
+                kernel.connect = lambda: fresh
+                await asyncio.sleep(0.3)
+                assert kernel.reconnects == 1
                 dv = await node.read_data_value()
                 assert dv.StatusCode.is_good() and dv.Value.Value == 5
                 assert await state.read_value() == "running"
