@@ -494,3 +494,23 @@ def placement(model: Model, path: str) -> Tuple[List[str], List[str]]:
     if len(parts) >= 2 and parts[0].lower() in res:
         return [res[parts[0].lower()], "Globals"], parts[1:]
     return ["Globals"], parts
+
+
+def array_groups(model: Model) -> Dict[str, List[str]]:
+    """The one-dimensional arrays of elementary elements (``tab[1]``,
+    ``tab[2]``, ... leaves of the same type, integer indexes): array
+    path -> its elements' paths in index order.  OPC UA shows each as one
+    array variable (ValueRank 1, ArrayDimensions [n]); arrays of
+    structures, of function blocks and of several dimensions stay folders
+    of their elements."""
+    groups: Dict[str, List[Tuple[int, str]]] = {}
+    kinds: Dict[str, set] = {}
+    for p in model.order:
+        m = re.match(r"^(.*[^\]])\[(-?\d+)\]$", p)
+        if not m or p.startswith("%"):
+            continue
+        groups.setdefault(m.group(1), []).append((int(m.group(2)), p))
+        t = model.var(p)
+        kinds.setdefault(m.group(1), set()).add((t.kind, t.size, t.base, t.length))
+    return {a: [p for _, p in sorted(els)] for a, els in groups.items()
+            if len(kinds[a]) == 1 and a.lower() not in model.variables}

@@ -31,7 +31,7 @@ from typing import Dict, List, Optional
 
 from ..errors import PLCError, UsageError
 from .kernel import Kernel
-from .model import Model, Refused, from_ua, placement, to_ua, ua_type
+from .model import Model, Refused, array_groups, from_ua, placement, to_ua, ua_type
 
 log = logging.getLogger("plc_manager.serve.opcua")
 
@@ -325,10 +325,20 @@ class OpcUaServer:
                     ua.NodeId(f"{t.resource}.{t.name}/{name}", ns), name, ua.Variant(init, vt))
             self.task_nodes[f"{t.resource}.{t.name}".lower()] = nodes
         self.writable_nodes: Dict[str, str] = {}     # node id string -> path
+        self.arrays = array_groups(m)
+        in_array = {p for els in self.arrays.values() for p in els}
+        self.array_of = {p.lower(): a for a, els in self.arrays.items() for p in els}
+        self.array_nodes: Dict[str, object] = {}
         for path in m.order:
+            if path in in_array:
+                continue
             dirs, rest = placement(m, path)
             parent = await folder(dirs + rest[:-1])
             await self._variable(parent, path, path, rest[-1])
+        for a, els in self.arrays.items():
+            dirs, rest = placement(m, a)
+            parent = await folder(dirs + rest[:-1])
+            await self._array(parent, a, els, rest[-1])
         for a in m.access:
             parent = await folder(["AccessPaths"])
             await self._variable(parent, a.path, f"access:{a.name}", a.name, access=a)
@@ -364,6 +374,49 @@ class OpcUaServer:
         self.nodes.setdefault(path.lower(), [])
         self.nodes[path.lower()].append(node)
         self.path_of[node.nodeid] = path.lower()
+
+    async def _array(self, parent, path: str, elements: List[str], name: str) -> None:
+        """One array variable for *elements* (ValueRank 1, ArrayDimensions
+        [n]), node id the array's path; a write sets every element in one
+        VAR_SET."""
+        from asyncua import ua
+        t = self.model.var(elements[0])
+        vt = _vtype(t)
+        init = {"Boolean": False, "String": "", "Float": 0.0, "Double": 0.0,
+                "Duration": 0.0}.get(ua_type(t), 0)
+        if ua_type(t) == "DateTime":
+            from .model import EPOCH
+            init = EPOCH
+        node = await parent.add_variable(
+            ua.NodeId(path, self.ns), ua.QualifiedName(name, self.ns),
+            ua.Variant([init] * len(elements), vt, is_array=True), datatype=_datatype(t))
+        await node.write_attribute(ua.AttributeIds.ValueRank,
+                                   ua.DataValue(ua.Variant(1, ua.VariantType.Int32)))
+        await node.write_attribute(ua.AttributeIds.ArrayDimensions, ua.DataValue(
+            ua.Variant([len(elements)], ua.VariantType.UInt32)))
+        if all(self.model.client_writable(p, self.writable_all) for p in elements):
+            await node.set_writable(True)
+            self.writable_nodes[node.nodeid.to_string()] = path
+        self.array_nodes[path.lower()] = node
+        self.path_of[node.nodeid] = path.lower()
+
+    async def _sync_arrays(self, changed, stamps) -> None:
+        """The array variables whose elements changed: the elements' last
+        values, with the worst of their status codes."""
+        from asyncua import ua
+        for a in sorted({self.array_of[p] for p in changed if p in self.array_of}):
+            els = [p.lower() for p in self.arrays[a]]
+            if any(p not in self.last for p in els):
+                continue
+            codes = [self.flagged.get(p, ua.StatusCodes.Good) for p in els]
+            code = next((c for c in codes if c != ua.StatusCodes.Good), ua.StatusCodes.Good)
+            t = self.model.var(els[0])
+            dv = ua.DataValue(ua.Variant([to_ua(t, self.last[p]) for p in els], _vtype(t),
+                                         is_array=True),
+                              StatusCode=ua.StatusCode(code),
+                              SourceTimestamp=stamps.get(self._task_of(els[0])) or now(),
+                              ServerTimestamp=now())
+            await self.server.write_attribute_value(self.array_nodes[a.lower()].nodeid, dv)
 
     # -- writes ----------------------------------------------------------
     def _hook_writes(self) -> None:
@@ -404,13 +457,20 @@ class OpcUaServer:
             if getattr(user, "role", None) != UserRole.Admin:
                 self.refused += 1
                 return ua.StatusCode(ua.StatusCodes.BadUserAccessDenied)
-        t = self.model.var(path)
         v = wv.Value.Value
-        if v is None or v.VariantType != _vtype(t):
+        elements = self.arrays.get(path) if path.lower() in self.array_nodes else None
+        t = self.model.var(elements[0] if elements else path)
+        if v is None or v.VariantType != _vtype(t) or \
+                (elements is not None and (not isinstance(v.Value, list) or
+                                           len(v.Value) != len(elements))):
             self.refused += 1
             return ua.StatusCode(ua.StatusCodes.BadTypeMismatch)
         try:
-            await self.kernel.write([(path, from_ua(t, v.Value))])
+            if elements is not None:
+                items = [(p, from_ua(t, x)) for p, x in zip(elements, v.Value)]
+            else:
+                items = [(path, from_ua(t, v.Value))]
+            await self.kernel.write(items)
         except Refused as e:
             self.refused += 1
             log.info("opcua write refused: %s", e)
@@ -432,6 +492,10 @@ class OpcUaServer:
         from asyncua import ua
         aspace = self.server.iserver.aspace
         out = []
+        for a, node in self.array_nodes.items():
+            nd = aspace.get(node.nodeid)
+            if nd is not None and nd.attributes[ua.AttributeIds.Value].datachange_callbacks:
+                out += self.array_elements(a)
         for path, nodes in self.nodes.items():
             for node in nodes:
                 nd = aspace.get(node.nodeid)
@@ -440,6 +504,13 @@ class OpcUaServer:
                     out.append(path)
                     break
         return out
+
+    def array_elements(self, a: str) -> List[str]:
+        """The lower paths of the elements of array *a* (lower path)."""
+        for name, els in self.arrays.items():
+            if name.lower() == a:
+                return [p.lower() for p in els]
+        return []
 
     async def _pre_read(self, event, _dispatcher) -> None:
         """A client reads values: the kernel's, fresh (they are not polled
@@ -453,7 +524,9 @@ class OpcUaServer:
             if rv.AttributeId == ua.AttributeIds.Value and \
                     rv.NodeId.NamespaceIndex == self.ns:
                 p = self.path_of.get(rv.NodeId)
-                if p is not None:
+                if p is not None and p in self.array_nodes:
+                    paths.update(self.array_elements(p))
+                elif p is not None:
                     paths.add(p)
         if not paths:
             return
@@ -503,6 +576,7 @@ class OpcUaServer:
         if status is not None:
             faulted = {t.path.lower() for t in status.tasks() if t.state == "fault"}
         stamps: Dict[Optional[str], object] = {}
+        changed = set()
         n = 0
         for path, val in snapshot.items():
             if val is None:
@@ -516,6 +590,7 @@ class OpcUaServer:
             if task not in stamps:
                 stamps[task] = self.stamp_of(status, task)
             await self._set(path, val, bad, stamps[task])
+            changed.add(path)
             n += 1
         # frozen: the variables of a faulted task not in this snapshot
         for path in list(self.last):
@@ -525,6 +600,8 @@ class OpcUaServer:
             if task in faulted and \
                     self.flagged.get(path) != ua.StatusCodes.BadOutOfService:
                 await self._set(path, self.last[path], ua.StatusCodes.BadOutOfService, now())
+                changed.add(path)
+        await self._sync_arrays(changed, stamps)
         if status is not None:
             for task in status.tasks():
                 nodes = self.task_nodes.get(task.path.lower())
@@ -572,7 +649,11 @@ class OpcUaServer:
         self.halted = True
         code = ua.StatusCode(ua.StatusCodes.BadServerHalted)
         stamp = now()
-        for path, nodes in self.nodes.items():
+        for a in self.array_nodes:
+            for p in self.array_elements(a):
+                self.flagged[p] = ua.StatusCodes.BadServerHalted
+        everything = list(self.nodes.items()) + [(a, [n]) for a, n in self.array_nodes.items()]
+        for path, nodes in everything:
             self.flagged[path] = ua.StatusCodes.BadServerHalted
             for node in nodes:
                 await self.server.write_attribute_value(

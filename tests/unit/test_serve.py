@@ -398,6 +398,74 @@ def test_strings_on_modbus(tmp_path):
     asyncio.run(go())
 
 
+ARR = AGG.replace("tab : ARRAY[1..2] OF INT;", "tab : ARRAY[1..2] OF INT; "
+                  "w : ARRAY[0..2] OF REAL; grid : ARRAY[1..2] OF Pt;").replace(
+    "HERE : %MW7 : INT READ_WRITE;", "HERE : %MW7 : INT READ_WRITE;\n"
+    "        W : w : ARRAY[0..2] OF REAL READ_WRITE;")
+
+
+def test_opcua_arrays(tmp_path, pki):
+    """A one-dimensional array of elementary elements is one array variable
+    (ValueRank 1, ArrayDimensions [n]); reads, subscriptions and writes take
+    the whole array (a write is one VAR_SET); an array of structures stays a
+    folder of its elements."""
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer
+    m = _gen(tmp_path, ARR)
+    mo = M.Model.from_manifest(m)
+    assert M.array_groups(mo) == {"tab": ["tab[1]", "tab[2]"],
+                                  "w": ["w[0]", "w[1]", "w[2]"]}
+    fake = FakeClient(m)
+    kernel = Kernel(mo, fake)
+    url = f"opc.tcp://127.0.0.1:{_port()}"
+
+    from plc_manager.serve.opcua import add_user, read_users
+    add_user(str(tmp_path / "users"), "op", "write", "operator-pw", n=2 ** 12)
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=False,
+                          users=read_users(str(tmp_path / "users")),
+                          allow_anonymous=False, security="none", cert_dir=pki)
+        await srv.start()
+        c = Client(url)
+        c.set_user("op")
+        c.set_password("operator-pw")
+        try:
+            async with c:
+                ns = srv.ns
+                tab = c.get_node(ua.NodeId("tab", ns))
+                assert await tab.read_attribute(ua.AttributeIds.ValueRank) is not None
+                rank = (await tab.read_attribute(ua.AttributeIds.ValueRank)).Value.Value
+                dims = (await tab.read_attribute(ua.AttributeIds.ArrayDimensions)).Value.Value
+                assert (rank, dims) == (1, [2])
+                fake.set("tab[1]", 4)
+                fake.set("tab[2]", -9)
+                assert await tab.read_value() == [4, -9]
+                w = c.get_node(ua.NodeId("w", ns))
+                await w.write_value(ua.Variant([1.5, 2.5, 3.5], ua.VariantType.Float))
+                assert [fake.get(f"w[{i}]") for i in range(3)] == [1.5, 2.5, 3.5]
+                assert len(fake.sets[-1]) == 3                      # one VAR_SET
+                with pytest.raises(ua.UaStatusCodeError) as e:      # two elements for three
+                    await w.write_value(ua.Variant([1.0, 2.0], ua.VariantType.Float))
+                assert e.value.code == ua.StatusCodes.BadTypeMismatch
+                with pytest.raises(ua.UaStatusCodeError) as e:      # a READ_ONLY path
+                    await tab.write_value(ua.Variant([1, 2], ua.VariantType.Int16))
+                assert e.value.code == ua.StatusCodes.BadNotWritable
+                # a subscription to the array polls its elements
+                assert set(srv.wanted()) == set()
+                sub = await c.create_subscription(20, None)
+                await sub.subscribe_data_change(tab)
+                assert set(srv.wanted()) == {"tab[1]", "tab[2]"}
+                # an array of structures: a folder of elements
+                grid = c.get_node(ua.NodeId("Globals/grid/", ns))
+                names = {(await n.read_browse_name()).Name for n in await grid.get_children()}
+                assert names == {"[1]", "[2]"}
+        finally:
+            await srv.stop()
+
+    asyncio.run(go())
+
+
 def test_swap_keeps_node_ids(tmp_path, pki):
     """A new body with the same interface (a swap): the same interface hash,
     so serve goes on, and the address space has the same node ids; a new
