@@ -281,6 +281,8 @@ class Model:
     instances: Dict[str, dict]              # lower path -> manifest instance
     access: List[AccessPath] = field(default_factory=list)
     located: Dict[str, str] = field(default_factory=dict)   # %MW100 -> path
+    generator: str = ""
+    programs: List[str] = field(default_factory=list)      # "TYPE build-id", loaded
 
     @classmethod
     def from_manifest(cls, m: dict) -> "Model":
@@ -324,7 +326,9 @@ class Model:
                    source_hash=m.get("source_hash", ""), variables=vs, order=order,
                    resources=[r["name"] for r in m.get("resources", [])], tasks=tasks,
                    instances={i["path"].lower(): i for i in m.get("instances", [])},
-                   access=acc, located=loc)
+                   access=acc, located=loc, generator=m.get("generator", ""),
+                   programs=[f"{p['name']} {p.get('build_id', '')}"
+                             for p in m.get("program_types", [])])
 
     def var(self, path: str) -> VarType:
         return self.variables[path.lower()]

@@ -308,9 +308,12 @@ class OpcUaServer:
             return f
 
         build = await folder(["Build"])
-        for name, val in (("InterfaceHash", m.interface_hash), ("SourceHash", m.source_hash)):
+        for name, val in (("InterfaceHash", m.interface_hash), ("SourceHash", m.source_hash),
+                          ("Generator", m.generator)):
             await build.add_variable(ua.NodeId(f"Build/{name}", ns), name,
                                      ua.Variant(val, ua.VariantType.String))
+        await build.add_variable(ua.NodeId("Build/Programs", ns), "Programs",
+                                 ua.Variant(m.programs, ua.VariantType.String, is_array=True))
         for t in m.tasks:
             f = await folder([t.resource, t.name])
             nodes = {}

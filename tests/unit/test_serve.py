@@ -652,6 +652,14 @@ def test_opcua_server(manifests, tmp_path, pki):
                 assert e.value.code == ua.StatusCodes.BadTypeMismatch
                 state = c.get_node(ua.NodeId("cpu0.fast0/State", ns))
                 assert await state.read_value() == "running"
+                # the loaded build: its hashes, its compiler, its program types' builds
+                m = manifests["two_resources"]
+                build = {n: await c.get_node(ua.NodeId(f"Build/{n}", ns)).read_value()
+                         for n in ("InterfaceHash", "SourceHash", "Generator", "Programs")}
+                assert build["InterfaceHash"] == m["interface_hash"]
+                assert build["Generator"] == m["generator"]
+                assert build["Programs"] == [f"{p['name']} {p['build_id']}"
+                                             for p in m["program_types"]]
                 # a task stopped on a fault: its instances' values frozen, flagged
                 fake.fault = "cpu1.slow1"
                 fake.set("cpu1.monitor.in_transit", 5)
