@@ -5,11 +5,11 @@ configuration (long-running; SIGTERM or SIGINT stops it cleanly).
 The address space and the Modbus map come from the running build's
 manifest alone (the copy plc-manager saved at load, or --project DIR):
 its variables, tasks, access paths (VAR_ACCESS) and the addresses of
-named located variables.  A poller reads every published
-variable and the tasks' status at the fastest task's rate (not faster
-than --period-min) and updates the OPC UA nodes that changed, so
-subscriptions see each change; Modbus requests read the kernel
-themselves."""
+named located variables.  A poller reads the tasks' status at the fastest
+task's rate (not faster than --period-min) and the variables clients
+subscribe to, each task's at its own rate when it ended a cycle, stamped
+with that cycle's end, and updates the OPC UA nodes that changed; a Read
+and every Modbus request read the kernel themselves."""
 
 from __future__ import annotations
 
