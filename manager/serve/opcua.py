@@ -282,6 +282,7 @@ class OpcUaServer:
         self.server = s
         await self._build()
         self._hook_writes()
+        self._hook_subscriptions()
         from asyncua.common.callback import CallbackType
         s.subscribe_server_callback(CallbackType.PreRead, self._pre_read)
         try:
@@ -518,12 +519,31 @@ class OpcUaServer:
     async def _pre_read(self, event, _dispatcher) -> None:
         """A client reads values: the kernel's, fresh (they are not polled
         unless subscribed)."""
-        from asyncua import ua
         params = getattr(event, "request_params", None)
-        if params is None or self.halted or not getattr(event, "is_external", True):
+        if params is None or not getattr(event, "is_external", True):
+            return
+        await self._refresh(params.NodesToRead)
+
+    def _hook_subscriptions(self) -> None:
+        """A new monitored item's first notification is the node's value:
+        the kernel's, read then (not one of a cycle long past)."""
+        svc = self.server.iserver.subscription_service
+        original = svc.create_monitored_items
+        srv = self
+
+        async def create_monitored_items(params):
+            await srv._refresh([i.ItemToMonitor for i in params.ItemsToCreate])
+            return await original(params)
+
+        svc.create_monitored_items = create_monitored_items
+
+    async def _refresh(self, read_ids) -> None:
+        """The values of the nodes *read_ids* (ReadValueIds) from the kernel."""
+        from asyncua import ua
+        if self.halted:
             return
         paths = set()
-        for rv in params.NodesToRead:
+        for rv in read_ids:
             if rv.AttributeId == ua.AttributeIds.Value and \
                     rv.NodeId.NamespaceIndex == self.ns:
                 p = self.path_of.get(rv.NodeId)

@@ -792,7 +792,10 @@ def test_poller_samples_what_is_subscribed(manifests, pki):
 
                 sub = await c.create_subscription(20, H())
                 transit = c.get_node(ua.NodeId("cpu1.monitor.in_transit", srv.ns))
+                fake.set("cpu1.monitor.in_transit", 2)
                 await sub.subscribe_data_change(transit)
+                # the first notification: the kernel's value when subscribed
+                assert (await asyncio.wait_for(got.get(), 5)).Value.Value == 2
                 fake.set("cpu1.monitor.in_transit", 3)
                 fake.ends["cpu1.slow1"] = end
                 fake.cycles["cpu1.slow1"] = 8
