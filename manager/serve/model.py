@@ -19,7 +19,7 @@ MIN_64B_RANGE 4096):
   %MDn               holding registers      2048 + 2n    (2 registers)
   %MLn               holding registers      4096 + 4n    (4 registers)
   access path k      holding registers      8192 + ...   (declaration order,
-                                                          1/2/4 registers)
+                                                          1/2/4 registers, a string more)
   BOOL access path   coils                  8192 + k-th BOOL path
   =================  =====================  ================================
 
