@@ -598,7 +598,7 @@ def test_modbus_value_refused(manifests):
 
 def test_opcua_server(manifests, tmp_path, pki):
     from asyncua import Client, ua
-    from plc_manager.serve.opcua import OpcUaServer, add_user, now, read_users
+    from plc_manager.serve.opcua import OpcUaServer, add_user, read_users
     mo = _model(manifests, "two_resources")
     fake = FakeClient(manifests["two_resources"])
     kernel = Kernel(mo, fake)
@@ -912,7 +912,7 @@ def test_opcua_50_clients(manifests, pki):
     """50 concurrent anonymous sessions read a variable; one that drops its
     connection mid-session does not disturb the others."""
     from asyncua import Client, ua
-    from plc_manager.serve.opcua import OpcUaServer, now
+    from plc_manager.serve.opcua import OpcUaServer
     mo = _model(manifests, "two_resources")
     fake = FakeClient(manifests["two_resources"])
     kernel = Kernel(mo, fake)
