@@ -124,6 +124,13 @@ def test_serve_with_real_clients(guest, station):
                                                           "label"], timeout=120)
         got = {v["path"]: v["value"] for v in json.loads(out)}
         assert got == {"level": 99, "sp": 5, "label": "ok"}, out
+        # the kernel reports the end of the task's last cycle (IEC_A_LAST_END_NS,
+        # CLOCK_REALTIME): what serve stamps values with
+        r = guest.pyrun(code="import time\nfrom plc_manager.netlink import Client\n"
+                             "c = Client(); t = c.status().tasks()[0]; c.close()\n"
+                             "print(t.last_end_ns, time.time_ns())", timeout=120)
+        end, now_ns = map(int, r.output.split()[-2:])
+        assert 0 < now_ns - end < 5 * 10**9, r.output
     finally:
         guest.run(f"kill -TERM $(cat {pidf}) 2>/dev/null", 10)
         deadline = time.monotonic() + 60
