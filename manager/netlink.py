@@ -87,6 +87,7 @@ ATTRIBUTES = [
     ("IEC_A_FIRST_RUN_NS", "int64"),
     ("IEC_A_SLOTS_ONLY", "flag"),
     ("IEC_A_FIRST_RUN_TASK", "asciiz"),
+    ("IEC_A_LAST_END_NS", "int64"),
 ]
 
 STATES = {0: "stopped", 1: "running", 2: "fault"}
@@ -148,6 +149,7 @@ class Task:
     fault_ns: Optional[int] = None
     starts: int = 0                      # since the load: more than one, restarted
     started_ns: int = 0                  # CLOCK_REALTIME of the last start
+    last_end_ns: int = 0                 # CLOCK_REALTIME of the end of the last cycle
 
     @property
     def path(self) -> str:
@@ -252,7 +254,7 @@ def _task_from(nl, resource: str) -> Task:
         fault_line=a.get("IEC_A_FAULT_LINE"), in_cycle_ns=a.get("IEC_A_IN_CYCLE_NS"),
         sel_evaluated=a.get("IEC_A_SEL_EVALUATED"), sel_skipped=a.get("IEC_A_SEL_SKIPPED"),
         fault_ns=a.get("IEC_A_FAULT_NS"), starts=a.get("IEC_A_STARTS", 0),
-        started_ns=a.get("IEC_A_STARTED_NS", 0))
+        started_ns=a.get("IEC_A_STARTED_NS", 0), last_end_ns=a.get("IEC_A_LAST_END_NS", 0))
 
 
 def _status_from(msg) -> Status:

@@ -61,7 +61,42 @@ def manifest_of(cfg, plan, config_mod, prog_modules, res_modules, source_hash, i
         # the I/O map (iec2kmod/iomap.py): per resource, its devices and bindings
         "io": {io.resource: io.manifest()
                for _, io in sorted((getattr(cfg, "io", None) or {}).items())},
+        # VAR_ACCESS: what an outside client (plc-manager serve) may see and change
+        "access": access_paths(cfg, variables),
     }
+
+
+def access_paths(cfg, variables):
+    """The configuration's access paths as manifest paths: name, path (a
+    variable of the table, or the prefix of an aggregate's members),
+    access (READ_ONLY / READ_WRITE) and the variable's type.  A path
+    without its resource names the only resource's variable; an address
+    names its located variable."""
+    paths = {v["path"].upper(): v for v in variables}
+    resources = [r.name for r in cfg.resources]
+    addresses = {a.upper(): p for a, p in getattr(cfg, "addresses", {}).items()}
+    out = []
+    for name, path, _target, direction in cfg.access:
+        if path.startswith("%"):
+            cands = [addresses.get(path.upper(), path)]
+        else:
+            cands = [path] + ([f"{resources[0]}.{path}"] if len(resources) == 1 else [])
+        hit = next((paths[c.upper()] for c in cands if c.upper() in paths), None)
+        if hit is not None:
+            out.append({"name": name, "path": hit["path"], "access": direction,
+                        "type": hit["type"]})
+            continue
+        # an aggregate: its members are the table's entries under the path
+        for c in cands:
+            pre = c.upper()
+            members = [v for v in variables
+                       if v["path"].upper().startswith((pre + ".", pre + "["))]
+            if members:
+                first = members[0]["path"]
+                out.append({"name": name, "path": first[:len(c)], "access": direction,
+                            "type": "aggregate"})
+                break
+    return out
 
 
 def manifest_text(manifest) -> str:

@@ -145,7 +145,9 @@ static int iec_put_task(struct sk_buff *skb, struct iec_task *t)
 	     nla_put_s64(skb, IEC_A_FAULT_NS, ktime_to_ns(s->fault_time), IEC_A_PAD)))
 		goto cancel;
 	if (nla_put_u64_64bit(skb, IEC_A_STARTS, s->starts, IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_STARTED_NS, ktime_to_ns(s->started), IEC_A_PAD))
+	    nla_put_s64(skb, IEC_A_STARTED_NS, ktime_to_ns(s->started), IEC_A_PAD) ||
+	    nla_put_s64(skb, IEC_A_LAST_END_NS, ktime_to_ns(READ_ONCE(s->last_end)),
+			IEC_A_PAD))
 		goto cancel;
 	nla_nest_end(skb, nest);
 	return 0;

@@ -130,6 +130,7 @@ struct iec_task_stats {
 	u64 hist[IEC_HIST_BUCKETS];	/* latency, see IEC_HIST_BUCKETS */
 	u64 starts;		/* since the load; more than one: restarted */
 	ktime_t started;	/* CLOCK_REALTIME of the last start */
+	ktime_t last_end;	/* CLOCK_REALTIME of the last cycle's end */
 	/*
 	 * The last fault (one per start: a fault stops the task), kept
 	 * across a restart; the task's state says whether it is stopped on

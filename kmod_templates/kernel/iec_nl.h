@@ -122,6 +122,7 @@ enum iec_nl_attr {
 	IEC_A_FIRST_RUN_NS,	/* s64: CLOCK_REALTIME of the body's first cycle */
 	IEC_A_SLOTS_ONLY,	/* flag: a STATUS without the resources */
 	IEC_A_FIRST_RUN_TASK,	/* string: "res.task" whose cycle ran the body first */
+	IEC_A_LAST_END_NS,	/* s64: CLOCK_REALTIME of the end of a task's last cycle */
 	__IEC_A_MAX
 };
 #define IEC_A_MAX (__IEC_A_MAX - 1)

@@ -176,6 +176,8 @@ static void iec_task_cycle(struct iec_task *t, ktime_t release)
 			iec_task_fault(t);
 	}
 	iec2kmod_cycle_end(t);
+	/* when the cycle's values were published (plc-manager serve stamps them) */
+	WRITE_ONCE(t->stats.last_end, ktime_get_real());
 	iec_task_account(t, ktime_to_ns(ktime_sub(start, release)),
 			 ktime_to_ns(ktime_sub(ktime_get(), start)));
 }

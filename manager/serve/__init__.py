@@ -3,13 +3,13 @@
 configuration (long-running; SIGTERM or SIGINT stops it cleanly).
 
 The address space and the Modbus map come from the running build's
-manifest (the copy plc-manager saved at load, or --project DIR), the
-access paths and the addresses of named located variables from the
-project's sources (--sources DIR).  A poller reads every published
-variable and the tasks' status at the fastest task's rate (not faster
-than --period-min) and updates the OPC UA nodes that changed, so
-subscriptions see each change; Modbus requests read the kernel
-themselves."""
+manifest alone (the copy plc-manager saved at load, or --project DIR):
+its variables, tasks, access paths (VAR_ACCESS) and the addresses of
+named located variables.  A poller reads the tasks' status at the fastest
+task's rate (not faster than --period-min) and the variables clients
+subscribe to, each task's at its own rate when it ended a cycle, stamped
+with that cycle's end, and updates the OPC UA nodes that changed; a Read
+and every Modbus request read the kernel themselves."""
 
 from __future__ import annotations
 
@@ -43,7 +43,7 @@ def _hostport(text: str, default_port: int):
         raise UsageError(f"{text}: not HOST:PORT") from None
 
 
-def load_model(project: Optional[str], sources: Optional[str]):
+def load_model(project: Optional[str]):
     from .. import ops
     from ..project import Project
     from .model import Model
@@ -63,11 +63,11 @@ def load_model(project: Optional[str], sources: Optional[str]):
             raise UsageError("the running configuration was not loaded by plc-manager (or "
                              "was swapped since by hand): give its build with --project DIR")
         manifest = s.manifest
-    access, located = [], {}
-    if sources:
-        from . import sources as src
-        access, located = src.read(sources, manifest)
-    return c, Model.from_manifest(manifest, access, located)
+    try:
+        return c, Model.from_manifest(manifest)
+    except BaseException:
+        c.close()
+        raise
 
 
 async def serve(a) -> int:
@@ -93,11 +93,13 @@ async def serve(a) -> int:
     t_start = time.monotonic()
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="netlink")
     try:
-        kernel = Kernel.open(pool, lambda: load_model(a.project, a.sources))
+        kernel = Kernel.open(pool, lambda: load_model(a.project))
     except BaseException:
         pool.shutdown()
         raise
     model = kernel.model
+    from .. import ops
+    kernel.connect = lambda: ops.connect("serve")
     t_model = time.monotonic() - t_start
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
@@ -144,7 +146,7 @@ async def serve(a) -> int:
                      f"{t_model:.1f} s)")
         print("\n".join(lines), flush=True)
         serving[0] = True
-        gone = await _poll(kernel, model, ua, period, stop, stats)
+        gone = await _poll(kernel, model, ua, period, stop, stats, a.gone_after)
     except asyncio.CancelledError:
         print("serve: stopped while starting", flush=True)
     finally:
@@ -171,34 +173,42 @@ class PollStats:
         self.total = 0.0
         self.max = 0.0
         self.late = 0
+        self.sampled = 0
 
     def text(self) -> str:
         if not self.polls:
             return "no polls"
         return (f"{self.polls} polls, {1000 * self.total / self.polls:.1f} ms mean, "
-                f"{1000 * self.max:.1f} ms max, {self.late} longer than the period")
+                f"{1000 * self.max:.1f} ms max, {self.late} longer than the period, "
+                f"{self.sampled} values sampled")
 
 
-GONE_AFTER = 3.0      # seconds without an answer from the kernel: the configuration is gone
+GONE_AFTER = 30.0     # seconds without an answer from the kernel: the configuration is gone
 EXIT_RELOAD = 75      # EX_TEMPFAIL: the configuration changed; start serve again
 
 
 async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
-                stats: PollStats) -> Optional[str]:
-    """Reads every variable (when OPC UA is served) and the status each
-    *period* (Modbus only: each second); a poll that takes longer than
-    the period is followed by a pause as long as itself (at most half the
-    server's time goes to polling, the clients get the rest).
+                stats: PollStats, gone_after: Optional[float] = None) -> Optional[str]:
+    """Each *period* (the fastest task's interval, at least --period-min;
+    Modbus only: each second) reads the tasks' status and, for every task
+    that ended a cycle since its variables were last sampled and whose
+    interval has passed, the variables of it that a client subscribes to
+    (globals with the fastest task); a poll that takes longer than the
+    period is followed by a pause as long as itself (at most half the
+    server's time goes to polling, the clients get the rest).  Variables
+    nobody subscribes to are not read (a client's Read asks the kernel
+    itself; Modbus requests too).
 
-    Returns why it ended other than by *stop*: the kernel runs another
-    configuration or another interface (a load, a swap that changed the
-    interface: the address space and the map no longer fit), or it has
-    not answered for GONE_AFTER seconds (stopped)."""
-    from .opcua import now
-    paths = list(model.order)
+    When the kernel does not answer, every value says BadServerHalted at
+    once.  Returns why it ended other than by *stop*: the kernel runs
+    another configuration or another interface (a load, a swap that
+    changed the interface: the address space and the map no longer fit),
+    or it has not answered for GONE_AFTER seconds (stopped)."""
     failing_since = None
+    gone_after = GONE_AFTER if gone_after is None else gone_after
     if ua is None:
         period = max(period, 1.0)
+    sampled: dict = {}       # 'res.task' -> (cycles, monotonic time) of its last sample
     while not stop.is_set():
         t0 = time.monotonic()
         try:
@@ -209,8 +219,18 @@ async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
                         f"not what is served ({model.configuration}, interface "
                         f"{model.interface_hash})")
             if ua is not None:
-                snap = await kernel.read(paths)
-                await ua.update(snap, st, now())
+                due = set()
+                for t in st.tasks():
+                    key = t.path.lower()
+                    cyc, when = sampled.get(key, (None, -1e9))
+                    if t.cycles != cyc and t0 - when >= (t.interval_ns or 0) / 1e9 - period / 2:
+                        due.add(key)
+                        sampled[key] = (t.cycles, t0)
+                paths = [p for p in ua.wanted()
+                         if (ua._task_of(p) in due) or (ua._task_of(p) is None and due)]
+                stats.sampled += len(paths)
+                snap = await kernel.read(paths) if paths else {}
+                await ua.update(snap, st)
             if failing_since is not None:
                 print("serve: the kernel answers again", file=sys.stderr, flush=True)
             failing_since = None
@@ -218,8 +238,10 @@ async def _poll(kernel, model, ua, period: float, stop: asyncio.Event,
             if failing_since is None:
                 print(f"serve: cannot read the kernel: {e}", file=sys.stderr, flush=True)
                 failing_since = t0
-            elif t0 - failing_since >= GONE_AFTER:
-                return f"no answer from the kernel for {GONE_AFTER:.0f} s: {e}"
+                if ua is not None:
+                    await ua.halt()
+            elif t0 - failing_since >= gone_after:
+                return f"no answer from the kernel for {gone_after:.0f} s: {e}"
         took = time.monotonic() - t0
         stats.polls += 1
         stats.total += took
@@ -264,8 +286,6 @@ def add_parsers(sub) -> None:
     s.add_argument("--modbus", metavar="HOST:PORT", help="Modbus TCP address")
     s.add_argument("--project", metavar="DIR", help="the running build (default: the copy "
                                                     "saved at load)")
-    s.add_argument("--sources", metavar="DIR", help="the project's sources: access paths "
-                                                    "(VAR_ACCESS) and named located variables")
     s.add_argument("--writable", action="store_true",
                    help="without access paths, clients may write what the kernel lets write "
                         "(default: read-only)")
@@ -277,6 +297,10 @@ def add_parsers(sub) -> None:
                         "an unencrypted endpoint")
     s.add_argument("--cert-dir", default="/var/lib/plc-manager/opcua", metavar="DIR",
                    help="the server's certificate and key (generated when missing)")
+    s.add_argument("--gone-after", type=float, default=GONE_AFTER, metavar="S",
+                   help="a kernel that does not answer for so long (a stop; a load takes "
+                        "seconds) ends serve with exit 75 (default 30 s); until then values "
+                        "say BadServerHalted")
     s.add_argument("--period-min", type=float, default=20.0, metavar="MS",
                    help="the poller's shortest period (default 20 ms)")
     s.set_defaults(func=main_serve)

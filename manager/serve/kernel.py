@@ -31,6 +31,8 @@ class Kernel:
         self.c = client
         self.lock = threading.Lock()
         self.requests = 0
+        self.reconnects = 0
+        self.connect = None     # () -> a new client (serve: ops.connect)
         self.pool = None
 
     @classmethod
@@ -101,8 +103,27 @@ class Kernel:
         return check(t, v)
 
     def status_now(self) -> Status:
+        """The kernel's status; when it does not answer (the configuration
+        module went away: a stop, a load), a new connection is tried (a
+        module loaded again registers its netlink family anew)."""
+        from ..errors import PLCError
         with self.lock:
             self.requests += 1
+            try:
+                return self.c.status()
+            except PLCError:
+                if self.connect is None:
+                    raise
+            try:
+                c = self.connect()
+            except PLCError:
+                raise
+            try:
+                self.c.close()
+            except Exception:       # a socket of a family that is gone
+                pass
+            self.c = c
+            self.reconnects += 1
             return self.c.status()
 
     # -- async --------------------------------------------------------

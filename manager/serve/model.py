@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """What `plc-manager serve` publishes, built from the running build's
-manifest (and, for the access paths and the addresses of named located
-variables, the project's sources): no kernel and no network here, so the
+manifest alone (its variables, tasks, access paths and the addresses of
+named located variables): no kernel and no network here, so the
 address and type mappings are unit-tested on the host.
 
 Modbus (OpenPLC's mapping, so its HMIs work unchanged; OpenPLC
@@ -19,14 +19,17 @@ MIN_64B_RANGE 4096):
   %MDn               holding registers      2048 + 2n    (2 registers)
   %MLn               holding registers      4096 + 4n    (4 registers)
   access path k      holding registers      8192 + ...   (declaration order,
-                                                          1/2/4 registers)
+                                                          1/2/4 registers, a string more)
   BOOL access path   coils                  8192 + k-th BOOL path
   =================  =====================  ================================
 
 Multi-register values are big-endian, most significant word first (as
 OpenPLC stores %MD/%ML); REAL/LREAL are IEEE 754 in 2/4 registers; a
-16-bit register holds the two's complement of INT/SINT.  Strings are not
-on Modbus (OPC UA has them).
+16-bit register holds the two's complement of INT/SINT.  A STRING[n]
+access path takes 1 + ceil(n/2) registers: its current length, then two
+characters (Latin-1) a register, the first in the high byte, zeros after
+the end; a WSTRING[n] 1 + n: its length, then one UTF-16 unit a register.
+A write of a length over the capacity is exception 03.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from .. import values
+from ..errors import UsageError
 from ..values import VarType
 
 MW_BASE, MD_BASE, ML_BASE, ACCESS_BASE = 1024, 2048, 4096, 8192
@@ -62,9 +66,13 @@ class Refused(Exception):
 # registers
 
 def registers_of(var: VarType) -> int:
-    """How many 16-bit registers *var* takes on Modbus (0: not on Modbus)."""
+    """How many 16-bit registers *var* takes on Modbus (0: not on Modbus).
+    STRING[n]: 1 + ceil(n/2) (its length, then two characters a register);
+    WSTRING[n]: 1 + n (its length, then one UTF-16 unit a register)."""
     if var.kind in "sw":
-        return 0
+        if var.length is None:
+            return 0
+        return 1 + (var.length if var.kind == "w" else (var.length + 1) // 2)
     if var.kind == "b":
         return 1
     size = var.size or (8 if var.kind == "t" else 4)
@@ -76,6 +84,14 @@ def to_registers(var: VarType, value) -> List[int]:
     n = registers_of(var)
     if var.kind == "b":
         return [1 if value else 0]
+    if var.kind == "s":
+        raw = value.encode("latin-1", "replace")
+        raw += b"\0" * (2 * (n - 1) - len(raw))
+        return [len(value)] + [raw[i] << 8 | raw[i + 1] for i in range(0, 2 * (n - 1), 2)]
+    if var.kind == "w":
+        units = value.encode("utf-16-be")
+        regs = [int.from_bytes(units[i:i + 2], "big") for i in range(0, len(units), 2)]
+        return [len(regs)] + regs + [0] * (n - 1 - len(regs))
     if var.kind == "f":
         raw = struct.pack(">d" if n == 4 else ">f", value)
         return [int.from_bytes(raw[i:i + 2], "big") for i in range(0, len(raw), 2)]
@@ -96,6 +112,19 @@ def from_registers(var: VarType, regs: Sequence[int]):
         if regs[0] not in (0, 1):
             raise Refused("range", f"{var.path}: a BOOL register is 0 or 1")
         return bool(regs[0])
+    if var.kind in "sw":
+        length = regs[0]
+        if length > var.length:
+            raise Refused("range", f"{var.path}: length {length} is over the capacity "
+                                   f"{var.length}")
+        if var.kind == "s":
+            raw = b"".join(r.to_bytes(2, "big") for r in regs[1:])[:length]
+            return check(var, raw.decode("latin-1"))
+        raw = b"".join(r.to_bytes(2, "big") for r in regs[1:1 + length])
+        try:
+            return check(var, raw.decode("utf-16-be"))
+        except UnicodeDecodeError:
+            raise Refused("range", f"{var.path}: not UTF-16") from None
     raw = b"".join(r.to_bytes(2, "big") for r in regs)
     if var.kind == "f":
         v = struct.unpack(">d" if n == 4 else ">f", raw)[0]
@@ -252,10 +281,18 @@ class Model:
     instances: Dict[str, dict]              # lower path -> manifest instance
     access: List[AccessPath] = field(default_factory=list)
     located: Dict[str, str] = field(default_factory=dict)   # %MW100 -> path
+    generator: str = ""
+    programs: List[str] = field(default_factory=list)      # "TYPE build-id", loaded
 
     @classmethod
-    def from_manifest(cls, m: dict, access: Sequence[AccessPath] = (),
-                      located: Optional[Dict[str, str]] = None) -> "Model":
+    def from_manifest(cls, m: dict) -> "Model":
+        """The model of a manifest: its variables, tasks, the access paths
+        ("access": VAR_ACCESS, an aggregate's path gives one access path
+        per member, NAME.member) and the addresses of named located
+        variables ("addresses")."""
+        if "access" not in m:
+            raise UsageError("the build's manifest has no access paths (made by an iec2kmod "
+                             "older than plc-manager serve): build the project again")
         vs: Dict[str, VarType] = {}
         order = []
         for v in m["variables"]:
@@ -271,15 +308,27 @@ class Model:
         for v in m["variables"]:
             if v.get("owner") == "direct":
                 loc[v["path"].upper()] = v["path"]
-        for addr, path in (located or {}).items():
+        for addr, path in m.get("addresses", {}).items():
             if path.lower() in vs:
                 loc.setdefault(addr.upper(), vs[path.lower()].path)
-        acc = [a for a in access if a.path.lower() in vs]
+        acc = []
+        for a in m["access"]:
+            rw = a["access"] == "READ_WRITE"
+            p = a["path"].lower()
+            if p in vs:
+                acc.append(AccessPath(name=a["name"], path=vs[p].path, read_write=rw))
+                continue
+            for q in order:
+                if q.lower().startswith((p + ".", p + "[")):
+                    acc.append(AccessPath(name=a["name"] + q[len(p):], path=q,
+                                          read_write=rw))
         return cls(configuration=m["configuration"], interface_hash=m.get("interface_hash", ""),
                    source_hash=m.get("source_hash", ""), variables=vs, order=order,
                    resources=[r["name"] for r in m.get("resources", [])], tasks=tasks,
                    instances={i["path"].lower(): i for i in m.get("instances", [])},
-                   access=acc, located=loc)
+                   access=acc, located=loc, generator=m.get("generator", ""),
+                   programs=[f"{p['name']} {p.get('build_id', '')}"
+                             for p in m.get("program_types", [])])
 
     def var(self, path: str) -> VarType:
         return self.variables[path.lower()]
@@ -401,7 +450,7 @@ def modbus_map(model: Model, writable_all: bool = False) -> ModbusMap:
         t = model.var(a.path)
         n = registers_of(t)
         if n == 0:
-            mm.skipped.append(f"access path {a.name} ({t.shown}): strings are not on Modbus")
+            mm.skipped.append(f"access path {a.name} ({t.shown}): no capacity known")
             continue
         w = a.read_write and t.writable
         for i in range(n):
@@ -449,3 +498,23 @@ def placement(model: Model, path: str) -> Tuple[List[str], List[str]]:
     if len(parts) >= 2 and parts[0].lower() in res:
         return [res[parts[0].lower()], "Globals"], parts[1:]
     return ["Globals"], parts
+
+
+def array_groups(model: Model) -> Dict[str, List[str]]:
+    """The one-dimensional arrays of elementary elements (``tab[1]``,
+    ``tab[2]``, ... leaves of the same type, integer indexes): array
+    path -> its elements' paths in index order.  OPC UA shows each as one
+    array variable (ValueRank 1, ArrayDimensions [n]); arrays of
+    structures, of function blocks and of several dimensions stay folders
+    of their elements."""
+    groups: Dict[str, List[Tuple[int, str]]] = {}
+    kinds: Dict[str, set] = {}
+    for p in model.order:
+        m = re.match(r"^(.*[^\]])\[(-?\d+)\]$", p)
+        if not m or p.startswith("%"):
+            continue
+        groups.setdefault(m.group(1), []).append((int(m.group(2)), p))
+        t = model.var(p)
+        kinds.setdefault(m.group(1), set()).add((t.kind, t.size, t.base, t.length))
+    return {a: [p for _, p in sorted(els)] for a, els in groups.items()
+            if len(kinds[a]) == 1 and a.lower() not in model.variables}

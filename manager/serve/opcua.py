@@ -31,7 +31,7 @@ from typing import Dict, List, Optional
 
 from ..errors import PLCError, UsageError
 from .kernel import Kernel
-from .model import Model, Refused, from_ua, placement, to_ua, ua_type
+from .model import Model, Refused, array_groups, from_ua, placement, to_ua, ua_type
 
 log = logging.getLogger("plc_manager.serve.opcua")
 
@@ -241,6 +241,10 @@ class OpcUaServer:
         self.nodes: Dict[str, object] = {}     # path -> node
         self.last: Dict[str, object] = {}
         self.task_nodes: Dict[str, Dict[str, object]] = {}
+        self.path_of: Dict[object, str] = {}   # node id -> lower path
+        self.flagged: Dict[str, int] = {}      # lower path -> the bad status it shows
+        self.halted = False
+        self.fresh_reads = 0
         self.writes = 0
         self.refused = 0
 
@@ -278,6 +282,9 @@ class OpcUaServer:
         self.server = s
         await self._build()
         self._hook_writes()
+        self._hook_subscriptions()
+        from asyncua.common.callback import CallbackType
+        s.subscribe_server_callback(CallbackType.PreRead, self._pre_read)
         try:
             await s.start()
         except OSError as e:
@@ -302,9 +309,12 @@ class OpcUaServer:
             return f
 
         build = await folder(["Build"])
-        for name, val in (("InterfaceHash", m.interface_hash), ("SourceHash", m.source_hash)):
+        for name, val in (("InterfaceHash", m.interface_hash), ("SourceHash", m.source_hash),
+                          ("Generator", m.generator)):
             await build.add_variable(ua.NodeId(f"Build/{name}", ns), name,
                                      ua.Variant(val, ua.VariantType.String))
+        await build.add_variable(ua.NodeId("Build/Programs", ns), "Programs",
+                                 ua.Variant(m.programs, ua.VariantType.String, is_array=True))
         for t in m.tasks:
             f = await folder([t.resource, t.name])
             nodes = {}
@@ -319,10 +329,20 @@ class OpcUaServer:
                     ua.NodeId(f"{t.resource}.{t.name}/{name}", ns), name, ua.Variant(init, vt))
             self.task_nodes[f"{t.resource}.{t.name}".lower()] = nodes
         self.writable_nodes: Dict[str, str] = {}     # node id string -> path
+        self.arrays = array_groups(m)
+        in_array = {p for els in self.arrays.values() for p in els}
+        self.array_of = {p.lower(): a for a, els in self.arrays.items() for p in els}
+        self.array_nodes: Dict[str, object] = {}
         for path in m.order:
+            if path in in_array:
+                continue
             dirs, rest = placement(m, path)
             parent = await folder(dirs + rest[:-1])
             await self._variable(parent, path, path, rest[-1])
+        for a, els in self.arrays.items():
+            dirs, rest = placement(m, a)
+            parent = await folder(dirs + rest[:-1])
+            await self._array(parent, a, els, rest[-1])
         for a in m.access:
             parent = await folder(["AccessPaths"])
             await self._variable(parent, a.path, f"access:{a.name}", a.name, access=a)
@@ -357,6 +377,50 @@ class OpcUaServer:
                                     ua.Variant(t.length, ua.VariantType.UInt32))
         self.nodes.setdefault(path.lower(), [])
         self.nodes[path.lower()].append(node)
+        self.path_of[node.nodeid] = path.lower()
+
+    async def _array(self, parent, path: str, elements: List[str], name: str) -> None:
+        """One array variable for *elements* (ValueRank 1, ArrayDimensions
+        [n]), node id the array's path; a write sets every element in one
+        VAR_SET."""
+        from asyncua import ua
+        t = self.model.var(elements[0])
+        vt = _vtype(t)
+        init = {"Boolean": False, "String": "", "Float": 0.0, "Double": 0.0,
+                "Duration": 0.0}.get(ua_type(t), 0)
+        if ua_type(t) == "DateTime":
+            from .model import EPOCH
+            init = EPOCH
+        node = await parent.add_variable(
+            ua.NodeId(path, self.ns), ua.QualifiedName(name, self.ns),
+            ua.Variant([init] * len(elements), vt, is_array=True), datatype=_datatype(t))
+        await node.write_attribute(ua.AttributeIds.ValueRank,
+                                   ua.DataValue(ua.Variant(1, ua.VariantType.Int32)))
+        await node.write_attribute(ua.AttributeIds.ArrayDimensions, ua.DataValue(
+            ua.Variant([len(elements)], ua.VariantType.UInt32)))
+        if all(self.model.client_writable(p, self.writable_all) for p in elements):
+            await node.set_writable(True)
+            self.writable_nodes[node.nodeid.to_string()] = path
+        self.array_nodes[path.lower()] = node
+        self.path_of[node.nodeid] = path.lower()
+
+    async def _sync_arrays(self, changed, stamps) -> None:
+        """The array variables whose elements changed: the elements' last
+        values, with the worst of their status codes."""
+        from asyncua import ua
+        for a in sorted({self.array_of[p] for p in changed if p in self.array_of}):
+            els = [p.lower() for p in self.arrays[a]]
+            if any(p not in self.last for p in els):
+                continue
+            codes = [self.flagged.get(p, ua.StatusCodes.Good) for p in els]
+            code = next((c for c in codes if c != ua.StatusCodes.Good), ua.StatusCodes.Good)
+            t = self.model.var(els[0])
+            dv = ua.DataValue(ua.Variant([to_ua(t, self.last[p]) for p in els], _vtype(t),
+                                         is_array=True),
+                              StatusCode=ua.StatusCode(code),
+                              SourceTimestamp=stamps.get(self._task_of(els[0])) or now(),
+                              ServerTimestamp=now())
+            await self.server.write_attribute_value(self.array_nodes[a.lower()].nodeid, dv)
 
     # -- writes ----------------------------------------------------------
     def _hook_writes(self) -> None:
@@ -397,13 +461,20 @@ class OpcUaServer:
             if getattr(user, "role", None) != UserRole.Admin:
                 self.refused += 1
                 return ua.StatusCode(ua.StatusCodes.BadUserAccessDenied)
-        t = self.model.var(path)
         v = wv.Value.Value
-        if v is None or v.VariantType != _vtype(t):
+        elements = self.arrays.get(path) if path.lower() in self.array_nodes else None
+        t = self.model.var(elements[0] if elements else path)
+        if v is None or v.VariantType != _vtype(t) or \
+                (elements is not None and (not isinstance(v.Value, list) or
+                                           len(v.Value) != len(elements))):
             self.refused += 1
             return ua.StatusCode(ua.StatusCodes.BadTypeMismatch)
         try:
-            await self.kernel.write([(path, from_ua(t, v.Value))])
+            if elements is not None:
+                items = [(p, from_ua(t, x)) for p, x in zip(elements, v.Value)]
+            else:
+                items = [(path, from_ua(t, v.Value))]
+            await self.kernel.write(items)
         except Refused as e:
             self.refused += 1
             log.info("opcua write refused: %s", e)
@@ -418,6 +489,79 @@ class OpcUaServer:
         self.writes += 1
         return ua.StatusCode()
 
+    # -- what is sampled ------------------------------------------------
+    def wanted(self) -> List[str]:
+        """The variables some client subscribes to now (a data change
+        monitored item on one of its nodes): only these are polled."""
+        from asyncua import ua
+        aspace = self.server.iserver.aspace
+        out = []
+        for a, node in self.array_nodes.items():
+            nd = aspace.get(node.nodeid)
+            if nd is not None and nd.attributes[ua.AttributeIds.Value].datachange_callbacks:
+                out += self.array_elements(a)
+        for path, nodes in self.nodes.items():
+            for node in nodes:
+                nd = aspace.get(node.nodeid)
+                if nd is not None and \
+                        nd.attributes[ua.AttributeIds.Value].datachange_callbacks:
+                    out.append(path)
+                    break
+        return out
+
+    def array_elements(self, a: str) -> List[str]:
+        """The lower paths of the elements of array *a* (lower path)."""
+        for name, els in self.arrays.items():
+            if name.lower() == a:
+                return [p.lower() for p in els]
+        return []
+
+    async def _pre_read(self, event, _dispatcher) -> None:
+        """A client reads values: the kernel's, fresh (they are not polled
+        unless subscribed)."""
+        params = getattr(event, "request_params", None)
+        if params is None or not getattr(event, "is_external", True):
+            return
+        await self._refresh(params.NodesToRead)
+
+    def _hook_subscriptions(self) -> None:
+        """A new monitored item's first notification is the node's value:
+        the kernel's, read then (not one of a cycle long past)."""
+        svc = self.server.iserver.subscription_service
+        original = svc.create_monitored_items
+        srv = self
+
+        async def create_monitored_items(params):
+            await srv._refresh([i.ItemToMonitor for i in params.ItemsToCreate])
+            return await original(params)
+
+        svc.create_monitored_items = create_monitored_items
+
+    async def _refresh(self, read_ids) -> None:
+        """The values of the nodes *read_ids* (ReadValueIds) from the kernel."""
+        from asyncua import ua
+        if self.halted:
+            return
+        paths = set()
+        for rv in read_ids:
+            if rv.AttributeId == ua.AttributeIds.Value and \
+                    rv.NodeId.NamespaceIndex == self.ns:
+                p = self.path_of.get(rv.NodeId)
+                if p is not None and p in self.array_nodes:
+                    paths.update(self.array_elements(p))
+                elif p is not None:
+                    paths.add(p)
+        if not paths:
+            return
+        self.fresh_reads += 1
+        try:
+            st = await self.kernel.status()
+            snap = await self.kernel.read(sorted(paths))
+        except PLCError as e:
+            log.warning("opcua read: %s", e)
+            return
+        await self.update(snap, st)
+
     # -- updates ----------------------------------------------------------
     def _task_of(self, path: str) -> Optional[str]:
         """'res.task' running the program instance *path* belongs to."""
@@ -429,38 +573,58 @@ class OpcUaServer:
             return None
         return f"{inst['resource']}.{inst['task']}".lower()
 
-    async def update(self, snapshot: Dict[str, object], status, stamp) -> int:
-        """New values of the variables that changed; returns how many.  The
-        variables of a program instance whose task is stopped on a fault
-        keep their last value with status UncertainLastUsableValue (a Bad
-        status would void the value: OPC UA part 4, 7.7.1), Good again once
-        the task runs."""
+    @staticmethod
+    def stamp_of(status, task: Optional[str]):
+        """The source timestamp of a value of *task* ('res.task', None: a
+        global): the end of the task's last cycle, as the kernel tells it
+        (CLOCK_REALTIME; a global: the latest end among the tasks), else
+        now (a kernel without it)."""
+        import datetime
+        ends = {t.path.lower(): t.last_end_ns for t in status.tasks()} if status else {}
+        ns = ends.get(task) if task else max(ends.values(), default=0)
+        if not ns:
+            return now()
+        return datetime.datetime.fromtimestamp(ns / 1e9, datetime.timezone.utc)
+
+    async def update(self, snapshot: Dict[str, object], status) -> int:
+        """New values of the variables that changed; returns how many.
+        Each value is stamped with the end of its task's last cycle (the
+        cycle whose values these are).  The variables of a program instance
+        whose task is stopped on a fault are flagged BadOutOfService (the
+        value then goes out null, OPC UA part 4, 7.7.1: clients keep the
+        last one they had, frozen; its task's State and Fault say why),
+        Good again once the task runs."""
         from asyncua import ua
         faulted = set()
         if status is not None:
             faulted = {t.path.lower() for t in status.tasks() if t.state == "fault"}
-        if not hasattr(self, "flagged"):
-            self.flagged = set()
+        stamps: Dict[Optional[str], object] = {}
+        changed = set()
         n = 0
         for path, val in snapshot.items():
             if val is None:
                 continue
-            bad = bool(faulted) and self._task_of(path) in faulted
-            if bad == (path in self.flagged) and self.last.get(path) == val:
+            path = path.lower()
+            task = self._task_of(path)
+            bad = ua.StatusCodes.BadOutOfService if task in faulted else ua.StatusCodes.Good
+            if self.flagged.get(path, ua.StatusCodes.Good) == bad and \
+                    self.last.get(path) == val:
                 continue
-            self.last[path] = val
-            t = self.model.var(path)
-            code = ua.StatusCode(ua.StatusCodes.UncertainLastUsableValue if bad
-                                 else ua.StatusCodes.Good)
-            if bad:
-                self.flagged.add(path)
-            else:
-                self.flagged.discard(path)
-            dv = ua.DataValue(ua.Variant(to_ua(t, val), _vtype(t)), StatusCode=code,
-                              SourceTimestamp=stamp, ServerTimestamp=stamp)
-            for node in self.nodes.get(path.lower(), ()):
-                await self.server.write_attribute_value(node.nodeid, dv)
+            if task not in stamps:
+                stamps[task] = self.stamp_of(status, task)
+            await self._set(path, val, bad, stamps[task])
+            changed.add(path)
             n += 1
+        # frozen: the variables of a faulted task not in this snapshot
+        for path in list(self.last):
+            if "/" in path:
+                continue
+            task = self._task_of(path)
+            if task in faulted and \
+                    self.flagged.get(path) != ua.StatusCodes.BadOutOfService:
+                await self._set(path, self.last[path], ua.StatusCodes.BadOutOfService, now())
+                changed.add(path)
+        await self._sync_arrays(changed, stamps)
         if status is not None:
             for task in status.tasks():
                 nodes = self.task_nodes.get(task.path.lower())
@@ -476,12 +640,52 @@ class OpcUaServer:
                                     ("Faults", ua.VariantType.UInt64, task.faults),
                                     ("Fault", ua.VariantType.String, fault)):
                     key = f"{task.path}/{name}"
-                    if self.last.get(key) != v:
+                    if self.last.get(key) != v or self.halted:
                         self.last[key] = v
                         await self.server.write_attribute_value(
                             nodes[name].nodeid, ua.DataValue(ua.Variant(v, vt),
-                                                             SourceTimestamp=stamp))
+                                                             SourceTimestamp=now()))
+        self.halted = False
         return n
+
+    async def _set(self, path: str, val, code: int, stamp) -> None:
+        from asyncua import ua
+        self.last[path] = val
+        t = self.model.var(path)
+        if code == ua.StatusCodes.Good:
+            self.flagged.pop(path, None)
+        else:
+            self.flagged[path] = code
+        dv = ua.DataValue(ua.Variant(to_ua(t, val), _vtype(t)),
+                          StatusCode=ua.StatusCode(code),
+                          SourceTimestamp=stamp, ServerTimestamp=now())
+        for node in self.nodes.get(path, ()):
+            await self.server.write_attribute_value(node.nodeid, dv)
+
+    async def halt(self) -> None:
+        """The kernel does not answer (the configuration stopped or is being
+        loaded): every value and the tasks' state say BadServerHalted until
+        it answers again."""
+        from asyncua import ua
+        if self.halted:
+            return
+        self.halted = True
+        code = ua.StatusCode(ua.StatusCodes.BadServerHalted)
+        stamp = now()
+        for a in self.array_nodes:
+            for p in self.array_elements(a):
+                self.flagged[p] = ua.StatusCodes.BadServerHalted
+        everything = list(self.nodes.items()) + [(a, [n]) for a, n in self.array_nodes.items()]
+        for path, nodes in everything:
+            self.flagged[path] = ua.StatusCodes.BadServerHalted
+            for node in nodes:
+                await self.server.write_attribute_value(
+                    node.nodeid, ua.DataValue(StatusCode=code, SourceTimestamp=stamp,
+                                              ServerTimestamp=stamp))
+        for nodes in self.task_nodes.values():
+            await self.server.write_attribute_value(
+                nodes["State"].nodeid, ua.DataValue(ua.Variant("halted", ua.VariantType.String),
+                                                    SourceTimestamp=stamp))
 
     async def stop(self) -> None:
         if self.server is not None and getattr(self, "started", False):

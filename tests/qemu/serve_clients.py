@@ -42,6 +42,7 @@ def modbus(port: int) -> dict:
             time.sleep(0.05)
         out["sp_doubled"] = doubled
         out["access_count"] = c.read_holding_registers(8192, count=1).registers[0]
+        out["label_regs"] = c.read_holding_registers(8195, count=5).registers       # LABEL
         r = c.write_registers(8193, [5, 0xFFFF])                               # SETPOINT, LEVEL
         out["write_access"] = not r.isError()
         out["after_access"] = c.read_holding_registers(8193, count=2).registers
@@ -164,9 +165,18 @@ async def opcua(url: str, cert: str, key: str) -> dict:
         out["write_label"] = await status_of(label, ua.Variant("ok", ua.VariantType.String))
         got = []
 
+        lat = []
+
         class H:
             def datachange_notification(self, node, val, data):
                 got.append((time.monotonic(), val))
+                # SourceTimestamp: the end of the task's cycle (the kernel's)
+                import datetime
+                st = data.monitored_item.Value.SourceTimestamp
+                if st is not None:
+                    st = st if st.tzinfo else st.replace(tzinfo=datetime.timezone.utc)
+                    lat.append((datetime.datetime.now(datetime.timezone.utc) - st)
+                               .total_seconds() * 1000)
 
         sub = await c.create_subscription(10, H())
         await sub.subscribe_data_change(count)
@@ -176,6 +186,9 @@ async def opcua(url: str, cert: str, key: str) -> dict:
         await sub.delete()
         out["notifications"] = len(got)
         out["distinct"] = len({v for _, v in got})
+        # the first notification is the node's value when the subscription
+        # was made (its cycle may be long past): the others are the poller's
+        out["cycle_end_to_client_ms"] = sorted(round(x, 1) for x in lat[1:])
         deadline = time.monotonic() + 5
         while time.monotonic() < deadline:
             out["level_back"] = await level.read_value()
@@ -201,13 +214,34 @@ async def opcua(url: str, cert: str, key: str) -> dict:
     return out
 
 
+def wait_for_server(url: str, timeout: float) -> float:
+    """The clients' libraries imported while the server starts (both take
+    tens of seconds under TCG), then wait until the OPC UA port accepts a
+    connection (serve opens it last); returns the seconds waited."""
+    import asyncua  # noqa: F401
+    import pymodbus.client  # noqa: F401
+    from urllib.parse import urlparse
+    u = urlparse(url)
+    t = time.monotonic()
+    while True:
+        try:
+            socket.create_connection((u.hostname, u.port), timeout=5).close()
+            return time.monotonic() - t
+        except OSError:
+            if time.monotonic() - t > timeout:
+                raise
+            time.sleep(0.3)
+
+
 def main() -> None:
     port, url, cert, key = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
+    waited = wait_for_server(url, float(sys.argv[5]) if len(sys.argv) > 5 else 0.0)
     t0 = time.monotonic()
     res = {"modbus": modbus(port)}
     t1 = time.monotonic()
     res["opcua"] = asyncio.run(opcua(url, cert, key))
-    res["seconds"] = {"modbus": round(t1 - t0, 1), "opcua": round(time.monotonic() - t1, 1)}
+    res["seconds"] = {"waited": round(waited, 1), "modbus": round(t1 - t0, 1),
+                      "opcua": round(time.monotonic() - t1, 1)}
     print(json.dumps(res))
 
 

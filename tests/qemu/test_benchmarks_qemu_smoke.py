@@ -41,7 +41,8 @@ GUEST = {
                    rf"{NUM} s, guest clock tcg$",
                    rf"^server CPU: {NUM}% of one CPU$",
                    rf"^notifications: {NUM}/s; writes done {NUM}/s \(\d+ behind schedule\)$",
-                   rf"^poll -> client \(ms\) +p50 +{NUM} +p99 +{NUM} +max +{NUM} +\(n=\d+\)$",
+                   rf"^cycle end -> client \(ms\) +p50 +{NUM} +p99 +{NUM} +max +{NUM} "
+                   r"+\(n=\d+\)$",
                    # on a loaded machine a 6 s run may see no write come back
                    rf"^write -> echo notified \(ms\) +(p50 +{NUM} +p99 +{NUM} +max +{NUM} "
                    r"+\(n=\d+\)|no sample \(n=0\))$",

@@ -68,28 +68,25 @@ def test_serve_with_real_clients(guest, station):
     try:
         r = guest.run(
             f"{py} -m plc_manager.cli serve --modbus 127.0.0.1:5020 "
-            f"--opcua opc.tcp://127.0.0.1:4841 --sources {PROJECT} --users {users} "
+            f"--opcua opc.tcp://127.0.0.1:4841 --users {users} "
             f"--cert-dir {pki} >{log} 2>&1 & echo $! >{pidf}", 30, chroot=True, cwd=str(ROOT))
         assert r.exit_code == 0, r.output
-        deadline = time.monotonic() + 120
-        while "serving Station" not in (log.read_text() if log.exists() else ""):
-            alive = guest.run(f"kill -0 $(cat {pidf})", 10).exit_code == 0
-            assert alive, f"serve exited:\n{log.read_text() if log.exists() else ''}"
-            assert time.monotonic() < deadline, log.read_text()
-            time.sleep(0.5)
-        t_start = time.monotonic() - t0
-        text = log.read_text()
-        assert "modbus tcp://127.0.0.1:5020: 2 coils, 1 discrete inputs" in text, text
-        assert "4 access paths" in text and "Basic256Sha256 SignAndEncrypt" in text, text
-
+        # the clients start at once: their imports run while serve starts,
+        # then they wait for its OPC UA port (opened last)
         r = guest.pyrun(code=(HERE / "serve_clients.py").read_text(),
                         argv=["5020", "opc.tcp://127.0.0.1:4841",
-                              str(pki / "client-cert.der"), str(pki / "client-key.pem")],
-                        timeout=300)
-        assert r.exit_code == 0, r.output + "\n--- serve log:\n" + log.read_text()
+                              str(pki / "client-cert.der"), str(pki / "client-key.pem"),
+                              "240"],
+                        timeout=540)
+        text = log.read_text() if log.exists() else ""
+        assert r.exit_code == 0, r.output + "\n--- serve log:\n" + text
         res = json.loads(r.output.strip().splitlines()[-1])
+        t_start = time.monotonic() - t0
+        assert "serving Station" in text, text
+        assert "modbus tcp://127.0.0.1:5020: 2 coils, 1 discrete inputs" in text, text
+        assert "4 access paths" in text and "Basic256Sha256 SignAndEncrypt" in text, text
         mb, ua = res["modbus"], res["opcua"]
-        print(f"serve started in {t_start:.1f} s; clients {res['seconds']}; "
+        print(f"serve and clients {t_start:.1f} s; clients {res['seconds']}; "
               f"opc ua refusals {ua['t_refusals']} s, connect {ua['t_connect']} s; "
               f"50 modbus clients {mb['concurrent']['seconds']} s")
 
@@ -98,6 +95,7 @@ def test_serve_with_real_clients(guest, station):
         assert [False, False] in mb["coil_states"] and [False, True] in mb["coil_states"], mb
         assert mb["write_sp"] and mb["sp_doubled"] == [21, 42], mb
         assert mb["access_count"] > 0
+        assert mb["label_regs"] == [4, 0x7075, 0x6D70, 0, 0], mb        # 'pump', STRING[8]
         assert mb["write_access"] and mb["after_access"] == [5, 0xFFFF], mb
         assert mb["write_output"] == 4 and mb["write_coil"] == 4, mb
         assert mb["bad_address"] == 2 and mb["di0"] is False, mb
@@ -116,6 +114,9 @@ def test_serve_with_real_clients(guest, station):
         assert ua["write_label_long"] == "BadOutOfRange", ua
         assert ua["level_back"] == 99 and ua["label_back"] == "ok", ua
         assert ua["distinct"] >= 4, ua
+        # stamped with the cycle's end (the kernel's), before the client got it
+        lat = ua["cycle_end_to_client_ms"]
+        assert lat and 0 <= lat[0] and lat[-1] < 30000, lat
         assert ua["viewer_read"] == 99 and ua["viewer_write"] == "BadUserAccessDenied", ua
 
         # the kernel saw the writes (through plc-manager read)
@@ -123,6 +124,13 @@ def test_serve_with_real_clients(guest, station):
                                                           "label"], timeout=120)
         got = {v["path"]: v["value"] for v in json.loads(out)}
         assert got == {"level": 99, "sp": 5, "label": "ok"}, out
+        # the kernel reports the end of the task's last cycle (IEC_A_LAST_END_NS,
+        # CLOCK_REALTIME): what serve stamps values with
+        r = guest.pyrun(code="import time\nfrom plc_manager.netlink import Client\n"
+                             "c = Client(); t = c.status().tasks()[0]; c.close()\n"
+                             "print(t.last_end_ns, time.time_ns())", timeout=120)
+        end, now_ns = map(int, r.output.split()[-2:])
+        assert 0 < now_ns - end < 5 * 10**9, r.output
     finally:
         guest.run(f"kill -TERM $(cat {pidf}) 2>/dev/null", 10)
         deadline = time.monotonic() + 60

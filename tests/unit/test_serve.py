@@ -23,7 +23,6 @@ import pytest
 from plc_manager import values
 from plc_manager.netlink import KernelError, Resource, Status, Task, VarValue
 from plc_manager.serve import model as M
-from plc_manager.serve import sources as S
 from plc_manager.serve.kernel import Kernel
 
 pytestmark = pytest.mark.unit
@@ -52,8 +51,7 @@ def pki(tmp_path_factory):
 
 def _model(manifests, ex):
     m = manifests[ex]
-    acc, loc = S.read(str(ROOT / "examples" / ex), m)
-    return M.Model.from_manifest(m, acc, loc)
+    return M.Model.from_manifest(m)
 
 
 # ---------------------------------------------------------------------------
@@ -72,7 +70,7 @@ def test_openplc_places(addr, place):
 def test_modbus_map_of_two_resources(manifests):
     mo = _model(manifests, "two_resources")
     mm = M.modbus_map(mo)
-    # named located variables come from the sources
+    # named located variables come from the manifest
     assert mm.discrete[7].path == "cpu0.estop_filler"
     assert mm.discrete[32].path == "cpu1.guard_door_open"
     assert mm.inputs[10].path == "%IW10"
@@ -95,6 +93,53 @@ def test_modbus_map_named_located(manifests):
     assert mm.holding[1124].path == "plc.belt_count"        # belt_count AT %MW100
     assert mm.holding[1126].path == "%MW102"
     assert [mm.coils[i].path for i in range(6)] == [f"%QX0.{i}" for i in range(6)]
+
+
+AGG = """
+TYPE Pt : STRUCT x : INT; y : REAL; END_STRUCT; END_TYPE
+PROGRAM P
+VAR_OUTPUT n : INT; END_VAR
+VAR here AT %MW7 : INT; END_VAR
+n := n + 1; here := n;
+END_PROGRAM
+CONFIGURATION C
+    VAR_GLOBAL pos : Pt; tab : ARRAY[1..2] OF INT; END_VAR
+    RESOURCE r ON CPU0
+        TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+        PROGRAM p WITH t : P;
+    END_RESOURCE
+    VAR_ACCESS
+        N   : r.p.n : INT READ_ONLY;
+        POS : pos : Pt READ_WRITE;
+        TAB : tab : ARRAY[1..2] OF INT READ_ONLY;
+        HERE : %MW7 : INT READ_WRITE;
+    END_VAR
+END_CONFIGURATION
+"""
+
+
+def test_model_from_the_manifest_alone(tmp_path):
+    """`serve` needs no sources: the manifest the compiler writes carries the
+    access paths (their access and type; an aggregate's members one path
+    each) and the addresses of named located variables."""
+    (tmp_path / "agg.st").write_text(AGG)
+    subprocess.run([sys.executable, "-m", "iec2kmod", "gen", str(tmp_path), "-o",
+                    str(tmp_path / "b")], check=True, capture_output=True)
+    m = json.loads((tmp_path / "b" / "manifest.json").read_text())
+    assert {"name": "N", "path": "r.p.n", "access": "READ_ONLY", "type": "INT"} in m["access"]
+    assert m["addresses"]["%MW7"] == "r.p.here"
+    mo = M.Model.from_manifest(m)
+    got = {a.name: (a.path, a.read_write) for a in mo.access}
+    assert got == {"N": ("r.p.n", False), "POS.x": ("pos.x", True),
+                   "POS.y": ("pos.y", True), "TAB[1]": ("tab[1]", False),
+                   "TAB[2]": ("tab[2]", False), "HERE": ("r.p.here", True)}, got
+    assert mo.located["%MW7"] == "r.p.here"
+    assert M.modbus_map(mo).holding[1024 + 7].path == "r.p.here"
+    # a manifest of an older compiler: a clear error, not a model without access paths
+    old = dict(m)
+    del old["access"]
+    with pytest.raises(M.UsageError, match="build the project again"):
+        M.Model.from_manifest(old)
 
 
 def _vt(kind, size, base=None, **kw):
@@ -221,8 +266,12 @@ class FakeClient:
         self.sets = []
         self.manifest = manifest
         self.fault = None           # 'res.task' stopped on a fault
+        self.cycles = {}            # 'res.task' -> its cycle count (default 7)
+        self.ends = {}              # 'res.task' -> end of its last cycle (CLOCK_REALTIME ns)
+        self.got = []               # the paths of each var_get
 
     def var_get(self, paths):
+        self.got.append(list(paths))
         out = []
         for p in paths:
             t = self.types[p.lower()]
@@ -246,11 +295,14 @@ class FakeClient:
                 Task(name=t["name"], resource=r["name"],
                      state="fault" if f"{r['name']}.{t['name']}" == self.fault else "running",
                      interval_ns=t["interval_ns"] or 0, priority=t["priority"], last_cpu=0,
-                     cycles=7, overruns=0, faults=0, exec_min_ns=0, exec_avg_ns=0,
-                     exec_max_ns=0, latency_avg_ns=0, latency_max_ns=0, histogram=[])
+                     cycles=self.cycles.get(f"{r['name']}.{t['name']}", 7), overruns=0,
+                     faults=0, exec_min_ns=0, exec_avg_ns=0, exec_max_ns=0, latency_avg_ns=0,
+                     latency_max_ns=0, histogram=[],
+                     last_end_ns=self.ends.get(f"{r['name']}.{t['name']}", 0))
                 for t in r["tasks"]]))
         return Status(abi=1, configuration=self.manifest["configuration"], module="m",
-                      source_hash="", interface_hash="", now_ns=0, forced=0,
+                      source_hash="", interface_hash=self.manifest["interface_hash"],
+                      now_ns=0, forced=0,
                       resources=res, slots=[])
 
     def set(self, path, value):
@@ -263,6 +315,185 @@ class FakeClient:
 
     def close(self):
         pass
+
+
+STR = """
+PROGRAM P
+VAR_OUTPUT n : INT; END_VAR
+n := n + 1;
+END_PROGRAM
+CONFIGURATION C
+    VAR_GLOBAL label : STRING[5] := 'ab'; wide : WSTRING[3]; END_VAR
+    RESOURCE r ON CPU0
+        TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+        PROGRAM p WITH t : P;
+    END_RESOURCE
+    VAR_ACCESS
+        LABEL : label : STRING[5] READ_WRITE;
+        WIDE  : wide : WSTRING[3] READ_WRITE;
+        N     : r.p.n : INT READ_ONLY;
+    END_VAR
+END_CONFIGURATION
+"""
+
+
+def _gen(tmp_path, text, name="b"):
+    src = tmp_path / f"src_{name}"
+    src.mkdir()
+    (src / "p.st").write_text(text)
+    subprocess.run([sys.executable, "-m", "iec2kmod", "gen", str(src), "-o",
+                    str(tmp_path / name)], check=True, capture_output=True)
+    return json.loads((tmp_path / name / "manifest.json").read_text())
+
+
+def test_strings_on_modbus(tmp_path):
+    """STRING[n]: its length, then two Latin-1 characters a register (the
+    first in the high byte); WSTRING[n]: its length, then one UTF-16 unit a
+    register; access paths at 8192.. like the others."""
+    s5 = values.VarType(path="s", kind="s", size=7, base="STRING", length=5)
+    w3 = values.VarType(path="w", kind="w", size=8, base="WSTRING", length=3)
+    assert M.registers_of(s5) == 4 and M.registers_of(w3) == 4
+    assert M.to_registers(s5, "abc") == [3, 0x6162, 0x6300, 0]
+    assert M.from_registers(s5, [3, 0x6162, 0x6300, 0]) == "abc"
+    assert M.from_registers(s5, [2, 0x6162, 0x6364, 0x6500]) == "ab"
+    assert M.to_registers(w3, "ét") == [2, 0xE9, 0x74, 0]
+    assert M.from_registers(w3, [2, 0xE9, 0x74, 0]) == "ét"
+    with pytest.raises(M.Refused) as e:
+        M.from_registers(s5, [6, 0, 0, 0])
+    assert e.value.why == "range"
+    with pytest.raises(M.Refused):
+        M.from_registers(w3, [1, 0xD800, 0, 0])            # a lone surrogate
+    mo = M.Model.from_manifest(_gen(tmp_path, STR))
+    mm = M.modbus_map(mo)
+    assert [mm.holding[8192 + i].path for i in range(9)] == \
+        ["label"] * 4 + ["wide"] * 4 + ["r.p.n"]
+    assert mm.holding[8192].writable and not mm.holding[8200].writable
+    assert not mm.skipped, mm.skipped
+
+    fake = FakeClient(mo_manifest := _gen(tmp_path, STR, "b2"))
+    kernel = Kernel(M.Model.from_manifest(mo_manifest), fake)
+    port = _port()
+
+    async def go():
+        from pymodbus.client import AsyncModbusTcpClient
+        from plc_manager.serve import modbus
+        srv = await modbus.start(kernel, mm, "127.0.0.1", port)
+        cl = AsyncModbusTcpClient("127.0.0.1", port=port)
+        await cl.connect()
+        try:
+            fake.set("label", "pump")
+            r = await cl.read_holding_registers(8192, count=4)
+            assert r.registers == [4, 0x7075, 0x6D70, 0]
+            r = await cl.write_registers(8192, [2, 0x6F6B, 0, 0])
+            assert not r.isError() and fake.get("label") == "ok"
+            r = await cl.write_registers(8192, [9, 0, 0, 0])          # over the capacity
+            assert r.isError() and r.exception_code == 3
+            assert fake.get("label") == "ok"
+            r = await cl.write_registers(8196, [1, 0x263A, 0, 0])
+            assert not r.isError() and fake.get("wide") == "\u263a"
+        finally:
+            cl.close()
+            await srv.shutdown()
+
+    asyncio.run(go())
+
+
+ARR = AGG.replace("tab : ARRAY[1..2] OF INT;", "tab : ARRAY[1..2] OF INT; "
+                  "w : ARRAY[0..2] OF REAL; grid : ARRAY[1..2] OF Pt;").replace(
+    "HERE : %MW7 : INT READ_WRITE;", "HERE : %MW7 : INT READ_WRITE;\n"
+    "        W : w : ARRAY[0..2] OF REAL READ_WRITE;")
+
+
+def test_opcua_arrays(tmp_path, pki):
+    """A one-dimensional array of elementary elements is one array variable
+    (ValueRank 1, ArrayDimensions [n]); reads, subscriptions and writes take
+    the whole array (a write is one VAR_SET); an array of structures stays a
+    folder of its elements."""
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer
+    m = _gen(tmp_path, ARR)
+    mo = M.Model.from_manifest(m)
+    assert M.array_groups(mo) == {"tab": ["tab[1]", "tab[2]"],
+                                  "w": ["w[0]", "w[1]", "w[2]"]}
+    fake = FakeClient(m)
+    kernel = Kernel(mo, fake)
+    url = f"opc.tcp://127.0.0.1:{_port()}"
+
+    from plc_manager.serve.opcua import add_user, read_users
+    add_user(str(tmp_path / "users"), "op", "write", "operator-pw", n=2 ** 12)
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=False,
+                          users=read_users(str(tmp_path / "users")),
+                          allow_anonymous=False, security="none", cert_dir=pki)
+        await srv.start()
+        c = Client(url)
+        c.set_user("op")
+        c.set_password("operator-pw")
+        try:
+            async with c:
+                ns = srv.ns
+                tab = c.get_node(ua.NodeId("tab", ns))
+                assert await tab.read_attribute(ua.AttributeIds.ValueRank) is not None
+                rank = (await tab.read_attribute(ua.AttributeIds.ValueRank)).Value.Value
+                dims = (await tab.read_attribute(ua.AttributeIds.ArrayDimensions)).Value.Value
+                assert (rank, dims) == (1, [2])
+                fake.set("tab[1]", 4)
+                fake.set("tab[2]", -9)
+                assert await tab.read_value() == [4, -9]
+                w = c.get_node(ua.NodeId("w", ns))
+                await w.write_value(ua.Variant([1.5, 2.5, 3.5], ua.VariantType.Float))
+                assert [fake.get(f"w[{i}]") for i in range(3)] == [1.5, 2.5, 3.5]
+                assert len(fake.sets[-1]) == 3                      # one VAR_SET
+                with pytest.raises(ua.UaStatusCodeError) as e:      # two elements for three
+                    await w.write_value(ua.Variant([1.0, 2.0], ua.VariantType.Float))
+                assert e.value.code == ua.StatusCodes.BadTypeMismatch
+                with pytest.raises(ua.UaStatusCodeError) as e:      # a READ_ONLY path
+                    await tab.write_value(ua.Variant([1, 2], ua.VariantType.Int16))
+                assert e.value.code == ua.StatusCodes.BadNotWritable
+                # a subscription to the array polls its elements
+                assert set(srv.wanted()) == set()
+                sub = await c.create_subscription(20, None)
+                await sub.subscribe_data_change(tab)
+                assert set(srv.wanted()) == {"tab[1]", "tab[2]"}
+                # an array of structures: a folder of elements
+                grid = c.get_node(ua.NodeId("Globals/grid/", ns))
+                names = {(await n.read_browse_name()).Name for n in await grid.get_children()}
+                assert names == {"[1]", "[2]"}
+        finally:
+            await srv.stop()
+
+    asyncio.run(go())
+
+
+def test_swap_keeps_node_ids(tmp_path, pki):
+    """A new body with the same interface (a swap): the same interface hash,
+    so serve goes on, and the address space has the same node ids; a new
+    variable changes the interface (serve exits 75 for a restart)."""
+    from plc_manager.serve.opcua import OpcUaServer
+    body = AGG.replace("n := n + 1;", "n := n + 2;")
+    m1, m2 = _gen(tmp_path, AGG, "one"), _gen(tmp_path, body, "two")
+    m3 = _gen(tmp_path, AGG.replace("VAR_OUTPUT n : INT;", "VAR_OUTPUT n : INT; k : INT;"),
+              "three")
+    assert m1["source_hash"] != m2["source_hash"]
+    assert m1["interface_hash"] == m2["interface_hash"] != m3["interface_hash"]
+
+    async def ids(m):
+        mo = M.Model.from_manifest(m)
+        srv = OpcUaServer(mo, Kernel(mo, FakeClient(m)), f"opc.tcp://127.0.0.1:{_port()}",
+                          writable_all=False, users={}, allow_anonymous=True,
+                          security="none", cert_dir=pki)
+        await srv.start()
+        try:
+            return {n.Identifier for n in srv.server.iserver.aspace.keys()
+                    if n.NamespaceIndex == srv.ns}
+        finally:
+            await srv.stop()
+
+    a, b, c = (asyncio.run(ids(m)) for m in (m1, m2, m3))
+    assert a == b and len(a) > 20
+    assert "r.p.n" in a and "access:POS.x" in a and "pos.x" in a
+    assert "r.p.k" in c - a
 
 
 def _port():
@@ -367,7 +598,7 @@ def test_modbus_value_refused(manifests):
 
 def test_opcua_server(manifests, tmp_path, pki):
     from asyncua import Client, ua
-    from plc_manager.serve.opcua import OpcUaServer, add_user, now, read_users
+    from plc_manager.serve.opcua import OpcUaServer, add_user, read_users
     mo = _model(manifests, "two_resources")
     fake = FakeClient(manifests["two_resources"])
     kernel = Kernel(mo, fake)
@@ -384,7 +615,7 @@ def test_opcua_server(manifests, tmp_path, pki):
         try:
             fake.set("bottles_filled", 42)
             fake.set("cpu0.fill_rate", 2.5)
-            await srv.update(kernel.read_now(mo.order), fake.status(), now())
+            await srv.update(kernel.read_now(mo.order), fake.status())
             ns = srv.ns
             async with Client(url) as c:          # anonymous: refused
                 pytest.fail("anonymous session accepted")
@@ -421,20 +652,30 @@ def test_opcua_server(manifests, tmp_path, pki):
                 assert e.value.code == ua.StatusCodes.BadTypeMismatch
                 state = c.get_node(ua.NodeId("cpu0.fast0/State", ns))
                 assert await state.read_value() == "running"
+                # the loaded build: its hashes, its compiler, its program types' builds
+                m = manifests["two_resources"]
+                build = {n: await c.get_node(ua.NodeId(f"Build/{n}", ns)).read_value()
+                         for n in ("InterfaceHash", "SourceHash", "Generator", "Programs")}
+                assert build["InterfaceHash"] == m["interface_hash"]
+                assert build["Generator"] == m["generator"]
+                assert build["Programs"] == [f"{p['name']} {p['build_id']}"
+                                             for p in m["program_types"]]
                 # a task stopped on a fault: its instances' values frozen, flagged
                 fake.fault = "cpu1.slow1"
                 fake.set("cpu1.monitor.in_transit", 5)
-                await srv.update(kernel.read_now(mo.order), fake.status(), now())
+                await srv.update(kernel.read_now(mo.order), fake.status())
                 transit = c.get_node(ua.NodeId("cpu1.monitor.in_transit", ns))
                 dv = await transit.read_data_value(raise_on_bad_status=False)
-                assert dv.StatusCode.value == ua.StatusCodes.UncertainLastUsableValue
-                assert dv.Value.Value == 5
+                # Bad: the value goes out null (OPC UA part 4, 7.7.1); clients keep
+                # the last one they had (frozen)
+                assert dv.StatusCode.value == ua.StatusCodes.BadOutOfService
+                assert dv.Value.Value is None
                 assert await c.get_node(ua.NodeId("cpu1.slow1/State", ns)).read_value() \
                     == "fault"
                 dv = await rate.read_data_value()
                 assert dv.StatusCode.is_good()                # another task's variable
                 fake.fault = None
-                await srv.update(kernel.read_now(mo.order), fake.status(), now())
+                await srv.update(kernel.read_now(mo.order), fake.status())
                 dv = await transit.read_data_value()
                 assert dv.StatusCode.is_good() and dv.Value.Value == 5
                 # subscription: a change in the kernel reaches the client
@@ -448,7 +689,7 @@ def test_opcua_server(manifests, tmp_path, pki):
                 await sub.subscribe_data_change(ap)
                 assert await asyncio.wait_for(got.get(), 5) == 42
                 fake.set("bottles_filled", 43)
-                await srv.update(kernel.read_now(mo.order), None, now())
+                await srv.update(kernel.read_now(mo.order), None)
                 assert await asyncio.wait_for(got.get(), 5) == 43
             finally:
                 await c.disconnect()
@@ -512,6 +753,138 @@ def test_poller_ends_when_the_configuration_changes(manifests, monkeypatch):
 
 
 
+def test_poller_samples_what_is_subscribed(manifests, pki):
+    """The poller reads only variables a client subscribes to, each task's
+    when it ended a cycle since the last sample, and stamps each value
+    with the end of its task's cycle (the kernel's IEC_A_LAST_END_NS):
+    latency is measured from there, not from the poll.  A client's Read
+    asks the kernel for what it reads."""
+    import datetime
+    import plc_manager.serve as serve
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer
+    mo = _model(manifests, "two_resources")
+    fake = FakeClient(manifests["two_resources"])
+    kernel = Kernel(mo, fake)
+    url = f"opc.tcp://127.0.0.1:{_port()}"
+    end = 1_700_000_000_123_456_000          # ns, CLOCK_REALTIME
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=False, users={},
+                          allow_anonymous=True, security="none", cert_dir=pki)
+        await srv.start()
+        stop = asyncio.Event()
+        stats = serve.PollStats()
+        poll = asyncio.ensure_future(serve._poll(kernel, mo, srv, 0.02, stop, stats))
+        try:
+            async with Client(url) as c:
+                for _ in range(250):
+                    if stats.polls >= 3 or poll.done():
+                        break
+                    await asyncio.sleep(0.02)
+                assert not poll.done(), poll.result()
+                assert fake.got == [] and stats.polls >= 3    # nothing subscribed
+                got = asyncio.Queue()
+
+                class H:
+                    def datachange_notification(self, node, val, data):
+                        got.put_nowait(data.monitored_item.Value)
+
+                sub = await c.create_subscription(20, H())
+                transit = c.get_node(ua.NodeId("cpu1.monitor.in_transit", srv.ns))
+                fake.set("cpu1.monitor.in_transit", 2)
+                await sub.subscribe_data_change(transit)
+                # the first notification: the kernel's value when subscribed
+                assert (await asyncio.wait_for(got.get(), 5)).Value.Value == 2
+                fake.set("cpu1.monitor.in_transit", 3)
+                fake.ends["cpu1.slow1"] = end
+                fake.cycles["cpu1.slow1"] = 8
+                while True:
+                    dv = await asyncio.wait_for(got.get(), 5)
+                    if dv.Value.Value == 3:
+                        break
+                assert dv.SourceTimestamp == datetime.datetime.fromtimestamp(
+                    end / 1e9, datetime.timezone.utc).replace(tzinfo=None) or \
+                    dv.SourceTimestamp == datetime.datetime.fromtimestamp(
+                        end / 1e9, datetime.timezone.utc)
+                polled = {p for g in fake.got for p in g}
+                assert polled == {"cpu1.monitor.in_transit"}, polled
+                # the task ends no cycle: its variable is not read again
+                fake.got.clear()
+                await asyncio.sleep(0.3)
+                assert fake.got == [], fake.got
+                fake.cycles["cpu1.slow1"] = 9         # read again, at slow1's 1 s rate
+                for _ in range(100):
+                    if fake.got:
+                        break
+                    await asyncio.sleep(0.02)
+                assert fake.got and {p for g in fake.got for p in g} == \
+                    {"cpu1.monitor.in_transit"}
+                # a Read of an unsubscribed variable: the kernel's value, fresh
+                fake.got.clear()
+                fake.set("bottles_filled", 77)
+                assert await c.get_node(ua.NodeId("access:FILLED", srv.ns)).read_value() == 77
+                assert ["bottles_filled"] in fake.got
+        finally:
+            stop.set()
+            await poll
+            await srv.stop()
+
+    asyncio.run(go())
+
+
+def test_kernel_gone_values_halted(manifests, pki):
+    """The kernel stops answering (a stop, a load under way): every value
+    says BadServerHalted at once, a write answers BadServerHalted, the
+    tasks' State says halted; values come back Good when it answers."""
+    import plc_manager.serve as serve
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer
+    mo = _model(manifests, "two_resources")
+    fake = FakeClient(manifests["two_resources"])
+    kernel = Kernel(mo, fake)
+    url = f"opc.tcp://127.0.0.1:{_port()}"
+    status, var_get, var_set = fake.status, fake.var_get, fake.var_set
+
+    def gone(*_a):
+        raise KernelError(errno.ENOENT, "no such family")
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=True, users={},
+                          allow_anonymous=True, security="none", cert_dir=pki)
+        await srv.start()
+        stop = asyncio.Event()
+        poll = asyncio.ensure_future(serve._poll(kernel, mo, srv, 0.02, stop,
+                                                 serve.PollStats()))
+        try:
+            async with Client(url) as c:
+                node = c.get_node(ua.NodeId("bottles_filled", srv.ns))
+                fake.set("bottles_filled", 5)
+                assert await node.read_value() == 5
+                fake.status = fake.var_get = fake.var_set = gone
+                await asyncio.sleep(0.2)
+                dv = await node.read_data_value(raise_on_bad_status=False)
+                assert dv.StatusCode.value == ua.StatusCodes.BadServerHalted
+                state = c.get_node(ua.NodeId("cpu0.fast0/State", srv.ns))
+                assert await state.read_value() == "halted"
+                # loaded again: a new module, a new netlink family, a new client
+                fresh = FakeClient(manifests["two_resources"])
+                fresh.data = dict(fake.data)
+                fresh.status, fresh.var_get, fresh.var_set = status, var_get, var_set
+                kernel.connect = lambda: fresh
+                await asyncio.sleep(0.3)
+                assert kernel.reconnects == 1
+                dv = await node.read_data_value()
+                assert dv.StatusCode.is_good() and dv.Value.Value == 5
+                assert await state.read_value() == "running"
+        finally:
+            stop.set()
+            await poll
+            await srv.stop()
+
+    asyncio.run(go())
+
+
 def test_ports_taken(manifests, pki):
     """A port in use: one line, no traceback."""
     from plc_manager.errors import PLCError
@@ -539,7 +912,7 @@ def test_opcua_50_clients(manifests, pki):
     """50 concurrent anonymous sessions read a variable; one that drops its
     connection mid-session does not disturb the others."""
     from asyncua import Client, ua
-    from plc_manager.serve.opcua import OpcUaServer, now
+    from plc_manager.serve.opcua import OpcUaServer
     mo = _model(manifests, "two_resources")
     fake = FakeClient(manifests["two_resources"])
     kernel = Kernel(mo, fake)
@@ -552,7 +925,7 @@ def test_opcua_50_clients(manifests, pki):
         await srv.start()
         try:
             fake.set("bottles_filled", 7)
-            await srv.update(kernel.read_now(mo.order), fake.status(), now())
+            await srv.update(kernel.read_now(mo.order), fake.status())
 
             async def one(i):
                 c = Client(url, timeout=30)
