@@ -48,6 +48,8 @@ HOST = {
                     r"^property verdicts .*: proved \d+"],
     "scale": [rf"^ +4 +\d+ +{NUM} +{NUM} +{NUM} +configuration x1: ",
               rf"^ +8 +\d+ +{NUM} +{NUM} +nan +not built$"],
+    "realcode": [r"^12 files: [1-9]\d* same, 0 differ, 0 failed, \d+ checked, \d+ refused$",
+                 r"^refusals by cause:$"],
     "verify_encode_diff": [rf"^2 programs x 20 expressions, \d+ cycles compared, 0 differ, "
                            rf"{NUM} s$"],
 }
