@@ -429,9 +429,11 @@ class BodyChecker(ILChecks):
         if isinstance(e, _CR):
             return e.cr_type
         if isinstance(e, ast.Direct):
-            self.error(e.pos, f"directly represented variable {e.address} used in a POU: "
-                              "iec2kmod reaches an address through the one variable located "
-                              "there; declare it with a name in the program's VAR or in the "
+            what = self.pou.kind.lower().replace("_", " ")
+            self.error(e.pos, f"directly represented variable {e.address} used in a {what}: "
+                              "only a PROGRAM's statements may name an address (iec2kmod "
+                              "reaches it through the one variable located there); declare it "
+                              "with a name in the program's VAR or in the "
                               f"configuration's VAR_GLOBAL (name AT {e.address} : ...) and use "
                               "that name here (through VAR_EXTERNAL for a global), or connect "
                               "it to an input or output of the program "
