@@ -21,7 +21,8 @@ A file is
   PROGRAM).  Every variable ``sim --list`` names is watched; the input
   variables (``%I`` located variables and the programs' inputs) get a
   deterministic pseudo-random trace so the bodies have something to do.
-  ``same``: both engines ran and wrote the same CSV; ``differ`` or
+  ``same``: both engines ran and wrote the same CSV (a program stopped by
+  a runtime error: the same error, after the same values); ``differ`` or
   ``failed`` (an engine failed: its last lines are printed) otherwise.
 
 ``--smoke``: 12 files spread over the corpus, 5 cycles.
@@ -172,7 +173,7 @@ def run_file(f: Path, cycles: int, tmp: Path, do_run: bool) -> dict:
     watch = [n for n, t, acc, rest in rows][:400]
     tr = tmp / "inputs.csv"
     tr.write_text(trace(rows, cycles, f.name))
-    outs = {}
+    outs, faults = {}, {}
     for eng in ("c", "interp"):
         out = tmp / f"{eng}.csv"
         if out.exists():
@@ -183,14 +184,23 @@ def run_file(f: Path, cycles: int, tmp: Path, do_run: bool) -> dict:
             argv += ["--watch", ",".join(watch)]
         p = subprocess.run(argv + [str(x) for x in files], capture_output=True, text=True,
                            env=_env(), timeout=900)
-        if p.returncode != 0 or not out.exists():
-            return {"status": "failed", "engine": eng,
-                    "error": "\n".join((p.stderr.strip().splitlines() or ["(no output)"])[-4:])}
-        outs[eng] = out.read_text()
-    same = outs["c"] == outs["interp"]
-    return {"status": "same" if same else "differ", "watched": len(watch),
-            "rows": outs["c"].count("\n") - 1,
-            "seconds": round(time.perf_counter() - t0, 2)}
+        last = (p.stderr.strip().splitlines() or ["(no output)"])[-4:]
+        fault = [ln for ln in last if "runtime error:" in ln]
+        if p.returncode != 0 and fault:
+            # a fault of the program (a stopped task): both engines must
+            # report the same one, after the same values
+            faults[eng] = re.sub(r"^.*?runtime error:", "runtime error:", fault[0])
+        elif p.returncode != 0 or not out.exists():
+            return {"status": "failed", "engine": eng, "error": "\n".join(last)}
+        outs[eng] = out.read_text() if out.exists() else ""
+    same = outs["c"] == outs["interp"] and faults.get("c") == faults.get("interp")
+    r = {"status": "same" if same else "differ", "watched": len(watch),
+         "rows": outs["c"].count("\n") - 1, "seconds": round(time.perf_counter() - t0, 2)}
+    if faults:
+        r["fault"] = faults.get("c") or faults.get("interp")
+        if not same:
+            r["error"] = f"c: {faults.get('c')}; interp: {faults.get('interp')}"
+    return r
 
 
 def main(argv=None) -> int:
@@ -217,9 +227,11 @@ def main(argv=None) -> int:
             if a.verbose or r["status"] in ("differ", "failed"):
                 print(f"{r['status']:8} {f}: {r.get('error', r.get('cause', ''))}")
     status = Counter(r["status"] for r in results.values())
+    faulted = sum(1 for r in results.values() if r["status"] == "same" and r.get("fault"))
     causes = Counter(r["cause"] for r in results.values() if r["status"] == "refused")
     print(f"{len(fs)} files: " + ", ".join(f"{status[k]} {k}" for k in
-                                          ("same", "differ", "failed", "checked", "refused")))
+                                          ("same", "differ", "failed", "checked", "refused"))
+          + (f" ({faulted} of the same stopped by the same runtime error)" if faulted else ""))
     if causes:
         print("refusals by cause:")
         for c, n in causes.most_common():

@@ -584,7 +584,7 @@ class BodyChecker(ILChecks):
             self.error(c.pos, f"'{c.name}' is a standard function block type: declare an "
                               "instance and call the instance")
         else:
-            self.error(c.pos, f"unknown function '{c.name}'")
+            self.error(c.pos, f"unknown function '{c.name}'" + _vendor_note(key))
         self.args_exprs(c)
         return ERROR
 
@@ -833,3 +833,19 @@ def _tname(t):
 def _label_text(low, high):
     return f"{low!r}" + (f"..{high!r}" if high is not None else "")
 
+
+# operators of other tools that are no IEC 61131-3 functions
+_VENDOR_OPERATORS = {
+    "SIZEOF": "CODESYS", "ADR": "CODESYS", "ADRINST": "CODESYS", "BITADR": "CODESYS",
+    "INDEXOF": "CODESYS", "__NEW": "CODESYS", "__DELETE": "CODESYS",
+    "__ISVALIDREF": "CODESYS", "__QUERYINTERFACE": "CODESYS", "__QUERYPOINTER": "CODESYS",
+}
+
+
+def _vendor_note(key: str) -> str:
+    tool = _VENDOR_OPERATORS.get(key.upper())
+    if tool:
+        return f" ({key.upper()} is a {tool} operator, not an IEC 61131-3 function)"
+    if key.startswith("__"):
+        return " (a name beginning with '__' is no IEC 61131-3 identifier: a vendor's built-in)"
+    return ""

@@ -152,3 +152,40 @@ def test_matiec_inline_c_block_with_braces_is_one_pragma():
                       "IF trig AND NOT t0 THEN\n  {{\n   if (x) { f(1); }\n  }}\nEND_IF;\n"
                       "t0 := trig;\nEND_FUNCTION_BLOCK\n")
     assert got == [(5, 3, "warning", "pragma ignored")]
+
+
+# the dialect forms of benchmarks/realcode.py's corpus: a refusal names the
+# dialect (issue 25, deliverable 5)
+@pytest.mark.parametrize("text,line,named", [
+    ("PROGRAM P\nVAR p : POINTER TO INT; END_VAR\nEND_PROGRAM\n", 2,
+     "POINTER TO, a CODESYS pointer type"),
+    ("PROGRAM P\nVAR p : REFERENCE TO INT; END_VAR\nEND_PROGRAM\n", 2,
+     "REFERENCE TO, a CODESYS reference type"),
+    ("PROGRAM P\nVAR w : WORD; b : BOOL; END_VAR\nb := w.%X3;\nEND_PROGRAM\n", 3,
+     "a partial access (.%X0, .%B1 ...), IEC 61131-3 ed.3"),
+    ("PROGRAM P\nVAR b : BOOL; END_VAR\n/* ed.3 comment */\nb := TRUE;\nEND_PROGRAM\n", 3,
+     "a /* */ comment, IEC 61131-3 ed.3"),
+    ("VAR_GLOBAL\n  g : INT;\nEND_VAR\n", 1,
+     "VAR_GLOBAL outside a CONFIGURATION, a CODESYS/TwinCAT global variable list"),
+    ("PROGRAM P\nVAR t : UINT AT %MW0 := 20; END_VAR\nEND_PROGRAM\n", 2,
+     "a location after the type, a form of some editors (ed.2 writes name AT %MW0 : UINT)"),
+    ("PROGRAM P\nVAR n : INT; a : ARRAY[0..3] OF INT; END_VAR\nn := SIZEOF(a);\nEND_PROGRAM\n", 3,
+     "SIZEOF is a CODESYS operator, not an IEC 61131-3 function"),
+    ("PROGRAM P\nVAR n : INT; END_VAR\nn := __MOD(n, 2);\nEND_PROGRAM\n", 3,
+     "a name beginning with '__' is no IEC 61131-3 identifier"),
+])
+def test_dialect_refusal_names_the_dialect(text, line, named):
+    got = [d for d in diagnostics(text) if d[2] == "error"]
+    assert got and got[0][0] == line and named in got[0][3], got
+
+
+def test_overlap_of_two_sizes_names_openplc_tables():
+    # OpenPLC's %QX0.0 and %QW0 are two things; here one byte array: the
+    # message says so (github extralsc/openPLC_watertank, WaterTankPump.st)
+    got = [d for d in diagnostics(
+        "PROGRAM P\nVAR pump AT %QX0.0 : BOOL; level AT %QW0 : INT; END_VAR\n"
+        "level := 3; pump := TRUE;\nEND_PROGRAM\n"
+        "CONFIGURATION C RESOURCE R ON PLC TASK T (INTERVAL := T#10ms, PRIORITY := 1);\n"
+        "PROGRAM i WITH T : P; END_RESOURCE END_CONFIGURATION\n") if d[2] == "error"]
+    assert len(got) == 1 and "overlaps" in got[0][3] and \
+        "OpenPLC keeps each size in a table of its own" in got[0][3], got
