@@ -348,12 +348,9 @@ class BodyChecker(ILChecks):
         what = f"a part of input '{v.name}'" if part else f"input '{v.name}'"
         t = v.type.base if v.type is not None else None
         if self.pou.kind == "FUNCTION" and isinstance(t, (ArrayT, StructT, StringT)):
-            # the C code passes it by reference (a const pointer), which
-            # cannot take the write without changing the caller's variable
-            self.error(pos, f"cannot assign to {what} of a function: iec2kmod passes a "
-                            f"function's {t.name} input by reference, read-only; copy it into "
-                            "a VAR of the function and change the copy")
-            return
+            # the C code passes it by reference (a const pointer): a function
+            # that writes it works on a copy, made when it is called
+            v.copied = True
         self.warning(pos, f"{INPUT_WRITE_RULE} {what} inside its "
                           f"{self.pou.kind.lower().replace('_', ' ')}: an input is set by the "
                           "caller and is read-only inside the POU by the rule IEC 61131-3 tools "

@@ -94,15 +94,24 @@ def test_write_to_a_part_of_an_input():
 
 @pytest.mark.parametrize("decl, write", [("v : A3", "v[2] := 5"), ("v : A3", "v := v"),
                                          ("v : R", "v.a := 1"), ("v : STRING[4]", "v := 'x'")])
-def test_a_functions_aggregate_input_stays_read_only(decl, write):
-    """A function's ARRAY, STRUCT and STRING inputs are passed by reference
-    (found by the differential campaign: the C did not compile)."""
-    got = diagnostics("TYPE A3 : ARRAY[1..3] OF INT; R : STRUCT a : INT; END_STRUCT; END_TYPE\n"
-                      f"FUNCTION F : INT\nVAR_INPUT {decl}; END_VAR\n{write};\nF := 1;\n"
-                      "END_FUNCTION\n")
-    assert [(l, s) for l, _, s, _ in got] == [(4, "error")], got
-    assert "of a function: iec2kmod passes a function's" in got[0][3] and \
-        "copy it into a VAR of the function" in got[0][3]
+def test_a_functions_aggregate_input_is_copied_when_written(decl, write, tmp_path):
+    """A function's ARRAY, STRUCT and STRING inputs are passed by reference;
+    one the body writes is copied at the call (OSCAT POLYNOM_INT): a
+    warning like any write to an input, and the generated C compiles (it
+    did not: 'assignment of read-only location')."""
+    text = ("TYPE A3 : ARRAY[1..3] OF INT; R : STRUCT a : INT; END_STRUCT; END_TYPE\n"
+            f"FUNCTION F : INT\nVAR_INPUT {decl}; END_VAR\n{write};\nF := 1;\n"
+            "END_FUNCTION\n")
+    got = diagnostics(text)
+    assert [(l, s) for l, _, s, _ in got] == [(4, "warning")], got
+    assert "input 'v' inside its function" in got[0][3]
+    src = tmp_path / "f.st"
+    src.write_text(text + "PROGRAM P\nVAR x : " + decl.split(" : ")[1] + "; n : INT; END_VAR\n"
+                   "n := F(x);\nEND_PROGRAM\nCONFIGURATION C RESOURCE Rs ON PLC TASK T "
+                   "(INTERVAL := T#10ms, PRIORITY := 1); PROGRAM i WITH T : P; END_RESOURCE "
+                   "END_CONFIGURATION\n")
+    code, out, err = run("sim", "--cycles", "1", "--watch", "Rs.i.n", str(src))
+    assert code == 0 and "Rs.i.n" in out, err[-2000:]
 
 
 @pytest.mark.parametrize("word", ["PUBLIC", "PRIVATE", "INTERNAL", "PROTECTED", "FINAL",
