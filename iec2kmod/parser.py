@@ -677,6 +677,11 @@ def _unsupported_hint(text: str, offset: int) -> str:
     end = text.find("\n", offset)
     line = text[start:end if end >= 0 else len(text)]
     line = re.sub(r"\(\*.*?\*\)|//.*|'[^']*'|\"[^\"]*\"", " ", line)
+    here = text[text.rfind("\n", 0, offset) + 1:offset]
+    if re.match(r"\s*\(\*", here) and "*)" in here[here.index("(*") + 2:]:
+        # (*DBG: return (void *)&x;*): the comment ended at the first '*)'
+        return (" (the comment opened on this line was ended by the '*)' inside it: "
+                "'*)' ends a comment wherever it stands, and comments do not nest)")
     for rx, what in _DIALECT_FORMS:
         if rx.search(line):
             return f" (this line uses {what}, which iec2kmod does not support)"

@@ -182,6 +182,9 @@ def test_matiec_inline_c_block_with_braces_is_one_pragma():
      "SIZEOF is a CODESYS operator, not an IEC 61131-3 function"),
     ("PROGRAM P\nVAR n : INT; END_VAR\nn := __MOD(n, 2);\nEND_PROGRAM\n", 3,
      "a name beginning with '__' is no IEC 61131-3 identifier"),
+    # OpenPLC Runtime v4's program.st: C code in (*DBG: ... *) comments
+    ("PROGRAM P\nEND_PROGRAM\n(*DBG:    return (void *)&((__IEC_BOOL_t *) ptr)->value;*)\n", 3,
+     "the comment opened on this line was ended by the '*)' inside it"),
 ])
 def test_dialect_refusal_names_the_dialect(text, line, named):
     got = [d for d in diagnostics(text) if d[2] == "error"]
