@@ -53,6 +53,8 @@ sys.path.insert(0, str(ROOT))
 from iec2kmod import frontend  # noqa: E402
 
 VENDORED = Path(__file__).resolve().parent / "realcode"
+# a refusal whose message names the dialect the construct belongs to
+_DIALECT = re.compile(r"CODESYS|TwinCAT|ed\.3|OpenPLC|vendor|some editors")
 SUFFIXES = (".st", ".il", ".iec")
 
 
@@ -233,6 +235,9 @@ def main(argv=None) -> int:
                                           ("same", "differ", "failed", "checked", "refused"))
           + (f" ({faulted} of the same stopped by the same runtime error)" if faulted else ""))
     if causes:
+        named = sum(n for c, n in causes.items() if _DIALECT.search(c))
+        print(f"refusals naming another dialect: {named}; other refusals: "
+              f"{sum(causes.values()) - named}")
         print("refusals by cause:")
         for c, n in causes.most_common():
             print(f"  {n:4}  {c}")
