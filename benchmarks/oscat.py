@@ -336,6 +336,7 @@ def case_program(cases) -> str:
     decls, body = [], []
     decls.append("    cyc : INT;")
     for i, c in enumerate(cases):
+        decls += [f"    {v} (* var of case {i} *)" for v in getattr(c, "vars", ())]
         for j, (out, typ, _v) in enumerate(c.outputs):
             decls.append(f"    r{i}_{j} : {typ};")
         if c.kind == "FB":
@@ -373,7 +374,8 @@ def _case_lines(text: str):
         elif cur is not None and re.match(r"\s*(cyc := cyc|r\d+_\d+ :=|CASE|END_CASE|\d+:)",
                                           line):
             out[cur][1] = n
-        m = re.match(r"\s*(?:r|f)(\d+)(?:_\d+)?\s*:\s*\w+;", line)
+        m = re.match(r"\s*(?:r|f)(\d+)(?:_\d+)?\s*:\s*\w+;", line) or \
+            re.search(r"\(\* var of case (\d+) \*\)$", line)
         if m:
             out.setdefault(("decl", int(m.group(1))), []).append(n)
     return out

@@ -48,6 +48,8 @@ class Case:
     note: str = ""
     needs: tuple = ()        # other POUs the case's expressions call
     known: str = ""          # why the translation's code disagrees (found by reading it)
+    vars: tuple = ()         # declarations of the case program the arguments need
+                             # (an ARRAY argument), names unique across the cases
 
     @property
     def kind(self):
@@ -91,6 +93,17 @@ CASES = [
          known="the translation's binary (Stein) GCD halves its result, GCD := SHR(GCD, 1), "
                "where the algorithm doubles it for every factor 2 common to A and B: with "
                "both inputs even the result is 0 (odd inputs are right)"),
+    Case("POLYNOM_INT", "POLYNOM_INT",
+         [("POLYNOM_INT(X := 3.0, XY := pi_xy, Pts := 3)", "REAL", 9.0),
+          ("POLYNOM_INT(X := 1.5, XY := pi_xy, Pts := 3)", "REAL", 2.25),
+          ("pi_xy[3, 1]", "REAL", 4.0)],
+         "POLYNOM_INT calculates an output based on a Polynom interpolation of up to 5 "
+         "coordinates given in an array the indut coordinates have to start at the lowest "
+         "array position and must be sorted ba ascending X values",
+         note="the points (0,0) (1,1) (2,4) lie on y = x*x: their interpolating polynomial is "
+              "x*x (3 points, degree 2); the function writes its XY input, a VAR_INPUT: the "
+              "caller's array keeps its values (pi_xy[3, 1], read after both calls)",
+         vars=("pi_xy : ARRAY[1..5, 0..1] OF REAL := [0.0, 0.0, 1.0, 1.0, 2.0, 4.0, 4(0.0)];",)),
     Case("EVEN", "EVEN", [("EVEN(4)", "BOOL", True), ("EVEN(7)", "BOOL", False)],
          "checks an input for even value the output is true if the input is even"),
     Case("SGN", "SGN", [("SGN(-2.5)", "INT", -1), ("SGN(0.0)", "INT", 0), ("SGN(3.0)", "INT", 1)],

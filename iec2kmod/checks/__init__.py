@@ -8,6 +8,7 @@ import time
 from .body import BodyChecker
 from .config import ConfigChecker
 from .declare import Declarer
+from .direct import name_direct_variables
 from .symbols import Project
 from .types import FBType
 
@@ -16,6 +17,7 @@ def check_project(units, diags, timings=None) -> Project:
     timings = timings if timings is not None else {}
     project = Project(units=units)
     decl = Declarer(project, diags)
+    name_direct_variables(units, diags)
 
     t = time.perf_counter()
     decl.declare_types(units)

@@ -348,12 +348,9 @@ class BodyChecker(ILChecks):
         what = f"a part of input '{v.name}'" if part else f"input '{v.name}'"
         t = v.type.base if v.type is not None else None
         if self.pou.kind == "FUNCTION" and isinstance(t, (ArrayT, StructT, StringT)):
-            # the C code passes it by reference (a const pointer), which
-            # cannot take the write without changing the caller's variable
-            self.error(pos, f"cannot assign to {what} of a function: iec2kmod passes a "
-                            f"function's {t.name} input by reference, read-only; copy it into "
-                            "a VAR of the function and change the copy")
-            return
+            # the C code passes it by reference (a const pointer): a function
+            # that writes it works on a copy, made when it is called
+            v.copied = True
         self.warning(pos, f"{INPUT_WRITE_RULE} {what} inside its "
                           f"{self.pou.kind.lower().replace('_', ' ')}: an input is set by the "
                           "caller and is read-only inside the POU by the rule IEC 61131-3 tools "
@@ -429,9 +426,11 @@ class BodyChecker(ILChecks):
         if isinstance(e, ast.CR):
             return e.cr_type
         if isinstance(e, ast.Direct):
-            self.error(e.pos, f"directly represented variable {e.address} used in a POU: "
-                              "iec2kmod reaches an address through the one variable located "
-                              "there; declare it with a name in the program's VAR or in the "
+            what = self.pou.kind.lower().replace("_", " ")
+            self.error(e.pos, f"directly represented variable {e.address} used in a {what}: "
+                              "only a PROGRAM's statements may name an address (iec2kmod "
+                              "reaches it through the one variable located there); declare it "
+                              "with a name in the program's VAR or in the "
                               f"configuration's VAR_GLOBAL (name AT {e.address} : ...) and use "
                               "that name here (through VAR_EXTERNAL for a global), or connect "
                               "it to an input or output of the program "
@@ -582,7 +581,7 @@ class BodyChecker(ILChecks):
             self.error(c.pos, f"'{c.name}' is a standard function block type: declare an "
                               "instance and call the instance")
         else:
-            self.error(c.pos, f"unknown function '{c.name}'")
+            self.error(c.pos, f"unknown function '{c.name}'" + _vendor_note(key))
         self.args_exprs(c)
         return ERROR
 
@@ -831,3 +830,19 @@ def _tname(t):
 def _label_text(low, high):
     return f"{low!r}" + (f"..{high!r}" if high is not None else "")
 
+
+# operators of other tools that are no IEC 61131-3 functions
+_VENDOR_OPERATORS = {
+    "SIZEOF": "CODESYS", "ADR": "CODESYS", "ADRINST": "CODESYS", "BITADR": "CODESYS",
+    "INDEXOF": "CODESYS", "__NEW": "CODESYS", "__DELETE": "CODESYS",
+    "__ISVALIDREF": "CODESYS", "__QUERYINTERFACE": "CODESYS", "__QUERYPOINTER": "CODESYS",
+}
+
+
+def _vendor_note(key: str) -> str:
+    tool = _VENDOR_OPERATORS.get(key.upper())
+    if tool:
+        return f" ({key.upper()} is a {tool} operator, not an IEC 61131-3 function)"
+    if key.startswith("__"):
+        return " (a name beginning with '__' is no IEC 61131-3 identifier: a vendor's built-in)"
+    return ""

@@ -683,7 +683,21 @@ class ConfigChecker:
             if area1 == area2 and start2 < start1 + n1:
                 self.error(e2[2], e2[3], f"address {addr2} overlaps {addr1} ({e1[0]}, "
                                          f"{_place(e1[2], e1[3])}): one address is accessed by "
-                                         "exactly one variable")
+                                         "exactly one variable" + _tables_note(addr1, addr2))
+
+
+def _size(addr: str) -> str:
+    return addr[2] if len(addr) > 2 and addr[2].isalpha() else "X"
+
+
+def _tables_note(addr1: str, addr2: str) -> str:
+    """For two addresses of different sizes: how the areas are laid out,
+    and the dialect that keeps the sizes apart."""
+    if _size(addr1) == _size(addr2):
+        return ""
+    return (" (iec2kmod's process image is one array of bytes per area, %QW0 holding "
+            "%QX0.0 to %QX1.7; OpenPLC keeps each size in a table of its own, where "
+            f"{addr1} and {addr2} are two things: give one of them another address)")
 
 
 def _qual(r, name):

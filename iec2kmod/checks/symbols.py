@@ -26,6 +26,9 @@ class Var:
     used: bool = False
     assigned: bool = False
     step: object = None           # ast.Step: the variable is an SFC step (checks/sfc.py)
+    # a FUNCTION's ARRAY, STRUCT or STRING input its body writes: the
+    # function works on a copy of the caller's value (codegen/pou.py)
+    copied: bool = False
 
     @property
     def key(self) -> str:

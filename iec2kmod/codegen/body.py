@@ -133,7 +133,8 @@ class BodyEmitter:
         if not self.pooling or N.is_scalar(v.type):
             return False
         if self.is_function:
-            return v.section in ("VAR", "VAR_TEMP")
+            # a written aggregate input: the copy the body works on
+            return v.section in ("VAR", "VAR_TEMP") or (v.section == "VAR_INPUT" and v.copied)
         return v.section == "VAR_TEMP"
 
     def cr_var(self, t, depth=0):

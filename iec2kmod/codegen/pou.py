@@ -259,7 +259,7 @@ def function_signature(pou, cname=None, scope="IEC_POU_SCOPE", frame=None) -> st
         else:
             params.append(f"{N.ctype(result.type)} *ret")
     for v in pou.vars.values():
-        name = N.var(v.name)
+        name = param_name(v)
         if v.section == "VAR_INPUT":
             if N.is_scalar(v.type):
                 params.append(f"{N.ctype(v.type)} {name}")
@@ -277,10 +277,18 @@ def function_signature(pou, cname=None, scope="IEC_POU_SCOPE", frame=None) -> st
     return f"{scope} {ret} {cname or N.fn(pou.name)}({', '.join(params)})"
 
 
+def param_name(v) -> str:
+    """The C parameter of a function's variable: an aggregate input the body
+    writes arrives as the caller's value (<name>_in_, read-only) and is
+    copied into the frame, where the body works on it (an IEC name never
+    ends with '_', so no variable meets it)."""
+    return N.var(v.name) + ("_in_" if v.section == "VAR_INPUT" and v.copied else "")
+
+
 def function_args(pou) -> list[str]:
     """The parameter names of function_signature(pou), in order."""
     args = ["ctx"] + ([] if N.is_scalar(pou.vars[pou.key].type) else ["ret"])
-    return args + [N.var(v.name) for v in pou.vars.values()
+    return args + [param_name(v) for v in pou.vars.values()
                    if v.section in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")]
 
 
@@ -423,6 +431,11 @@ def pou_body(project, pou, sel=None) -> list[str]:
                 else:
                     init.append("iec_memset(ret, 0, sizeof(*ret));")
                     init += ie.lines("(*ret)", v.type, None, f)
+            elif v.section == "VAR_INPUT" and be.in_frame(v):
+                # the copy of a written aggregate input (param_name)
+                members.append(N.declare(v.type, N.var(v.name)) + ";")
+                name = be.var_access(v)
+                init.append(f"iec_memcpy(&{name}, {param_name(v)}, sizeof({name}));")
             elif v.section == "VAR_OUTPUT":
                 # outputs start from their initial values at every call, even
                 # when the function returns before writing them
@@ -443,7 +456,7 @@ def pou_body(project, pou, sel=None) -> list[str]:
         # marked used (-Wunused-parameter is an error in the module build)
         used = ["(void)ctx;"] + (["(void)ret;"] if not N.is_scalar(pou.vars[pou.key].type)
                                  else [])
-        used += [f"(void){N.var(v.name)};" for v in pou.vars.values()
+        used += [f"(void){param_name(v)};" for v in pou.vars.values()
                  if v.section in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")]
         used += [f"(void){FRAME};"] if members else []
         # an IL current result may be loaded and never used (valid IL)

@@ -633,6 +633,19 @@ _ED3_WORDS = re.compile(
     r"\b(CLASS|END_CLASS|METHOD|END_METHOD|INTERFACE|END_INTERFACE|NAMESPACE|"
     r"END_NAMESPACE|EXTENDS|IMPLEMENTS|PROPERTY|END_PROPERTY|REF_TO)\b|"
     r"\b(THIS|SUPER|\w+)\s*\^|\b(REF)\s*\(|ARRAY\s*\[\s*(\*)", re.I)
+# forms of other dialects that real code uses, named in a syntax error on
+# their line
+_DIALECT_FORMS = [(re.compile(rx, re.I | re.M), what) for rx, what in (
+    (r"\bPOINTER\s+TO\b", "POINTER TO, a CODESYS pointer type"),
+    (r"\bREFERENCE\s+TO\b", "REFERENCE TO, a CODESYS reference type"),
+    (r"\.\s*%[XBWDL]\d", "a partial access (.%X0, .%B1 ...), IEC 61131-3 ed.3"),
+    (r"/\*", "a /* */ comment, IEC 61131-3 ed.3 (ed.2 comments are (* *))"),
+    (r"^\s*VAR_GLOBAL\b", "VAR_GLOBAL outside a CONFIGURATION, a CODESYS/TwinCAT global "
+                          "variable list (ed.2 declares global variables in a CONFIGURATION "
+                          "or RESOURCE)"),
+    (r":\s*[\w\[\]. ]+?\s+AT\s+%", "a location after the type, a form of some editors "
+                                "(ed.2 writes name AT %MW0 : UINT)"),
+)]
 # an access or inheritance specifier after the POU keyword (ed.3 6.6.5,
 # CODESYS): FUNCTION_BLOCK PUBLIC name
 _ACCESS_SPECIFIER = re.compile(
@@ -664,6 +677,14 @@ def _unsupported_hint(text: str, offset: int) -> str:
     end = text.find("\n", offset)
     line = text[start:end if end >= 0 else len(text)]
     line = re.sub(r"\(\*.*?\*\)|//.*|'[^']*'|\"[^\"]*\"", " ", line)
+    here = text[text.rfind("\n", 0, offset) + 1:offset]
+    if re.match(r"\s*\(\*", here) and "*)" in here[here.index("(*") + 2:]:
+        # (*DBG: return (void *)&x;*): the comment ended at the first '*)'
+        return (" (the comment opened on this line was ended by the '*)' inside it: "
+                "'*)' ends a comment wherever it stands, and comments do not nest)")
+    for rx, what in _DIALECT_FORMS:
+        if rx.search(line):
+            return f" (this line uses {what}, which iec2kmod does not support)"
     m = _ED3_WORDS.search(line)
     if not m:
         return ""

@@ -52,6 +52,8 @@ HOST = {
                      r"0 disagree$"],
     "plcopen_corpus": [r"^mixed/plc\.xml +IEC only +runs \(", r"^IEC-only projects: 1$",
                        r"^ +1 +runs$"],
+    "realcode": [r"^12 files: [1-9]\d* same, 0 differ, 0 failed, \d+ checked, \d+ refused$",
+                 r"^refusals by cause:$"],
     "verify_encode_diff": [rf"^2 programs x 20 expressions, \d+ cycles compared, 0 differ, "
                            rf"{NUM} s$"],
 }

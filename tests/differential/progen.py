@@ -1796,14 +1796,15 @@ class Gen:
         """Inputs the body may assign (OSCAT does; a warning, not an error)."""
         if not self.real_chance(0.3):
             return
-        # a function's ARRAY, STRUCT and STRING inputs are passed by
-        # reference and stay read-only (an error of the checker)
-        ins = [v for v in pou.vars if v.sec == "in" and not v.edge and
-               (pou.kind != "FUNCTION" or v.ty.kind not in ("array", "struct", "string"))]
+        # a function's ARRAY, STRUCT and STRING inputs too: the function
+        # works on a copy (codegen/pou.py param_name)
+        ins = [v for v in pou.vars if v.sec == "in" and not v.edge]
         for v in ins:
             if self.real_r.random() < 0.6:
                 v.ro = False
                 self.feat("input_write")
+                if pou.kind == "FUNCTION" and v.ty.kind in ("array", "struct", "string"):
+                    self.feat("function_aggregate_input_write")
 
     # ------------------------------------------------------------ render
     SEC = {"in": "VAR_INPUT", "out": "VAR_OUTPUT", "inout": "VAR_IN_OUT", "ext": "VAR_EXTERNAL",

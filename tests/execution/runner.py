@@ -58,6 +58,7 @@ from pathlib import Path
 from iec2kmod import sim
 from iec2kmod.parse import frontend
 from iec2kmod.codegen.plan import build_plan
+from iec2kmod.located import addresses_of
 from iec2kmod.checks.types import Elementary, EnumT, StringT, SubrangeT, concrete
 from iec2kmod.parse.literals import LiteralError, classify
 
@@ -196,6 +197,11 @@ class Case:
         return max(cycles)
 
     def full_path(self, p: str) -> str:
+        # an address located by a program's variable (declared, unnamed or
+        # implied by a statement) is that variable's path
+        located = getattr(self, "located", {}).get(p.upper())
+        if located:
+            return located
         return p if self.standalone else f"{self.program}.{p}"
 
 
@@ -507,6 +513,10 @@ def run_group(name: str, cases, sanitize=False, engine="c", extra_sources=()) ->
             for c in cases:
                 run.task_of[c.name] = f"t_{c.program}"
         run.types = {e.path.upper(): e.type for e in build_plan(project).table}
+        addresses = {a.upper(): path for a, path in addresses_of(project).items()
+                     if path.upper() in run.types and a.upper() not in run.types}
+        for c in cases:
+            c.located = addresses
         for c in cases:         # INPUT values are typed like EXPECT values
             for cycle, p, v in c.inputs:
                 vtype = run.types.get(c.full_path(p).upper())

@@ -179,19 +179,39 @@ def test_program_access_paths_are_recorded():
 
 def test_located_variable_message_names_the_rule_and_the_fix():
     # a program's VAR may locate a variable (ed.2 located_var_declarations,
-    # issue 25); a function block's complete address, an address in a
-    # statement and a located VAR_INPUT stay refused, each with its fix
-    errs = errors("PROGRAM Ctrl\nVAR_OUTPUT m : BOOL; END_VAR\nVAR q AT %QX0.1 : BOOL; END_VAR\n"
-                  "m := %IX0.1;\nq := m;\nEND_PROGRAM\n"
+    # issue 25) and its statements may name an address (ed.2 B.1.4); a
+    # function block's complete address or direct variable in a statement
+    # and a located VAR_INPUT stay refused, each with its fix
+    errs = errors("FUNCTION_BLOCK Ctrl\nVAR_OUTPUT m : BOOL; END_VAR\n"
+                  "m := %IX0.1;\nEND_FUNCTION_BLOCK\n"
                   "FUNCTION_BLOCK B\nVAR w AT %IW4 : WORD; END_VAR\nEND_FUNCTION_BLOCK\n"
                   "PROGRAM P2\nVAR_INPUT i AT %IX0.2 : BOOL; END_VAR\nEND_PROGRAM")
     assert len(errs) == 3
-    assert "%IX0.1 used in a POU" in errs[0] and "(name AT %IX0.1 : ...)" in errs[0] and \
-        "(x := %IX0.1)" in errs[0]
+    assert "%IX0.1 used in a function block: only a PROGRAM's statements" in errs[0] and \
+        "(name AT %IX0.1 : ...)" in errs[0] and "(x := %IX0.1)" in errs[0]
     assert "'w' AT %IW4 in a function block" in errs[1] and "(w AT %I* : WORD)" in errs[1] \
         and "VAR_CONFIG" in errs[1]
     assert "'i' AT %IX0.2 in VAR_INPUT" in errs[2] and \
         "PROGRAM inst WITH task : P2 (i := %IX0.2)" in errs[2]
+
+
+def test_direct_variables_in_a_program_are_its_located_variables():
+    # ed.2 B.1.4 variable ::= direct_variable | symbolic_variable, and
+    # located_var_decl ::= [variable_name] location: an address in a
+    # program's statement is the variable the program locates there, or one
+    # the use declares; the one-address rule covers them
+    ok = ("PROGRAM P\nVAR q AT %QX0.1 : BOOL; AT %IW3 : INT; END_VAR\n"
+          "q := %IX0.1;\n%QX0.2 := %IW3 > 0 AND q;\n%QX0.1 := FALSE;\nEND_PROGRAM\n")
+    cfg = ("CONFIGURATION C RESOURCE R ON PLC TASK T (INTERVAL := T#10ms, PRIORITY := 1);\n"
+           "PROGRAM a WITH T : P; {} END_RESOURCE END_CONFIGURATION\n")
+    assert errors(ok + cfg.format("")) == []
+    errs = errors(ok + cfg.format("PROGRAM b WITH T : P;"))
+    assert len(errs) == 1 and "a second instance 'b' of program 'P'" in errs[0]
+    errs = errors(ok + "PROGRAM P3\n%QX0.2 := TRUE;\nEND_PROGRAM\n"
+                  + cfg.format("PROGRAM c WITH T : P3;"))
+    assert len(errs) == 1 and "address %QX0.2 is already used by" in errs[0]
+    errs = errors("PROGRAM P\n%QW0 := 1;\n%QX0.3 := TRUE;\nEND_PROGRAM\n" + cfg.format(""))
+    assert len(errs) == 1 and "%QX0.3 overlaps %QW0" in errs[0]
 
 
 # -------------------------- 8. calls on array elements, LDATE#, generic TRUNC
