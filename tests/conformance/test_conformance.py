@@ -103,7 +103,7 @@ def test_every_grammar_rule_is_used_by_a_valid_file():
     for path in VALID_FILES + ANNEXF_LIBRARY:
         parser = mm._parser_blueprint.clone()
         _rule_names(parser.parse(path.read_text(), file_name=str(path)), seen)
-    grammar = (ROOT / "iec2kmod" / "grammar" / "iec61131.tx").read_text()
+    grammar = (ROOT / "iec2kmod" / "parse" / "grammar" / "iec61131.tx").read_text()
     grammar = re.sub(r"/\*.*?\*/", "", grammar, flags=re.S)
     rules = set(re.findall(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[[^\]]*\])?:", grammar, re.M))
     assert len(rules) > 100
