@@ -88,7 +88,22 @@ def _headers() -> Tuple[str, str, str]:
     return kdir, rel, ver
 
 
+def _image_config(release: str) -> list:
+    """The ``docker import`` changes that configure the image (the rest of
+    what makes it is build-rootfs.sh and the headers' release and version)."""
+    return ["ENV PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin",
+            "ENV LANG=C.UTF-8",
+            f"ENV IEC2KMOD_KDIR=/usr/src/linux-headers-{release}",
+            'CMD ["/bin/bash"]']
+
+
 def recipe_hash(release: Optional[str] = None, version: Optional[str] = None) -> str:
+    """The image's identity: a hash of exactly what makes the image, namely
+    the recipe's files (build-rootfs.sh and anything else it reads, but not
+    its documentation, ``*.md``, nor the Python package marker ``*.py`` that
+    installs the directory as ``iec2kmod.containers``: editing those does not
+    change the image and must not rebuild it), the suite, the headers'
+    release and version, and the image configuration set at import."""
     if release is None or version is None:
         _, release, version = _headers()
     h = hashlib.sha256()
@@ -96,13 +111,14 @@ def recipe_hash(release: Optional[str] = None, version: Optional[str] = None) ->
     for root, dirs, files in os.walk(d):
         dirs[:] = sorted(x for x in dirs if x != "__pycache__")
         for fn in sorted(files):
-            if fn.endswith(".md"):        # documentation does not change the image
+            if fn.endswith((".md", ".py", ".pyc")):   # not read by the recipe
                 continue
             p = os.path.join(root, fn)
             h.update(os.path.relpath(p, d).encode() + b"\0")
             with open(p, "rb") as f:
                 h.update(f.read() + b"\0")
-    h.update(f"{SUITE}\0{release}\0{version}".encode())
+    h.update(f"{SUITE}\0{release}\0{version}\0".encode())
+    h.update("\0".join(_image_config(release)).encode())
     return h.hexdigest()[:16]
 
 
@@ -232,14 +248,9 @@ def ensure_image(*, log: Callable[[str], None] = print, rebuild: bool = False) -
             repo, _, t = tag.partition(":")
             client.api.import_image(
                 src=tarball, repository=repo, tag=t,
-                changes=[
-                    "ENV PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin",
-                    "ENV LANG=C.UTF-8",
-                    f"ENV IEC2KMOD_KDIR=/usr/src/linux-headers-{rel}",
+                changes=_image_config(rel) + [
                     f"LABEL org.iec2kmod.recipe={tag.split(':')[1]} "
-                    f"org.iec2kmod.kernel={rel} org.iec2kmod.headers-version={ver}",
-                    'CMD ["/bin/bash"]',
-                ])
+                    f"org.iec2kmod.kernel={rel} org.iec2kmod.headers-version={ver}"])
             if not _image_exists(client, tag):
                 raise ContainerError(f"docker import did not create {tag}")
         finally:

@@ -52,8 +52,18 @@ def test_image_tag_follows_the_recipe(tmp_path, monkeypatch):
     t1 = container.recipe_hash("6.1.0-56-rt-amd64", "6.1.192-2")
     assert t1 == container.recipe_hash("6.1.0-56-rt-amd64", "6.1.192-2")
     assert t1 != container.recipe_hash("6.1.0-57-rt-amd64", "6.1.193-1")
+    # what does not make the image does not change its tag (a rebuild is minutes):
+    # the package marker that installs the recipe and its documentation
+    (recipe / "__init__.py").write_text((recipe / "__init__.py").read_text() + "\nX = 1\n")
+    (recipe / "README.md").write_text("changed\n")
+    assert t1 == container.recipe_hash("6.1.0-56-rt-amd64", "6.1.192-2")
+    # the recipe does
     (recipe / "build-rootfs.sh").write_text((recipe / "build-rootfs.sh").read_text() + "\n#\n")
-    assert t1 != container.recipe_hash("6.1.0-56-rt-amd64", "6.1.192-2")
+    t2 = container.recipe_hash("6.1.0-56-rt-amd64", "6.1.192-2")
+    assert t1 != t2
+    # and so does the configuration given at import
+    monkeypatch.setattr(container, "_image_config", lambda rel: ["ENV LANG=C"])
+    assert t2 != container.recipe_hash("6.1.0-56-rt-amd64", "6.1.192-2")
 
 
 def test_debian_mirrors_from_apt_sources(tmp_path):
