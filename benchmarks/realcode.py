@@ -50,7 +50,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from iec2kmod import frontend  # noqa: E402
+from iec2kmod.parse import frontend  # noqa: E402
 
 VENDORED = Path(__file__).resolve().parent / "realcode"
 # a refusal whose message names the dialect the construct belongs to
