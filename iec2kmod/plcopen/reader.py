@@ -622,7 +622,7 @@ class _Generator:
                     out.append(r)
             return out
 
-        def sources(e, seen=()):
+        def sources(e):
             out = []
             for r in inputs(e):
                 k = _local(r)

@@ -77,3 +77,12 @@ def unload(guest, manifest):
 def loaded_modules(guest) -> list[str]:
     return [ln.split()[0] for ln in guest.run("cat /proc/modules").output.splitlines()
             if ln.startswith("iec_")]
+
+
+def pm(guest, *args, check=0, timeout=300):
+    """plc-manager ARGS in the guest: (exit code, output); the exit code must
+    be *check* (None: any)."""
+    r = guest.pyrun(script="plc-manager", argv=[str(a) for a in args], timeout=timeout)
+    assert check is None or r.exit_code == check, \
+        f"plc-manager {' '.join(map(str, args))}: exit {r.exit_code}\n{r.output}"
+    return r.exit_code, r.output

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import pytest
 
-from kmod_helpers import gen_and_build, loaded_modules
+from kmod_helpers import gen_and_build, loaded_modules, pm
 
 pytestmark = pytest.mark.qemu
 HERE = Path(__file__).resolve().parent
@@ -51,13 +51,6 @@ for spec in sys.argv[1:]:
     out.append(data[0])
 print(" ".join(map(str, out)))
 """
-
-
-def pm(guest, *args, check=0):
-    r = guest.pyrun(script="plc-manager", argv=[str(a) for a in args], timeout=300)
-    assert check is None or r.exit_code == check, \
-        f"plc-manager {' '.join(map(str, args))}: exit {r.exit_code}\n{r.output}"
-    return r.exit_code, r.output
 
 
 def values(guest, *names) -> dict:

@@ -15,19 +15,12 @@ from pathlib import Path
 
 import pytest
 
-from kmod_helpers import gen_and_build, loaded_modules
+from kmod_helpers import gen_and_build, loaded_modules, pm
 
 pytestmark = pytest.mark.qemu
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 PROJECT = ROOT / "tests" / "conformance" / "valid" / "realcode" / "openplc_located.st"
-
-
-def pm(guest, *args, check=0):
-    r = guest.pyrun(script="plc-manager", argv=[str(a) for a in args], timeout=300)
-    assert check is None or r.exit_code == check, \
-        f"plc-manager {' '.join(map(str, args))}: exit {r.exit_code}\n{r.output}"
-    return r.exit_code, r.output
 
 
 def values(guest, *names) -> list:
