@@ -17,6 +17,7 @@ from textx.exceptions import TextXSyntaxError, TextXSemanticError
 
 from .. import ast
 from ..diagnostics import Diagnostics, SourceFile
+from .lexical import pragmas
 from .literals import LiteralError, classify
 
 # Arpeggio descends about 16 Python frames per parenthesis, 28 per nested
@@ -507,22 +508,11 @@ def _model(src: SourceFile, reference: bool):
         return build()
 
 
-_PRAGMA_SCAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|(\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\})",
-                          re.S)
-
-
-# {verify NAME: EXPR} and {assume: EXPR}: read by `iec2kmod verify` (iec2kmod/verify/props.py)
-_VERIFY_PRAGMA = re.compile(r"\{\s*(verify|assume)\b", re.I)
-
-
 def _warn_pragmas(src: SourceFile, diags: Diagnostics) -> None:
-    if "{" not in src.text:
-        return
-    for m in _PRAGMA_SCAN.finditer(src.text):
-        if m.group(1) and not re.match(r"\{\s*(selective|watchdog)\b", m.group(1), re.I) and \
-                not _VERIFY_PRAGMA.match(m.group(1)):
-            # {selective ...} is read by iec2kmod/codegen/selective.py
-            diags.warning(src, m.start(1), "pragma ignored")
+    """A warning at every pragma no pass reads (see lexical.PRAGMAS)."""
+    for p in pragmas(src.text):
+        if p.kind is None:
+            diags.warning(src, p.start, "pragma ignored")
 
 
 def _describe_expected(err) -> str:
