@@ -29,6 +29,7 @@ from ..checks.symbols import POUInfo, Var
 from ..checks.types import BOOL, ERROR, EnumT, ErrorT, FBType, StructT
 from ..diagnostics import Diagnostics, SourceFile
 from ..parse import lexical
+from ..parse.parser import parse_expression
 
 # the text after {verify / {assume: an optional name, a colon, the expression
 _PROP_BODY = re.compile(r"\s*(" + lexical.NAME + r")?\s*:(.*)\Z", re.S)
@@ -36,8 +37,6 @@ POU_SPAN = re.compile(lexical.SKIP_ALL + "|"
                       r"\b(END_PROGRAM|END_FUNCTION_BLOCK|END_FUNCTION)\b|"
                       r"\b(PROGRAM|FUNCTION_BLOCK|FUNCTION)\s+(" + lexical.NAME + ")",
                       re.S | re.I)
-
-HEADER = "FUNCTION F__ : BOOL F__ := "
 
 
 @dataclass
@@ -109,49 +108,7 @@ def _pou_spans(text):
 def parse_expr(text: str, src: SourceFile, start: int, diags: Diagnostics):
     """The expression AST of ``text`` (found at offset ``start`` of src),
     its positions those of src; None after a syntax error (in diags)."""
-    from ..parse.parser import parse_source
-    synth = SourceFile(src.path, HEADER + text + "\n;\nEND_FUNCTION\n")
-    d = Diagnostics()
-    unit = parse_source(synth, d)
-    delta = start - len(HEADER)
-    if unit is None or d.errors or len(unit.pous) != 1 or len(unit.pous[0].body) != 1 or \
-            not isinstance(unit.pous[0].body[0], ast.Assign):
-        for e in d.errors or [None]:
-            if e is None:
-                diags.error(src, start, "a property must be one expression")
-                continue
-            off = synth.offset(e.line, e.col) + delta
-            off = min(max(off, start), start + len(text))
-            diags.error(src, off, f"in a property: {e.message}")
-        return None
-    e = unit.pous[0].body[0].value
-    _shift(e, delta)
-    return e
-
-
-def _shift(e, d):
-    if e is None:
-        return
-    if isinstance(e, ast.Expr) and e.pos is not None:
-        e.pos += d
-    if isinstance(e, ast.BinOp):
-        _shift(e.left, d)
-        _shift(e.right, d)
-    elif isinstance(e, ast.UnOp):
-        _shift(e.operand, d)
-    elif isinstance(e, ast.Ref):
-        acc = []
-        for k, val, pos in e.accessors:
-            if k == "index":
-                for x in val:
-                    _shift(x, d)
-            acc.append((k, val, pos + d if pos is not None else pos))
-        e.accessors = acc
-    elif isinstance(e, ast.Call):
-        for a in e.args:
-            if a.pos is not None:
-                a.pos += d
-            _shift(a.value, d)
+    return parse_expression(text, (src, start), diags, "property")
 
 
 # ---------------------------------------------------------- checking
