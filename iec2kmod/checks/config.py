@@ -8,6 +8,7 @@ import os
 import re
 
 from .. import ast
+from ..parse import lexical
 from ..parse.literals import LiteralError, parse_duration
 from .body import BodyChecker
 from .declare import ConstError, address_span, check_address_type
@@ -25,10 +26,6 @@ MAX_PRIORITY = 48   # IEC 0 (most urgent) .. 48 -> SCHED_FIFO 49 .. 1
 # no overrun limit.
 WATCHDOG_DEFAULT_NS = 5_000_000_000
 WATCHDOG_MAX_OVERRUNS = 1_000_000
-_WATCHDOG_PRAGMA = re.compile(r"\{\s*watchdog\b([^}]*)\}\s*\Z", re.I)
-_WATCHDOG_ANY = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
-                           r"(\{\s*watchdog\b[^}]*\})", re.S | re.I)
-
 
 
 class _Scope:
@@ -240,12 +237,12 @@ class ConfigChecker:
     def watchdog(self, info: TaskInfo, src) -> None:
         """The {watchdog ...} pragma right in front of the TASK, if any."""
         info.watchdog_ns = WATCHDOG_DEFAULT_NS
-        m = _WATCHDOG_PRAGMA.search(src.text, 0, info.pos)
+        m = lexical.in_front_of(src.text, info.pos, "watchdog")
         if not m:
             return
-        self.watchdogs_used.add((src.path, m.start()))
-        pos = m.start()
-        words = [w.strip() for w in m.group(1).split(",")]
+        self.watchdogs_used.add((src.path, m.start))
+        pos = m.start
+        words = [w.strip() for w in m.body.split(",")]
         usage = "write {watchdog T#20ms}, {watchdog T#20ms, 3} or {watchdog off, 3}"
         if len(words) > 2 or not words[0]:
             self.error(src, pos, f"malformed watchdog pragma: {usage}")
@@ -280,11 +277,9 @@ class ConfigChecker:
     def unused_watchdogs(self, units) -> None:
         for unit in units:
             src = unit.src
-            if "{" not in src.text:
-                continue
-            for m in _WATCHDOG_ANY.finditer(src.text):
-                if m.group(1) and (src.path, m.start(1)) not in self.watchdogs_used:
-                    self.warning(src, m.start(1), "watchdog pragma applies to nothing: put it "
+            for m in lexical.of_kind(src.text, "watchdog"):
+                if (src.path, m.start) not in self.watchdogs_used:
+                    self.warning(src, m.start, "watchdog pragma applies to nothing: put it "
                                                   "right in front of a TASK declaration")
 
     def program_instance(self, pc, r, cfg):

@@ -171,14 +171,12 @@ from dataclasses import dataclass, field
 from .. import ast
 from ..checks.symbols import Var
 from ..checks.types import ArrayT, FBType, StructT, concrete
+from ..parse import lexical
 from . import analysis
 from . import cnames as N
 
 TIMERS = {"TON", "TOF", "TP"}
 MODES = ("all", "marked")
-
-_PRAGMA = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
-                     r"(\{\s*selective\b([^}]*)\})", re.S | re.I)
 
 
 @dataclass
@@ -284,24 +282,23 @@ class SelectivePlan:
                         targets.setdefault(cfg.src.path, []).append((pos, "inst", inst))
         for unit in self.project.units:
             src = unit.src
-            if "{" not in src.text:
+            found = lexical.of_kind(src.text, "selective")
+            if not found:
                 continue
             mine = sorted(targets.get(src.path, []), key=lambda t: t[0])
-            for m in _PRAGMA.finditer(src.text):
-                if not m.group(1):
-                    continue
-                word = m.group(2).strip().lower()
+            for m in found:
+                word = m.body.strip().lower()
                 if word in ("", "on"):
                     on = True
                 elif word == "off":
                     on = False
                 else:
-                    self.warnings.append((src, m.start(1), "unknown selective pragma: write "
+                    self.warnings.append((src, m.start, "unknown selective pragma: write "
                                           "{selective on} or {selective off}"))
                     continue
-                after = [t for t in mine if t[0] >= m.end(1)]
-                if not after or not _only_space_between(src.text, m.end(1), after[0][0]):
-                    self.warnings.append((src, m.start(1), "selective pragma applies to "
+                after = [t for t in mine if t[0] >= m.end]
+                if not after or not _only_space_between(src.text, m.end, after[0][0]):
+                    self.warnings.append((src, m.start, "selective pragma applies to "
                                           "nothing: put it in front of a POU, a function "
                                           "block instance or a program instance"))
                     continue
@@ -313,7 +310,7 @@ class SelectivePlan:
                 elif kind == "var":
                     for _, _, v in same:
                         if not isinstance(v.type, FBType) or v.type.pou.standard:
-                            self.warnings.append((src, m.start(1), f"selective pragma on "
+                            self.warnings.append((src, m.start, f"selective pragma on "
                                                   f"'{v.name}', which is not an instance of a "
                                                   "user function block"))
                         self.var_mark[id(v)] = on
@@ -1014,7 +1011,8 @@ def _only_space_between(text, a, b):
     between = text[a:b]
     # the declaration may start with its keyword (FUNCTION_BLOCK, PROGRAM) or
     # sit on the next line; comments and other pragmas may come between
-    between = re.sub(r"\(\*.*?\*\)|//[^\n]*|\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\}", " ", between, flags=re.S)
+    between = re.sub(lexical.COMMENT + "|" + lexical.INLINE_C + "|" + lexical.PRAGMA, " ", between,
+                     flags=re.S)
     return re.fullmatch(r"\s*(?:(?:FUNCTION_BLOCK|PROGRAM|FUNCTION|VAR\w*|RETAIN|"
                         r"NON_RETAIN|CONSTANT)\s+)*", between, re.I) is not None
 

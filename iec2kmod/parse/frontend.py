@@ -23,6 +23,7 @@ from pathlib import Path
 
 from .. import __version__
 from ..diagnostics import Diagnostic, Diagnostics, SourceFile
+from .lexical import SKIP_ALL
 from .stfast import POU_END, body_tokens, statement_cuts
 
 
@@ -105,7 +106,7 @@ def _parse_one(src: SourceFile):
     return unit, diags.items
 
 
-_TOP_END = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\}|"
+_TOP_END = re.compile(SKIP_ALL + "|"
                       r"\b(END_FUNCTION_BLOCK|END_FUNCTION|END_PROGRAM|END_TYPE|"
                       r"END_CONFIGURATION)\b", re.S | re.I)
 

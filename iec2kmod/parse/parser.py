@@ -11,12 +11,13 @@ from functools import lru_cache
 from pathlib import Path
 
 from arpeggio import EndOfFile, Terminal
-from textx import metamodel_from_file
+from textx import metamodel_from_file, metamodel_from_str
 from textx.const import MULT_ASSIGN_ERROR
 from textx.exceptions import TextXSyntaxError, TextXSemanticError
 
 from .. import ast
 from ..diagnostics import Diagnostics, SourceFile
+from .lexical import pragmas
 from .literals import LiteralError, classify
 
 # Arpeggio descends about 16 Python frames per parenthesis, 28 per nested
@@ -507,25 +508,22 @@ def _model(src: SourceFile, reference: bool):
         return build()
 
 
-_PRAGMA_SCAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|(\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\})",
-                          re.S)
-
-
-# {verify NAME: EXPR} and {assume: EXPR}: read by `iec2kmod verify` (iec2kmod/verify/props.py)
-_VERIFY_PRAGMA = re.compile(r"\{\s*(verify|assume)\b", re.I)
-
-
 def _warn_pragmas(src: SourceFile, diags: Diagnostics) -> None:
-    if "{" not in src.text:
-        return
-    for m in _PRAGMA_SCAN.finditer(src.text):
-        if m.group(1) and not re.match(r"\{\s*(selective|watchdog)\b", m.group(1), re.I) and \
-                not _VERIFY_PRAGMA.match(m.group(1)):
-            # {selective ...} is read by iec2kmod/codegen/selective.py
-            diags.warning(src, m.start(1), "pragma ignored")
+    """A warning at every pragma no pass reads (see lexical.PRAGMAS)."""
+    for p in pragmas(src.text):
+        if p.kind is None:
+            diags.warning(src, p.start, "pragma ignored")
 
 
-def _describe_expected(err) -> str:
+def _syntax_message(err, text: str, offset: int, end: str = "end of file") -> str:
+    """'expected ..., found ...' of a syntax error at offset of text."""
+    what = _describe_expected(err, end)
+    token = re.match(r"\w+|\S", text[offset:])
+    what += f", found '{token.group(0)}'" if token else f", found {end}"
+    return what + _unsupported_hint(text, offset)
+
+
+def _describe_expected(err, end: str = "end of file") -> str:
     rules = getattr(err, "expected_rules", None) or []
     names = []
     for r in rules:
@@ -535,6 +533,8 @@ def _describe_expected(err) -> str:
             label = f"'{to_match}'"
         elif name in ("Comment", "KEYWORD_FUNCTION") or name in FAST_PATHS:
             continue
+        elif name == "EOF":
+            label = end
         elif name in _TOKEN_NAMES:
             label = _TOKEN_NAMES[name]
         elif name:
@@ -560,7 +560,6 @@ _TOKEN_NAMES = {
     "BINARY_OP": "operator", "UNARY_OP": "unary operator",
     "IL_OP": "IL operator", "IL_CALL_OP": "CAL", "EOL": "end of line",
     "IL_SIGNED_NUMBER": "number",
-    "EOF": "end of file",
 }
 
 
@@ -603,10 +602,7 @@ def _parse_source(src: SourceFile, diags: Diagnostics, reference: bool):
         if spec is not None:
             diags.error(src, *spec)
             return None
-        what = _describe_expected(err)
-        token = re.match(r"\w+|\S", src.text[offset:])
-        what += f", found '{token.group(0)}'" if token else ", found end of file"
-        diags.error(src, offset, what + _unsupported_hint(src.text, offset))
+        diags.error(src, offset, _syntax_message(err, src.text, offset))
         return None
     except TextXSemanticError as err:
         diags.error(src, None, str(err.message), line=err.line or 1, col=err.col or 1)
@@ -746,6 +742,106 @@ def _deepest_nesting(text: str) -> int:
         elif ch in ")]":
             depth -= 1
     return where
+
+
+# --------------------------------------------------------------------------
+# One expression on its own: verify properties and assumptions, and paths
+# like sim --watch's.  The grammar's Expression rule is the root of a second
+# metamodel made from the same grammar (same tokens, same object
+# processors), so positions are those of the expression's own text.
+
+_EXPRESSION_ROOT = "ExpressionText:\n    value=Expression\n;\n\n"
+
+
+@lru_cache(maxsize=1)
+def expression_metamodel():
+    mm = metamodel_from_str(_EXPRESSION_ROOT + GRAMMAR.read_text(), ignore_case=True,
+                            autokwd=True, memoization=False, skipws=True)
+    mm.register_obj_processors(metamodel()._obj_processors)
+    return mm
+
+
+def parse_expression(text: str, origin: tuple[SourceFile, int] | None = None,
+                     diags: Diagnostics | None = None, what: str = "expression"):
+    """The AST of the ST expression ``text``, or None after an error.
+
+    ``origin`` is (src, offset): where text stands in a source file; the
+    positions of the AST and of the diagnostics (into *diags*) are then
+    those of src, else those of text itself.  *what* names the expression
+    in messages ("property": "in a property: expected ...")."""
+    src, base = origin if origin is not None else (SourceFile("<expression>", text), 0)
+    own = SourceFile(src.path, text)
+    local = Diagnostics()
+    mm = expression_metamodel()
+    saved_src, saved_diags = _ctx.src, _ctx.diags
+    _ctx.src, _ctx.diags = own, local
+    if sys.getrecursionlimit() < RECURSION_LIMIT:
+        sys.setrecursionlimit(RECURSION_LIMIT)
+    expr = None
+    try:
+        try:
+            expr = mm.model_from_str(text).value
+        except TextXSyntaxError:
+            # the error of the grammar without its fast-path tokens (see
+            # FAST_PATHS), as parse_source reports it
+            rules = [mm[name]._tx_peg_rule for name in FAST_PATHS]
+            saved = [r.regex for r in rules]
+            for r in rules:
+                r.regex = _NEVER
+            try:
+                mm.model_from_str(text)
+            except TextXSyntaxError as err:
+                offset = min(own.offset(err.line or 1, err.col or 1), len(text))
+                local.error(own, offset, _syntax_message(err, text, offset,
+                                                         f"end of {what}"))
+            finally:
+                for r, regex in zip(rules, saved):
+                    r.regex = regex
+    except TextXSemanticError as err:
+        local.error(own, None, str(err.message), line=err.line or 1, col=err.col or 1)
+    except RecursionError:
+        local.error(own, _deepest_nesting(text), "nested too deeply for the parser "
+                                                 "(simplify this expression)")
+    finally:
+        _ctx.src, _ctx.diags = saved_src, saved_diags
+    if local.errors or expr is None:
+        if diags is not None:
+            for e in local.errors or [None]:
+                if e is None:
+                    diags.error(src, base, f"a {what} must be one expression")
+                    continue
+                off = min(max(own.offset(e.line, e.col), 0), len(text))
+                diags.error(src, base + off, f"in a {what}: {e.message}")
+        return None
+    if base:
+        shift_positions(expr, base)
+    return expr
+
+
+def shift_positions(e, d: int) -> None:
+    """Moves the positions of expression e (and its operands) by d."""
+    if e is None:
+        return
+    if isinstance(e, ast.Expr) and e.pos is not None:
+        e.pos += d
+    if isinstance(e, ast.BinOp):
+        shift_positions(e.left, d)
+        shift_positions(e.right, d)
+    elif isinstance(e, ast.UnOp):
+        shift_positions(e.operand, d)
+    elif isinstance(e, ast.Ref):
+        acc = []
+        for k, val, pos in e.accessors:
+            if k == "index":
+                for x in val:
+                    shift_positions(x, d)
+            acc.append((k, val, pos + d if pos is not None else pos))
+        e.accessors = acc
+    elif isinstance(e, ast.Call):
+        for a in e.args:
+            if a.pos is not None:
+                a.pos += d
+            shift_positions(a.value, d)
 
 
 def parse_file(path: str, diags: Diagnostics):

@@ -44,12 +44,13 @@ from __future__ import annotations
 import re
 
 from .. import ast
+from .lexical import SKIP_ALL
 from .literals import LiteralError, classify
 
 # tokens of an ST body that matter for cutting it between statements;
 # comments, strings and pragmas are skipped whole
 BODY_TOKENS = re.compile(
-    r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\}|"
+    SKIP_ALL + "|"
     r"(;)|\b(IF|CASE|FOR|WHILE|REPEAT|END_IF|END_CASE|END_FOR|END_WHILE|END_REPEAT|"
     r"END_VAR|VAR\w*|PROGRAM|FUNCTION_BLOCK|FUNCTION|END_PROGRAM|END_FUNCTION_BLOCK|"
     r"END_FUNCTION|TYPE|END_TYPE|CONFIGURATION|END_CONFIGURATION|ACTION|METHOD|USING)\b",

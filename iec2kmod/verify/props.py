@@ -28,16 +28,15 @@ from ..checks.declare import Declarer
 from ..checks.symbols import POUInfo, Var
 from ..checks.types import BOOL, ERROR, EnumT, ErrorT, FBType, StructT
 from ..diagnostics import Diagnostics, SourceFile
+from ..parse import lexical
+from ..parse.parser import parse_expression
 
-PRAGMA = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
-                    r"(\{\s*(verify|assume)\b\s*([A-Za-z_][A-Za-z0-9_]*)?\s*:([^}]*)\})",
-                    re.S | re.I)
-POU_SPAN = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"
-                      r"\{\{(?:[^}]|\}(?!\}))*\}\}|\{[^}]*\}|\b(END_PROGRAM|END_FUNCTION_BLOCK|END_FUNCTION)\b|"
-                      r"\b(PROGRAM|FUNCTION_BLOCK|FUNCTION)\s+([A-Za-z_][A-Za-z0-9_]*)",
+# the text after {verify / {assume: an optional name, a colon, the expression
+_PROP_BODY = re.compile(r"\s*(" + lexical.NAME + r")?\s*:(.*)\Z", re.S)
+POU_SPAN = re.compile(lexical.SKIP_ALL + "|"
+                      r"\b(END_PROGRAM|END_FUNCTION_BLOCK|END_FUNCTION)\b|"
+                      r"\b(PROGRAM|FUNCTION_BLOCK|FUNCTION)\s+(" + lexical.NAME + ")",
                       re.S | re.I)
-
-HEADER = "FUNCTION F__ : BOOL F__ := "
 
 
 @dataclass
@@ -62,28 +61,31 @@ def scan_pragmas(project) -> tuple[list, list]:
         seen.add(id(src))
         spans = _pou_spans(src.text)
         n = 0
-        for m in PRAGMA.finditer(src.text):
-            if not m.group(1):
+        for p in lexical.pragmas(src.text):
+            if p.kind not in ("verify", "assume"):
                 continue
-            kind = m.group(2).lower()
-            start = m.start(4)
-            text = m.group(4)
+            m = _PROP_BODY.match(p.body)
+            if not m:
+                continue     # no colon: not a property (as before the registry)
+            kind = p.kind
+            start = p.body_start + m.start(2)
+            text = m.group(2)
             program = None
             inside = None
             for kw, name, a, b in spans:
-                if a <= m.start(1) < b:
+                if a <= p.start < b:
                     inside = (kw, name)
             if inside is not None:
                 if inside[0] == "PROGRAM":
                     program = inside[1].upper()
                 else:
-                    bad.append((src, m.start(1), f"a {{{kind}}} pragma inside a "
+                    bad.append((src, p.start, f"a {{{kind}}} pragma inside a "
                                 f"{inside[0].replace('_', ' ').lower()} (write it in a "
                                 "PROGRAM or in the configuration)"))
                     continue
             n += 1
-            line, _ = src.linecol(m.start(1))
-            name = m.group(3) or f"{src.path.rsplit('/', 1)[-1]}:{line}"
+            line, _ = src.linecol(p.start)
+            name = m.group(1) or f"{src.path.rsplit('/', 1)[-1]}:{line}"
             props.append(Prop("property" if kind == "verify" else "assume", name, text, src,
                               start, program))
     return props, bad
@@ -106,49 +108,7 @@ def _pou_spans(text):
 def parse_expr(text: str, src: SourceFile, start: int, diags: Diagnostics):
     """The expression AST of ``text`` (found at offset ``start`` of src),
     its positions those of src; None after a syntax error (in diags)."""
-    from ..parse.parser import parse_source
-    synth = SourceFile(src.path, HEADER + text + "\n;\nEND_FUNCTION\n")
-    d = Diagnostics()
-    unit = parse_source(synth, d)
-    delta = start - len(HEADER)
-    if unit is None or d.errors or len(unit.pous) != 1 or len(unit.pous[0].body) != 1 or \
-            not isinstance(unit.pous[0].body[0], ast.Assign):
-        for e in d.errors or [None]:
-            if e is None:
-                diags.error(src, start, "a property must be one expression")
-                continue
-            off = synth.offset(e.line, e.col) + delta
-            off = min(max(off, start), start + len(text))
-            diags.error(src, off, f"in a property: {e.message}")
-        return None
-    e = unit.pous[0].body[0].value
-    _shift(e, delta)
-    return e
-
-
-def _shift(e, d):
-    if e is None:
-        return
-    if isinstance(e, ast.Expr) and e.pos is not None:
-        e.pos += d
-    if isinstance(e, ast.BinOp):
-        _shift(e.left, d)
-        _shift(e.right, d)
-    elif isinstance(e, ast.UnOp):
-        _shift(e.operand, d)
-    elif isinstance(e, ast.Ref):
-        acc = []
-        for k, val, pos in e.accessors:
-            if k == "index":
-                for x in val:
-                    _shift(x, d)
-            acc.append((k, val, pos + d if pos is not None else pos))
-        e.accessors = acc
-    elif isinstance(e, ast.Call):
-        for a in e.args:
-            if a.pos is not None:
-                a.pos += d
-            _shift(a.value, d)
+    return parse_expression(text, (src, start), diags, "property")
 
 
 # ---------------------------------------------------------- checking
