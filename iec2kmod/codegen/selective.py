@@ -174,7 +174,7 @@ from ..checks.types import ArrayT, FBType, StructT, concrete
 from . import analysis
 from . import cnames as N
 
-TIMERS = {"TON", "TOF", "TP"}
+TIMERS = {"TON", "TOF", "TP", "RTC"}
 MODES = ("all", "marked")
 
 _PRAGMA = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\"|\(\*.*?\*\)|//[^\n]*|"

@@ -53,7 +53,12 @@ STD_FB_OUTPUTS = {("TON", "Q"): "BOOL", ("TON", "ET"): "TIME", ("TOF", "Q"): "BO
                   ("CTU", "Q"): "BOOL", ("CTU", "CV"): "INT", ("CTD", "Q"): "BOOL",
                   ("CTD", "CV"): "INT", ("CTUD", "QU"): "BOOL", ("CTUD", "QD"): "BOOL",
                   ("CTUD", "CV"): "INT", ("R_TRIG", "Q"): "BOOL", ("F_TRIG", "Q"): "BOOL",
-                  ("SR", "Q1"): "BOOL", ("RS", "Q1"): "BOOL"}
+                  ("SR", "Q1"): "BOOL", ("RS", "Q1"): "BOOL",
+                  ("RTC", "Q"): "BOOL", ("RTC", "CDT"): "DT"}
+# the typed date and time functions (ed.2 table 30) by their result
+DATE_ARITH = {"SUB_DT_DT": "TIME", "SUB_DATE_DATE": "TIME", "SUB_TOD_TOD": "TIME",
+              "ADD_DT_TIME": "DT", "SUB_DT_TIME": "DT", "ADD_TOD_TIME": "TOD",
+              "SUB_TOD_TIME": "TOD", "CONCAT_DATE_TOD": "DT"}
 STATEMENTS = ("block", "outVariable", "inOutVariable", "coil", "jump", "return")
 KNOWN = STATEMENTS + ("inVariable", "connector", "continuation", "label", "comment",
                       "leftPowerRail", "rightPowerRail", "contact", "addData",
@@ -297,6 +302,18 @@ class Network:
             return m.group(1) or m.group(2)
         if name in self.gen.fn_returns:
             return self.gen.fn_returns[name]
+        if name in DATE_ARITH:
+            return DATE_ARITH[name]
+        if name == "SUB":
+            # the difference of two dates or times of day is a duration
+            ins = []
+            for v in self.pins(blk, "inputVariables"):
+                if v.get("formalParameter") in ("IN1", "IN2"):
+                    cpin = _kid(v, "connectionPointIn")
+                    cs = _kids(cpin, "connection") if cpin is not None else []
+                    ins.append(self.infer_conn(cs[0], seen) if cs else None)
+            if len(ins) == 2 and ins[0] == ins[1] and ins[0] in ("DT", "DATE", "TOD"):
+                return "TIME"
         skip = {"SEL": ("G",), "MUX": ("K",), "LIMIT": (), "SHL": ("N",), "SHR": ("N",),
                 "ROL": ("N",), "ROR": ("N",)}.get(name, ())
         if name in ("LEN", "FIND"):
