@@ -32,10 +32,14 @@ output pin, formalParameter).  The translation:
   * EN of a function block instance: the call under ``IF en``; its ENO is
     EN.  EN of a function call is refused (its output without execution is
     not defined by the standard).
-  * Labels cut the network into segments by their vertical position; a
-    jump goes forward to a label (a backward jump is refused); statements
-    after a jump run under a guard variable; return: ``IF cond THEN
-    RETURN``.
+  * Labels cut the network into segments by their vertical position;
+    statements after a jump run under a guard variable (``_JMP_``, the
+    label's number while a jump is pending) until its label; return: ``IF
+    cond THEN RETURN``.  A jump to a label above it (backward) makes the
+    body a ``REPEAT ... UNTIL _JMP_ = 0`` loop: the pass after the jump
+    skips the rest, the next one skips down to the label and resumes there
+    (ed.2 4.1.3: control goes to the label), so a loop drawn with a jump
+    runs under the execution model's loop budget like an ST loop.
 """
 
 from __future__ import annotations
@@ -598,6 +602,7 @@ class Network:
                  (_local(e) != "block" or e.get("instanceName") or
                   e.get("localId") in self.temps)]
         labels = sorted((e for e in _kids(self.body) if _local(e) == "label"), key=_pos)
+        self.backward = False
         self.label_index = {}
         for i, lab in enumerate(labels):
             self.label_index[lab.get("label")] = i + 1
@@ -611,8 +616,7 @@ class Network:
                 raise XmlRefusal(j, f"{self.label(j)} in {self.ctx}: no label "
                                     f"'{j.get('label')}' in the body")
             if target <= segment(j):
-                raise XmlRefusal(j, f"{self.label(j)} in {self.ctx} jumps backward to label "
-                                    f"'{j.get('label')}': only forward jumps are supported")
+                self.backward = True
         ids = [int(e.get("executionOrderId") or 0) for e in stmts]
         if stmts and all(i > 0 for i in ids):
             ordered = [e for _, e in sorted(zip(ids, stmts), key=lambda p: p[0])]
@@ -673,4 +677,12 @@ class Network:
                 out.append(("END_IF;", e, self.label(e)))
             else:
                 out += [(s_, el, self.label(el)) for s_, el in lines]
+        if self.backward:
+            # a jump to a label above it: the body is the pass of a loop
+            # that runs again from the top while a jump is pending (the
+            # statements are skipped down to the label), so it runs under
+            # the task's loop budget like any ST loop
+            body = [("    " + s_, el, c) for s_, el, c in out[1:]]
+            out = [out[0], ("REPEAT", self.body, None)] + body + \
+                [("UNTIL _JMP_ = 0", self.body, None), ("END_REPEAT;", self.body, None)]
         return out
