@@ -106,6 +106,7 @@ class Network:
         self.done_trig = {}              # key -> trig instance name
         self.implied = set()             # blocks with EN known to run (enabled_value)
         self.temps = {}                  # localId -> variable holding a function's output
+        self.backward = False            # a jump to a label above it (order() tells)
         for e in _kids(body):
             k = _local(e)
             if sfc and k in SFC_KINDS:
