@@ -14,7 +14,7 @@ from ..checks.types import ArrayT, FBType, StructT, concrete
 CLOCK_FBS = {"RTC"}
 
 
-def clock_user(project):
+def clock_user(project, who="verify"):
     """(src, pos, message) of the first variable whose type holds a clock FB
     (RTC, in an array or a structure too), or None: verify refuses them."""
     def holds(t, seen):
@@ -45,7 +45,7 @@ def clock_user(project):
     for scope in scopes:
         for v in scope:
             if (n := holds(v.type, set())) is not None:
-                return v.src, v.pos, (f"verify: '{v.name}' holds an {n} instance (it reads the real-time "
-                                      "clock, the wall clock in the kernel): verify does not "
-                                      "model the date and time of day")
+                return v.src, v.pos, (f"{who}: '{v.name}' holds an {n} instance (it reads "
+                                      "the real-time clock, the wall clock in the kernel): "
+                                      f"{who} does not model the date and time of day")
     return None
