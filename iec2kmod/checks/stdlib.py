@@ -519,6 +519,10 @@ FUNCTION_BLOCKS = {
     "TP": _fb("TP", [("IN", BOOL), ("PT", TIME)], [("Q", BOOL), ("ET", TIME)]),
     "TON": _fb("TON", [("IN", BOOL), ("PT", TIME)], [("Q", BOOL), ("ET", TIME)]),
     "TOF": _fb("TOF", [("IN", BOOL), ("PT", TIME)], [("Q", BOOL), ("ET", TIME)]),
+    # ed.1 table 35 (MatIEC's definition): Q is IN; a rising IN sets the
+    # clock to PDT, CDT then advances with it; IN FALSE: CDT is the clock
+    "RTC": _fb("RTC", [("IN", BOOL), ("PDT", ELEMENTARY["DT"])],
+               [("Q", BOOL), ("CDT", ELEMENTARY["DT"])]),
     **_counters(),
 }
 

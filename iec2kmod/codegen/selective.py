@@ -175,7 +175,7 @@ from ..parse import lexical
 from . import analysis
 from . import cnames as N
 
-TIMERS = {"TON", "TOF", "TP"}
+TIMERS = {"TON", "TOF", "TP", "RTC"}
 MODES = ("all", "marked")
 
 

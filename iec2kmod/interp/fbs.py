@@ -142,6 +142,31 @@ def tp(v, rt):
     _timer_out(v, rt, st, pt)
 
 
+# The clock RTC reads in the interpreter (and the simulator): the simulated
+# time from the epoch DT#1970-01-01-00:00:00 (DT 0), so runs are
+# deterministic; the kernel reads the wall clock at the cycle's release.
+RTC_EPOCH = 0
+
+
+def _s64(x):
+    return (x + (1 << 63)) % (1 << 64) - (1 << 63)
+
+
+def rtc(v, rt):
+    """RTC as MatIEC defines it: OFFSET := PDT - clock on a rising IN,
+    CDT := clock + OFFSET while IN, CDT := clock otherwise; Q := IN."""
+    now = _s64(RTC_EPOCH + rt.now)
+    inp = bool(v["IN"])
+    if inp:
+        if not v["$LAST"]:
+            v["$OFS"] = _s64(v["PDT"] - now)
+        v["CDT"] = _s64(now + v["$OFS"])
+    else:
+        v["CDT"] = now
+    v["Q"] = inp
+    v["$LAST"] = inp
+
+
 def body_of(pou):
     """(Python body, hidden state {key: initial value}) of a standard FB."""
     name = pou.name.upper()
@@ -155,6 +180,8 @@ def body_of(pou):
         return f_trig, {"$M": True}
     if name in ("TON", "TOF", "TP"):
         return {"TON": ton, "TOF": tof, "TP": tp}[name], {"$S": INIT, "$T0": 0, "$LAST": False}
+    if name == "RTC":
+        return rtc, {"$LAST": False, "$OFS": 0}
     for kind in ("CTUD", "CTU", "CTD"):
         if name.startswith(kind):
             t = pou.vars["CV"].type

@@ -32,10 +32,14 @@ output pin, formalParameter).  The translation:
   * EN of a function block instance: the call under ``IF en``; its ENO is
     EN.  EN of a function call is refused (its output without execution is
     not defined by the standard).
-  * Labels cut the network into segments by their vertical position; a
-    jump goes forward to a label (a backward jump is refused); statements
-    after a jump run under a guard variable; return: ``IF cond THEN
-    RETURN``.
+  * Labels cut the network into segments by their vertical position;
+    statements after a jump run under a guard variable (``_JMP_``, the
+    label's number while a jump is pending) until its label; return: ``IF
+    cond THEN RETURN``.  A jump to a label above it (backward) makes the
+    body a ``REPEAT ... UNTIL _JMP_ = 0`` loop: the pass after the jump
+    skips the rest, the next one skips down to the label and resumes there
+    (ed.2 4.1.3: control goes to the label), so a loop drawn with a jump
+    runs under the execution model's loop budget like an ST loop.
 """
 
 from __future__ import annotations
@@ -53,7 +57,12 @@ STD_FB_OUTPUTS = {("TON", "Q"): "BOOL", ("TON", "ET"): "TIME", ("TOF", "Q"): "BO
                   ("CTU", "Q"): "BOOL", ("CTU", "CV"): "INT", ("CTD", "Q"): "BOOL",
                   ("CTD", "CV"): "INT", ("CTUD", "QU"): "BOOL", ("CTUD", "QD"): "BOOL",
                   ("CTUD", "CV"): "INT", ("R_TRIG", "Q"): "BOOL", ("F_TRIG", "Q"): "BOOL",
-                  ("SR", "Q1"): "BOOL", ("RS", "Q1"): "BOOL"}
+                  ("SR", "Q1"): "BOOL", ("RS", "Q1"): "BOOL",
+                  ("RTC", "Q"): "BOOL", ("RTC", "CDT"): "DT"}
+# the typed date and time functions (ed.2 table 30) by their result
+DATE_ARITH = {"SUB_DT_DT": "TIME", "SUB_DATE_DATE": "TIME", "SUB_TOD_TOD": "TIME",
+              "ADD_DT_TIME": "DT", "SUB_DT_TIME": "DT", "ADD_TOD_TIME": "TOD",
+              "SUB_TOD_TIME": "TOD", "CONCAT_DATE_TOD": "DT"}
 STATEMENTS = ("block", "outVariable", "inOutVariable", "coil", "jump", "return")
 KNOWN = STATEMENTS + ("inVariable", "connector", "continuation", "label", "comment",
                       "leftPowerRail", "rightPowerRail", "contact", "addData",
@@ -97,6 +106,7 @@ class Network:
         self.done_trig = {}              # key -> trig instance name
         self.implied = set()             # blocks with EN known to run (enabled_value)
         self.temps = {}                  # localId -> variable holding a function's output
+        self.backward = False            # a jump to a label above it (order() tells)
         for e in _kids(body):
             k = _local(e)
             if sfc and k in SFC_KINDS:
@@ -297,6 +307,18 @@ class Network:
             return m.group(1) or m.group(2)
         if name in self.gen.fn_returns:
             return self.gen.fn_returns[name]
+        if name in DATE_ARITH:
+            return DATE_ARITH[name]
+        if name == "SUB":
+            # the difference of two dates or times of day is a duration
+            ins = []
+            for v in self.pins(blk, "inputVariables"):
+                if v.get("formalParameter") in ("IN1", "IN2"):
+                    cpin = _kid(v, "connectionPointIn")
+                    cs = _kids(cpin, "connection") if cpin is not None else []
+                    ins.append(self.infer_conn(cs[0], seen) if cs else None)
+            if len(ins) == 2 and ins[0] == ins[1] and ins[0] in ("DT", "DATE", "TOD"):
+                return "TIME"
         skip = {"SEL": ("G",), "MUX": ("K",), "LIMIT": (), "SHL": ("N",), "SHR": ("N",),
                 "ROL": ("N",), "ROR": ("N",)}.get(name, ())
         if name in ("LEN", "FIND"):
@@ -581,6 +603,7 @@ class Network:
                  (_local(e) != "block" or e.get("instanceName") or
                   e.get("localId") in self.temps)]
         labels = sorted((e for e in _kids(self.body) if _local(e) == "label"), key=_pos)
+        self.backward = False
         self.label_index = {}
         for i, lab in enumerate(labels):
             self.label_index[lab.get("label")] = i + 1
@@ -594,8 +617,7 @@ class Network:
                 raise XmlRefusal(j, f"{self.label(j)} in {self.ctx}: no label "
                                     f"'{j.get('label')}' in the body")
             if target <= segment(j):
-                raise XmlRefusal(j, f"{self.label(j)} in {self.ctx} jumps backward to label "
-                                    f"'{j.get('label')}': only forward jumps are supported")
+                self.backward = True
         ids = [int(e.get("executionOrderId") or 0) for e in stmts]
         if stmts and all(i > 0 for i in ids):
             ordered = [e for _, e in sorted(zip(ids, stmts), key=lambda p: p[0])]
@@ -656,4 +678,12 @@ class Network:
                 out.append(("END_IF;", e, self.label(e)))
             else:
                 out += [(s_, el, self.label(el)) for s_, el in lines]
+        if self.backward:
+            # a jump to a label above it: the body is the pass of a loop
+            # that runs again from the top while a jump is pending (the
+            # statements are skipped down to the label), so it runs under
+            # the task's loop budget like any ST loop
+            body = [("    " + s_, el, c) for s_, el, c in out[1:]]
+            out = [out[0], ("REPEAT", self.body, None)] + body + \
+                [("UNTIL _JMP_ = 0", self.body, None), ("END_REPEAT;", self.body, None)]
         return out

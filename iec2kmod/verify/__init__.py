@@ -117,6 +117,7 @@ import z3
 
 from ..checks.types import BOOL as _BOOL, StringT, concrete
 from ..diagnostics import Diagnostics
+from .clockfb import clock_user
 from .encode import FALSE, TRUE, Encoder, Frame, Refuse, const_of, land
 from .engine import System, check
 from .model import SymbolicMachine
@@ -386,6 +387,8 @@ def verify(project, cli_props=(), cli_assumes=(), depth=20, instance=None, diags
     by then are unknown (timeout)."""
     diags = diags if diags is not None else Diagnostics()
     t0 = time.perf_counter()
+    if (clock := clock_user(project)) is not None:
+        raise Refuse(*clock)
     out = build(project, list(cli_props), list(cli_assumes), instance, diags, unroll)
     if out is None:
         return None

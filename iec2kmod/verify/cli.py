@@ -204,12 +204,15 @@ def run_export(args) -> int:
     from ..cli import front_end, print_diagnostics
     from ..diagnostics import Diagnostics
     from . import Refuse, UsageError
+    from .clockfb import clock_user
     from .uppaal import export
     project = front_end(args.files)
     if project is None:
         return EXIT_SOURCE
     diags = Diagnostics()
     try:
+        if (clock := clock_user(project, "export")) is not None:
+            raise Refuse(*clock)
         text, warnings = export(project, args.property, args.instance)
     except UsageError as exc:
         print(f"iec2kmod: error: {exc}", file=sys.stderr)

@@ -70,6 +70,7 @@ from ..interp.machine import Machine
 from ..interp.model import Instance
 from ..interp.values import base_of, int_range
 from ..traces import write_inputs
+from .clockfb import clock_user
 
 DEFAULT_MAX_STATES = 200_000
 DEFAULT_MAX_INPUTS = 4096
@@ -446,6 +447,8 @@ class Explorer:
         if not periods:
             raise VerifyError(cfg.src, cfg.node.pos, "verify: a configuration without a "
                               "periodic task (the step of time) cannot be explored")
+        if (clock := clock_user(project)) is not None:
+            raise VerifyError(*clock)
         for pou in project.pous.values():
             if getattr(pou, "sfc", None) is not None and pou.node is not None and \
                     getattr(pou.node, "language", "") == "SFC":

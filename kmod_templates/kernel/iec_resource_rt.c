@@ -38,6 +38,7 @@
 #include <linux/sched/types.h>
 #include <linux/sysfs.h>
 #include <linux/string.h>
+#include <linux/timekeeping.h>
 #include <uapi/linux/sched/types.h>
 
 #include "iec_kmod.h"
@@ -159,6 +160,8 @@ static void iec_task_cycle(struct iec_task *t, ktime_t release)
 	ktime_t start = ktime_get();
 
 	iec_ctx_cycle_begin(&t->ctx, ktime_to_ns(release));
+	/* RTC's clock: the wall clock at the release, not at the wake-up */
+	t->ctx.wall_ns = ktime_to_ns(ktime_mono_to_real(release));
 	if (t->watchdog_ns)
 		hrtimer_start(&t->watchdog, ns_to_ktime(t->watchdog_ns),
 			      HRTIMER_MODE_REL_HARD);

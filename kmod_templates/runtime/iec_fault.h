@@ -69,6 +69,13 @@ enum iec_fault_code {
 
 struct iec_ctx {
 	iec_s64 now_ns;			/* time the task cycle started */
+	/*
+	 * the date and time (DT, ns since 1970-01-01) the cycle started, read
+	 * by RTC: the kernel sets it to the wall clock at the cycle's release
+	 * after iec_ctx_cycle_begin(); elsewhere (the simulator) it is now_ns
+	 * from the epoch DT#1970-01-01-00:00:00, so runs are deterministic
+	 */
+	iec_s64 wall_ns;
 	iec_u32 loop_budget;		/* iterations left in this cycle */
 	iec_u32 loop_budget_cycle;	/* budget granted at cycle start */
 	/*
@@ -108,6 +115,7 @@ static inline void iec_ctx_init(struct iec_ctx *ctx, iec_u32 loop_budget)
 static inline void iec_ctx_cycle_begin(struct iec_ctx *ctx, iec_s64 now_ns)
 {
 	ctx->now_ns = now_ns;
+	ctx->wall_ns = now_ns;
 	ctx->sel_cycle++;
 	ctx->loop_budget = ctx->loop_budget_cycle;
 	ctx->budget_fault = IEC_FAULT_LOOP;

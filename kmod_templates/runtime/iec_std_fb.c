@@ -210,6 +210,21 @@ IEC__DEF_TIMER(tp_ltime, iec__tp)
 IEC__DEF_TIMER(ton_ltime, iec__ton)
 IEC__DEF_TIMER(tof_ltime, iec__tof)
 
+void iec_fb_rtc(struct iec_fb_rtc *self, struct iec_ctx *ctx)
+{
+	iec_u64 now = (iec_u64)ctx->wall_ns;
+
+	if (self->in) {
+		if (!self->prev_in)
+			self->offset = (iec_s64)((iec_u64)self->pdt - now);
+		self->cdt = (iec_dt)(now + (iec_u64)self->offset);
+	} else {
+		self->cdt = (iec_dt)now;
+	}
+	self->q = !!self->in;
+	self->prev_in = !!self->in;
+}
+
 static void iec__action_timer(struct iec_fb_ton *tmr, iec_bool in, iec_time pt,
 			      struct iec_ctx *ctx)
 {

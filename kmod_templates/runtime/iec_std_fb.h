@@ -47,6 +47,12 @@
  *        ET = 0 once IN is FALSE (Init; also on the call the pulse ends if
  *        IN is FALSE then).  PT = 0 gives no pulse.
  * IN pulses shorter than a cycle are only seen if a call sees them.
+ *   RTC  (ed.1 table 35, as MatIEC defines it) Q = IN.  A rising IN sets
+ *        the clock: offset = PDT - clock; while IN stays TRUE, CDT = clock
+ *        + offset (PDT changed meanwhile is not taken); IN FALSE: CDT =
+ *        clock.  The clock is ctx->wall_ns: the wall clock at the cycle's
+ *        release in the kernel, the simulated time from DT#1970-01-01 in
+ *        the simulator.  DT arithmetic wraps (unsigned 64-bit).
  */
 #ifndef IEC_STD_FB_H
 #define IEC_STD_FB_H
@@ -159,6 +165,22 @@ IEC__DECL_TIMER(tof, iec_time)
 IEC__DECL_TIMER(tp_ltime, iec_ltime)
 IEC__DECL_TIMER(ton_ltime, iec_ltime)
 IEC__DECL_TIMER(tof_ltime, iec_ltime)
+
+struct iec_fb_rtc {
+	iec_bool in;
+	iec_dt pdt;
+	iec_bool q;
+	iec_dt cdt;
+	iec_bool prev_in;	/* IN of the previous call */
+	iec_s64 offset;		/* PDT - clock at the rising IN */
+};
+
+void iec_fb_rtc(struct iec_fb_rtc *self, struct iec_ctx *ctx);
+
+static inline void iec_fb_rtc_init(struct iec_fb_rtc *self)
+{
+	iec_memset(self, 0, sizeof(*self));
+}
 
 /*
  * ACTION_CONTROL (IEC 61131-3 ed.2 2.6.4.5, figure 14, the form without

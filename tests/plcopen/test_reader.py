@@ -200,3 +200,27 @@ def test_verify_takes_an_ld_project(tmp_path, capsys):
     assert main(["verify", str(ld), "--instance", "res.inst", "-p", "NOT Motor", "--depth", "6",
                  "--cex-dir", str(tmp_path)]) == 3
     assert "violated" in capsys.readouterr().out
+
+
+# the C engine only: the interpreters take 12 s for the million passes (they
+# stop at the same pass, checked by hand: benchmarks are the place for more)
+@pytest.mark.parametrize("engine", ["c"])
+def test_backward_jump_loop_runs_under_the_loop_budget(tmp_path, capsys, engine):
+    # cases/fbd_loop.xml with a jump that never stops (GE(i, -32768)): the
+    # loop drawn with a backward jump is stopped by the loop budget (1e6
+    # passes, so i = 1000000 mod 65536 = 16960) as an ST loop is, with the
+    # XML's name in the message
+    text = (HERE / "cases" / "fbd_loop.xml").read_text()
+    assert 'typeName="LT"' in text and '<simpleValue value="4"/>' in text
+    p = tmp_path / "runaway.xml"
+    p.write_text(text.replace('typeName="LT"', 'typeName="GE"')
+                 .replace('<simpleValue value="4"/>', '<simpleValue value="-32768"/>'))
+    out = tmp_path / "v.csv"
+    assert main(["sim", str(p), "--cycles", "2", "--engine", engine, "--watch",
+                 "res.inst.i,res.inst.passes", "--csv", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"{p}:" in err and "runtime error: endless loop (loop budget exhausted) in Loop" \
+        in err, err
+    with open(out) as f:
+        rows = list(csv.reader(f))[1:]
+    assert rows[0][1:] == ["16960", "0"], rows

@@ -22,7 +22,7 @@ def wrap64(v):
 
 
 class Ctx(C.Structure):
-    _fields_ = [("now_ns", C.c_int64), ("loop_budget", C.c_uint32),
+    _fields_ = [("now_ns", C.c_int64), ("wall_ns", C.c_int64), ("loop_budget", C.c_uint32),
                 ("loop_budget_cycle", C.c_uint32), ("budget_fault", C.c_int),
                 ("fault", C.c_int), ("fault_pou", C.c_char_p), ("fault_line", C.c_int),
                 ("fault_count", C.c_uint32), ("sel_epoch", C.c_uint32),

@@ -141,3 +141,17 @@ def test_export_refuses_what_it_cannot_model(capsys, tmp_path):
     assert not (tmp_path / "m.xml").exists()
     rc, out, err = export(capsys, ROOT / "examples" / "pid_loop", tmp_path / "p.xml")
     assert rc == 1 and "a second task" in err, err
+
+
+def test_export_refuses_rtc_by_name(capsys, tmp_path):
+    # RTC reads the kernel's wall clock: no automaton models it
+    src = tmp_path / "r.st"
+    src.write_text("PROGRAM P\nVAR c : RTC; x : BOOL; END_VAR\n"
+                   "c(IN := x, PDT := DT#2024-01-01-00:00:00);\nEND_PROGRAM\n"
+                   "CONFIGURATION C RESOURCE R ON CPU0 TASK t(INTERVAL := T#10ms, PRIORITY := 1);"
+                   " PROGRAM p WITH t : P; END_RESOURCE END_CONFIGURATION\n")
+    rc, out, err = export(capsys, src, tmp_path / "r.xml")
+    assert rc == 1, err
+    assert "r.st:2:5: error: export: 'c' holds an RTC instance (it reads the real-time clock" \
+        in err, err
+    assert "Traceback" not in err and not (tmp_path / "r.xml").exists()

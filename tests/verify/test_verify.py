@@ -501,3 +501,32 @@ def test_differential_continue():
     """CONTINUE (ed.3): the encoding skips the rest of the iteration and
     runs the step or the test, as the interpreter does."""
     _check([HERE / "diff" / "continue.st"], 30, [1, 2, 3])
+
+
+@pytest.mark.parametrize("engine", ["z3", "explicit"])
+def test_rtc_is_refused_by_name(tmp_path, capsys, engine):
+    # RTC's CDT is the kernel's wall clock: no engine models it, so the
+    # variable holding one (here inside a user FB) is named, in both engines
+    proj = project(tmp_path, """
+        FUNCTION_BLOCK Stamp
+        VAR_INPUT go : BOOL; END_VAR
+        VAR clk : RTC; END_VAR
+        clk(IN := go, PDT := DT#2024-01-01-00:00:00);
+        END_FUNCTION_BLOCK
+        PROGRAM P
+        VAR s : Stamp; x : BOOL; END_VAR
+        {verify same: s.clk.Q = x}
+        s(go := x);
+        END_PROGRAM
+        CONFIGURATION C
+            RESOURCE R ON CPU0
+                TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+                PROGRAM p WITH t : P;
+            END_RESOURCE
+        END_CONFIGURATION
+    """)
+    rc, out, err = verify(capsys, proj, "--engine", engine)
+    assert rc == 1, err
+    assert "p.st:4:5: error: verify: 'clk' holds an RTC instance (it reads the real-time " \
+           "clock" in err, err
+    assert "Traceback" not in err
