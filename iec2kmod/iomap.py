@@ -30,6 +30,30 @@ rounded and clamped).  An output's safe state (on stop, fault and unload) is
 The boards in BOARDS are described as their drivers report them; the kernel
 module compares each bound subdevice with the device at load (kind, channel
 count, resolution) and refuses the load naming the device when they differ.
+
+Interrupts.  An event task (``TASK t (SINGLE := ack, PRIORITY := 0)``) can
+be woken by a hardware interrupt instead of a rising edge written by a
+program: its SINGLE variable is a located BOOL input, and the I/O map binds
+that address to an interrupt source of a device::
+
+    VAR_GLOBAL ack AT %IX9.0 : BOOL; END_VAR          (the configuration)
+    INTERRUPT %IX9.0 : lpt.ACK IRQ 7                  (the .iomap)
+
+Every interrupt runs each task whose SINGLE is that variable once (an
+interrupt that comes while the task's previous cycle still runs or waits
+gives one more cycle, not one per interrupt).  The cycle's release time,
+which the programs' timers and the task's latency statistics use, is the
+moment the interrupt handler ran.  The variable itself is not written by
+the interrupt (it keeps its value, FALSE unless forced; a write of TRUE
+over FALSE by the manager still wakes the tasks, as for any SINGLE).  The
+sources a board has are in INTERRUPTS; IRQ names the line, which the
+resource module requests at load (a threaded handler: on PREEMPT_RT it
+runs in its irq/N thread, at SCHED_FIFO 50, above every PLC task) and frees
+at unload before its task threads stop.  comedi_parport's ACK (pin 10):
+the driver must be attached without an IRQ (options: the I/O base only),
+since the resource module requests the line itself and sets the control
+register's interrupt enable bit (comedi_parport's control-line writes keep
+it).
 """
 
 from __future__ import annotations
@@ -75,6 +99,13 @@ BOARDS = {
 }
 
 
+# The interrupt sources of a board: name -> what it is.
+INTERRUPTS = {
+    "comedi_parport": {"ACK": "the ACK status line (pin 10), with the control "
+                              "register's interrupt enable set"},
+}
+
+
 @dataclass
 class Device:
     name: str
@@ -103,10 +134,21 @@ class Binding:
 
 
 @dataclass
+class Interrupt:
+    address: str                   # %IX9.0: the SINGLE variable's address
+    device: str
+    source: str                    # ACK
+    irq: int                       # the line the resource module requests
+    tasks: list                    # the resource's tasks it wakes (names)
+    place: str
+
+
+@dataclass
 class ResourceIO:
     resource: str
     devices: dict = field(default_factory=dict)    # upper name -> Device
     bindings: list = field(default_factory=list)
+    interrupts: list = field(default_factory=list)
 
     def manifest(self) -> dict:
         return {
@@ -116,6 +158,8 @@ class ResourceIO:
                           "channel": b.channel, "kind": b.kind, "type": b.type,
                           "scale": b.scale, "range": b.range, "safe": b.safe}
                          for b in self.bindings],
+            "interrupts": [{"address": q.address, "device": q.device, "source": q.source,
+                            "irq": q.irq, "tasks": q.tasks} for q in self.interrupts],
         }
 
 
@@ -232,11 +276,15 @@ class _MapChecker:
                 elif kind == "word" and up == "SUBDEVICE":
                     line.take()
                     self.subdevice(src, n, line, devices)
+                elif kind == "word" and up == "INTERRUPT":
+                    line.take()
+                    self.interrupt(src, n, line, resource)
                 elif kind == "addr":
                     self.binding(src, n, line, resource)
                 else:
-                    raise _Error(col, f"expected RESOURCE, DEVICE, SUBDEVICE or an address "
-                                      f"(%IX0.0 : device.subdevice.channel), found {text!r}")
+                    raise _Error(col, f"expected RESOURCE, DEVICE, SUBDEVICE, INTERRUPT or an "
+                                      f"address (%IX0.0 : device.subdevice.channel), found "
+                                      f"{text!r}")
             except _Error as exc:
                 self.error(src, n, exc.col, exc.message)
 
@@ -323,6 +371,63 @@ class _MapChecker:
         if i in dev.subdevices:
             raise _Error(col, f"subdevice {dev.name}.{i} is already declared")
         dev.subdevices[i] = Subdevice(i, kind, channels, bits, ranges)
+
+    # -----------------------------------------------------------------
+    def interrupt(self, src, n, line, resource):
+        """INTERRUPT %IXa.b : device.SOURCE IRQ n"""
+        _, addr, acol = _expect(line, "addr", "the address of an event task's SINGLE "
+                                              "variable (%IX0.0)")
+        addr = addr.upper()
+        _expect(line, "punct", "':' and device.SOURCE")
+        _, target, tcol = _expect(line, "target", "device.SOURCE (e.g. lpt.ACK)")
+        if not line.keyword("IRQ"):
+            k, text, col = line.peek()
+            raise _Error(col, f"expected IRQ and the interrupt line's number, found "
+                              f"{repr(text) if text else 'the end of the line'}")
+        irq_tok = line.peek()
+        irq = _int(line.take(), "an IRQ number")
+        _end(line)
+        if not 1 <= irq <= 255:
+            raise _Error(irq_tok[2], f"IRQ {irq} is out of range: 1..255")
+        if not addr.startswith("%IX") or addr.endswith("*"):
+            raise _Error(acol, f"{addr}: an interrupt wakes the tasks whose SINGLE is a "
+                               "BOOL input: bind a bit input address (%IX)")
+        info = self.cfg.located.get(addr)
+        if info is None:
+            raise _Error(acol, f"no located variable at {addr}: declare one (name AT {addr} : "
+                               "BOOL) and name it in a TASK's SINGLE")
+        res = next(r for r in self.cfg.resources
+                   if r.name.upper() == resource.resource.upper())
+        tasks = [t.name for t in res.tasks.values()
+                 if t.single is not None and (t.single.location or "").upper() == addr]
+        if not tasks:
+            raise _Error(acol, f"no TASK of resource {resource.resource} has SINGLE := the "
+                               f"variable at {addr}: an interrupt wakes event tasks")
+        first = self.bound.get(addr)
+        if first is not None:
+            raise _Error(acol, f"{addr} is already bound ({first}): one address is bound "
+                               "to one channel or interrupt")
+        dev_name, _, source = target.partition(".")
+        dev = resource.devices.get(dev_name.upper())
+        if dev is None:
+            raise _Error(tcol, f"unknown device '{dev_name}' in resource "
+                               f"{resource.resource}: declare it with DEVICE {dev_name} : "
+                               "comedi ... before its interrupts")
+        scol = tcol + len(dev_name) + 1
+        sources = INTERRUPTS.get(dev.board or "", {})
+        if source.upper() not in sources:
+            have = (f"its interrupt sources are {', '.join(sorted(sources))}" if sources else
+                    "it has no interrupt source the provider knows (boards with one: "
+                    f"{', '.join(sorted(INTERRUPTS))})")
+            raise _Error(scol, f"device '{dev.name}' ({dev.board or 'board not named'}) has no "
+                               f"interrupt source '{source}': {have}")
+        for q in resource.interrupts:
+            if q.device.upper() == dev.name.upper() and q.source == source.upper():
+                raise _Error(tcol, f"{dev.name}.{q.source} already wakes the tasks of "
+                                   f"{q.address} ({q.place})")
+        place = f"{src.path}:{n}:{acol}"
+        self.bound[addr] = place
+        resource.interrupts.append(Interrupt(addr, dev.name, source.upper(), irq, tasks, place))
 
     # -----------------------------------------------------------------
     def binding(self, src, n, line, resource):

@@ -216,6 +216,10 @@ def _resource_source(env, comp, rm):
     by_c = _globals_by_c(plan)
     c_of = _global_c_names(plan)
     io = _io_of(cfg, plan, r)
+    if io:
+        pos = {tp.name.upper(): i for i, tp in enumerate(rm.tasks)}
+        for q in io["irqs"]:
+            q["tasks"] = [pos[n.upper()] for n in q["tasks"]]
     for tp in rm.tasks:
         used: dict[str, tuple] = {}   # global C name -> (read, write)
 
@@ -310,7 +314,7 @@ def _io_of(cfg, plan, r):
     address of a program connection)."""
     from ..compilation import CompileError
     rio = (getattr(cfg, "io", None) or {}).get(r.name.upper())
-    if rio is None or not rio.bindings:
+    if rio is None or not (rio.bindings or rio.interrupts):
         return None
     devs = list(rio.devices.values())
     index = {d.name.upper(): i for i, d in enumerate(devs)}
@@ -342,8 +346,11 @@ def _io_of(cfg, plan, r):
                       "hold": int(b.safe == "HOLD"), "maxdata": maxdata, "safe": safe,
                       "lvalue": lvalue, "c_name": c_name,
                       "signed": int(b.type in ("SINT", "INT", "DINT", "LINT"))})
+    irqs = [{"address": q.address, "source": f"{q.device}.{q.source}",
+             "dev": index[q.device.upper()], "line": q.irq, "tasks": list(q.tasks)}
+            for q in rio.interrupts]
     return {"devs": [{"name": d.name, "provider": d.provider, "minor": d.minor} for d in devs],
-            "binds": binds, "comedi": any(d.provider == "comedi" for d in devs)}
+            "binds": binds, "irqs": irqs, "comedi": any(d.provider == "comedi" for d in devs)}
 
 
 def _write_module(out, mod, files, objs, fp_objs, runtime):

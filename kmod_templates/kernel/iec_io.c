@@ -40,12 +40,24 @@
  * 0/FALSE by default, nothing for SAFE HOLD.  At load and unload every
  * bound output goes to its safe state.
  *
+ * Interrupts.  An INTERRUPT of the I/O map wakes the event tasks whose
+ * SINGLE variable is at its address.  The provider requests the line at
+ * load, after the task threads exist (iec_io_irq_on()), with its own
+ * primary handler (hard interrupt context, IRQF_ONESHOT: it acknowledges
+ * the device, stamps the time, returns IRQ_WAKE_THREAD) and
+ * iec_io_irq_thread() as the threaded handler: on PREEMPT_RT it runs in
+ * the line's irq/N thread (SCHED_FIFO 50, above the PLC tasks), marks each
+ * task's event pending with the stamp as its release and wakes its thread.
+ * Unload frees the line first (iec_io_irq_off(): free_irq() waits for a
+ * running handler), then stops the task threads.
+ *
  * Scaling (the generator accepts only these): a digital channel is 0/1 in
  * a BOOL; an analog channel's raw sample 0..maxdata is the value of an
  * integer variable.  An output's value is clamped to 0..maxdata before it
  * is written.
  */
 #include <linux/errno.h>
+#include <linux/interrupt.h>
 #include <linux/kernel.h>
 #include <linux/minmax.h>
 #include <linux/string.h>
@@ -56,6 +68,7 @@ enum iec_io_kind { IEC_IO_AI, IEC_IO_AO, IEC_IO_DI, IEC_IO_DO, IEC_IO_DIO };
 
 struct iec_io_dev;
 struct iec_io_bind;
+struct iec_io_irq;
 
 /* A provider: how a kind of device is reached. */
 struct iec_io_provider {
@@ -69,6 +82,14 @@ struct iec_io_provider {
 	/* task thread, preemptible, no lock held: one sample */
 	int (*read)(struct iec_io_dev *d, const struct iec_io_bind *b, u32 *raw);
 	int (*write)(struct iec_io_dev *d, const struct iec_io_bind *b, u32 raw);
+	/*
+	 * Interrupt sources (NULL: none).  irq_on, module init, may sleep:
+	 * request q->line with the provider's primary handler and
+	 * iec_io_irq_thread, then let the device raise it; irq_off undoes it
+	 * and returns when no handler runs any more.
+	 */
+	int (*irq_on)(struct iec_io_dev *d, struct iec_io_irq *q, const char **why);
+	void (*irq_off)(struct iec_io_dev *d, struct iec_io_irq *q);
 };
 
 struct iec_io_dev {
@@ -95,6 +116,22 @@ struct iec_io_bind {
 	u8 is_signed;
 };
 
+/* An interrupt source bound to the event tasks of one SINGLE variable. */
+struct iec_io_irq {
+	const char *address;		/* %IX9.0 */
+	const char *source;		/* lpt.ACK */
+	u16 dev;
+	u16 line;			/* the IRQ number */
+	const u16 *tasks;		/* indexes in the resource's tasks */
+	u32 ntasks;
+	/* runtime */
+	struct iec_resource *res;
+	unsigned long base;		/* the provider's (an I/O port base) */
+	ktime_t stamp;			/* set by the primary handler */
+	u64 count;			/* handled interrupts (threaded side) */
+	bool on;
+};
+
 struct iec_io {
 	const char *resource;
 	struct iec_io_dev *devs;
@@ -104,6 +141,8 @@ struct iec_io {
 	u32 nopen;			/* devices opened so far */
 	/* per task: the text its IEC_FAULT_IO points at */
 	char (*fault_text)[64];
+	struct iec_io_irq *irqs;
+	u32 nirqs;
 };
 
 static u32 iec_io_get(const struct iec_io_bind *b)
@@ -163,8 +202,13 @@ static void iec_io_fault(struct iec_io *io, struct iec_task *t,
 	iec_fault_locate(&t->ctx, text, 0);
 }
 
-/* Step 1: the task's inputs into raw[]; false (and a fault) on an error. */
-static bool iec_io_read(struct iec_io *io, struct iec_task *t,
+/*
+ * Steps 1, 2, 4 and 5 (__maybe_unused: a resource whose tasks only read, or
+ * only write, or only wait for interrupts uses some of them).
+ *
+ * Step 1: the task's inputs into raw[]; false (and a fault) on an error.
+ */
+static __maybe_unused bool iec_io_read(struct iec_io *io, struct iec_task *t,
 			const u16 *idx, u32 *raw, u32 n)
 {
 	u32 i;
@@ -183,7 +227,7 @@ static bool iec_io_read(struct iec_io *io, struct iec_task *t,
 }
 
 /* Step 2, under the image lock: the staged inputs into their variables. */
-static void iec_io_store(struct iec_io *io, const u16 *idx, const u32 *raw,
+static __maybe_unused void iec_io_store(struct iec_io *io, const u16 *idx, const u32 *raw,
 			 u32 n)
 {
 	u32 i;
@@ -193,7 +237,7 @@ static void iec_io_store(struct iec_io *io, const u16 *idx, const u32 *raw,
 }
 
 /* Step 4, under the image lock: the task's outputs into raw[]. */
-static void iec_io_stage(struct iec_io *io, const u16 *idx, u32 *raw, u32 n)
+static __maybe_unused void iec_io_stage(struct iec_io *io, const u16 *idx, u32 *raw, u32 n)
 {
 	u32 i;
 
@@ -202,7 +246,7 @@ static void iec_io_stage(struct iec_io *io, const u16 *idx, u32 *raw, u32 n)
 }
 
 /* Step 5: raw[] to the devices; a fault on the first error. */
-static void iec_io_write(struct iec_io *io, struct iec_task *t,
+static __maybe_unused void iec_io_write(struct iec_io *io, struct iec_task *t,
 			 const u16 *idx, const u32 *raw, u32 n)
 {
 	u32 i;
@@ -281,6 +325,73 @@ static int iec_io_open(struct iec_io *io)
 err:
 	iec_io_close(io);
 	return ret;
+}
+
+/*
+ * The threaded handler of every interrupt source: runs in the line's irq
+ * thread (preemptible on PREEMPT_RT, never sleeps here).  The primary
+ * handler stamped the interrupt; the stamp is each task's release.
+ */
+static irqreturn_t iec_io_irq_thread(int irq, void *arg)
+{
+	struct iec_io_irq *q = arg;
+	ktime_t stamp = READ_ONCE(q->stamp);
+	u32 i;
+
+	q->count++;
+	for (i = 0; i < q->ntasks; i++) {
+		struct iec_task *t = &q->res->tasks[q->tasks[i]];
+
+		if (!t->thread)
+			continue;
+		WRITE_ONCE(t->event_time, stamp);
+		smp_wmb();	/* the release before the event (iec_wait_event) */
+		WRITE_ONCE(t->event_pending, true);
+		wake_up_process(t->thread);
+	}
+	return IRQ_HANDLED;
+}
+
+static void iec_io_irq_off(struct iec_io *io)
+{
+	u32 i;
+
+	for (i = io->nirqs; i-- > 0;) {
+		struct iec_io_irq *q = &io->irqs[i];
+		struct iec_io_dev *d = &io->devs[q->dev];
+
+		if (!q->on)
+			continue;
+		d->prov->irq_off(d, q);	/* free_irq(): no handler runs after it */
+		q->on = false;
+		pr_info("iec2kmod: resource %s: IRQ %u (%s) released after %llu interrupts\n",
+			io->resource, q->line, q->source, q->count);
+	}
+}
+
+/* Module init, the task threads created: the interrupt lines, or -errno. */
+static int iec_io_irq_on(struct iec_io *io, struct iec_resource *res)
+{
+	const char *why = "";
+	u32 i;
+	int ret;
+
+	for (i = 0; i < io->nirqs; i++) {
+		struct iec_io_irq *q = &io->irqs[i];
+		struct iec_io_dev *d = &io->devs[q->dev];
+
+		q->res = res;
+		ret = d->prov->irq_on ? d->prov->irq_on(d, q, &why) : -EOPNOTSUPP;
+		if (ret) {
+			pr_err("iec2kmod: resource %s: interrupt %s (IRQ %u) of %s: %s (errno %d); not loading\n",
+			       io->resource, q->source, q->line, q->address,
+			       d->prov->irq_on ? why : "the provider has no interrupts", -ret);
+			iec_io_irq_off(io);
+			return ret;
+		}
+		q->on = true;
+	}
+	return 0;
 }
 
 /* Module exit, the threads stopped: safe state, then the devices go. */

@@ -15,9 +15,21 @@
  * AREF_GROUND).  Every call may sleep (the mutex): iec_io.c calls them
  * from the task thread with no lock held.  A device detached meanwhile
  * (its driver removed) answers -ENODEV, which faults the task.
+ *
+ * Interrupts: comedi_parport's ACK line.  kcomedilib has no call for
+ * comedi's asynchronous commands (the driver's own way to report the
+ * interrupt, through its subdevice 3), so the driver is attached without
+ * an IRQ and this provider requests the line itself: the primary handler
+ * checks the control register's interrupt enable (a shared line's other
+ * interrupts are not ours), reads the status register (which acknowledges
+ * the interrupt of QEMU's emulated port; harmless on a real one) and
+ * wakes the threaded handler.  The enable bit is set and cleared under the
+ * device's mutex, as comedi_parport's control-line writes (which keep it)
+ * are.
  */
 #include <linux/comedi/comedidev.h>
 #include <linux/comedi/comedilib.h>
+#include <linux/io.h>
 #include <linux/mutex.h>
 #include <linux/rwsem.h>
 
@@ -170,6 +182,85 @@ static int iec_comedi_write(struct iec_io_dev *d, const struct iec_io_bind *b,
 	return ret < 0 ? ret : 0;
 }
 
+#define IEC_PARPORT_STATUS	1
+#define IEC_PARPORT_CTRL	2
+#define IEC_PARPORT_IRQ_ENA	0x10
+
+/* Hard interrupt context (IRQF_ONESHOT: not forced into a thread). */
+static irqreturn_t iec_parport_irq(int irq, void *arg)
+{
+	struct iec_io_irq *q = arg;
+
+	if (!(inb(q->base + IEC_PARPORT_CTRL) & IEC_PARPORT_IRQ_ENA))
+		return IRQ_NONE;
+	inb(q->base + IEC_PARPORT_STATUS);
+	WRITE_ONCE(q->stamp, ktime_get());
+	return IRQ_WAKE_THREAD;
+}
+
+/* Sets or clears the interrupt enable under the device's mutex. */
+static int iec_parport_enable(struct comedi_device *dev, bool on)
+{
+	unsigned int ctrl;
+	int ret = 0;
+
+	mutex_lock(&dev->mutex);
+	if (dev->attached) {
+		ctrl = inb(dev->iobase + IEC_PARPORT_CTRL);
+		ctrl = on ? ctrl | IEC_PARPORT_IRQ_ENA : ctrl & ~IEC_PARPORT_IRQ_ENA;
+		/* a stale pending interrupt (QEMU keeps its line up) goes */
+		inb(dev->iobase + IEC_PARPORT_STATUS);
+		outb(ctrl, dev->iobase + IEC_PARPORT_CTRL);
+		inb(dev->iobase + IEC_PARPORT_STATUS);
+	} else {
+		ret = -ENODEV;
+	}
+	mutex_unlock(&dev->mutex);
+	return ret;
+}
+
+static int iec_comedi_irq_on(struct iec_io_dev *d, struct iec_io_irq *q,
+			     const char **why)
+{
+	struct comedi_device *dev = d->handle;
+	int ret = 0;
+
+	down_read(&dev->attach_lock);
+	if (!dev->attached) {
+		*why = "the device is not attached";
+		ret = -ENODEV;
+	} else if (strcmp(dev->driver->driver_name, "comedi_parport")) {
+		*why = "ACK is an interrupt of comedi_parport; the device has another driver";
+		ret = -ENODEV;
+	} else if (dev->irq) {
+		*why = "comedi_parport was attached with an IRQ and holds it: attach it with its I/O base only";
+		ret = -EBUSY;
+	} else {
+		q->base = dev->iobase;
+	}
+	up_read(&dev->attach_lock);
+	if (ret)
+		return ret;
+	ret = request_threaded_irq(q->line, iec_parport_irq, iec_io_irq_thread,
+				   IRQF_ONESHOT, "iec2kmod", q);
+	if (ret) {
+		*why = "the IRQ line cannot be requested (held by another driver?)";
+		return ret;
+	}
+	ret = iec_parport_enable(dev, true);
+	if (ret) {
+		free_irq(q->line, q);
+		*why = "the device is not attached";
+	}
+	return ret;
+}
+
+static void iec_comedi_irq_off(struct iec_io_dev *d, struct iec_io_irq *q)
+{
+	iec_parport_enable(d->handle, false);
+	free_irq(q->line, q);
+}
+
 static const struct iec_io_provider iec_io_comedi = {
 	.name = "comedi",
 	.open = iec_comedi_open,
@@ -177,4 +268,6 @@ static const struct iec_io_provider iec_io_comedi = {
 	.check = iec_comedi_check,
 	.read = iec_comedi_read,
 	.write = iec_comedi_write,
+	.irq_on = iec_comedi_irq_on,
+	.irq_off = iec_comedi_irq_off,
 };

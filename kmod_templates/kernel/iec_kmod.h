@@ -209,6 +209,9 @@ struct iec_task {
 	struct iec_ctx ctx;
 	int state;			/* enum iec_task_state */
 	bool event_pending;
+	/* 0, or the release of the pending event: when its interrupt came
+	 * (iec_io.c); written before event_pending */
+	ktime_t event_time;
 	bool start_request;
 	ktime_t first;		/* first release after a start (the epoch) */
 	ktime_t until;		/* 0, or: stop before this release ("run") */

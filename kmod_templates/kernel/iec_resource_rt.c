@@ -8,7 +8,7 @@
  * absolute deadline (hrtimer, hard mode: the timerlat pattern); a deadline
  * already in the past when the cycle ends is an overrun: the missed
  * releases are skipped and counted.  An event task sleeps until its SINGLE
- * variable rises (iec2kmod_event()).  Each cycle: copy the globals in under
+ * variable rises (iec2kmod_event()) or its interrupt comes (iec_io.c).  Each cycle: copy the globals in under
  * the image lock, run the programs, copy the written globals out, account.
  * IEC priority 0..48 maps to SCHED_FIFO 49..1: below the threaded
  * interrupt handlers (50), as on OpenPLC and LinuxCNC.
@@ -200,7 +200,11 @@ static bool iec_sleep_until(struct iec_task *t, ktime_t deadline)
 	return false;
 }
 
-static bool iec_wait_event(struct iec_task *t)
+/*
+ * Waits for an event; false if told to stop.  *release is the event's:
+ * an interrupt's time (iec_io.c), or now for a SINGLE variable's edge.
+ */
+static bool iec_wait_event(struct iec_task *t, ktime_t *release)
 {
 	for (;;) {
 		set_current_state(TASK_INTERRUPTIBLE);
@@ -212,6 +216,10 @@ static bool iec_wait_event(struct iec_task *t)
 		if (READ_ONCE(t->event_pending)) {
 			__set_current_state(TASK_RUNNING);
 			WRITE_ONCE(t->event_pending, false);
+			/* a full barrier: pairs with iec_io_irq_thread() */
+			*release = xchg(&t->event_time, 0);
+			if (!*release)
+				*release = ktime_get();
 			return true;
 		}
 		schedule();
@@ -278,8 +286,10 @@ static int iec_task_thread(void *arg)
 
 	while (iec_wait_started(t)) {
 		if (!t->interval_ns) {
-			while (iec_wait_event(t))
-				iec_task_cycle(t, ktime_get());
+			ktime_t release;
+
+			while (iec_wait_event(t, &release))
+				iec_task_cycle(t, release);
 			iec_task_idle(t);
 			continue;
 		}

@@ -315,7 +315,13 @@ class Guest:
     Python fork server (:meth:`pyrun`) imports once at its start; the
     default, :data:`PRELOAD`, is pyroute2 and plc_manager's modules: the
     guest writes no bytecode, so a module not preloaded is compiled again
-    by every pyrun that imports it (about 1 s per ``plc-manager`` call).
+    by every pyrun that imports it (about 1 s per ``plc-manager`` call);
+    *parallel* — a host file that receives the bytes of an ISA parallel port
+    (LPT1: I/O base 0x378, IRQ 7, ``-device isa-parallel`` on a ``file``
+    chardev): QEMU writes the data register to it on each rising STROBE of
+    the control register (with INIT and SELECT set), and raises IRQ 7 on a
+    control write with STROBE low when the previous control value had the
+    interrupt enable bit (hw/char/parallel.c); no parallel port without it.
     """
 
     def __init__(self, workdir: str, *, memory: int = 1024, smp: int = 2,
@@ -323,7 +329,8 @@ class Guest:
                  extra_modules: Sequence[str] = (), console_log: Optional[str] = None,
                  boot_timeout: float = 180.0, kernel: Optional[KernelImage] = None,
                  python: Optional[str] = None, qemu_args: Sequence[str] = (),
-                 pvh: bool = True, preload: Sequence[str] = PRELOAD) -> None:
+                 pvh: bool = True, preload: Sequence[str] = PRELOAD,
+                 parallel: Optional[str] = None) -> None:
         self.workdir = os.path.realpath(workdir)
         if any(c.isspace() for c in self.workdir):
             raise GuestError(f"work directory path must not contain whitespace: {self.workdir!r}")
@@ -339,6 +346,7 @@ class Guest:
         self.boot_timeout = boot_timeout
         self.python_exe = python or sys.executable
         self.qemu_args = list(qemu_args)
+        self.parallel = os.path.realpath(parallel) if parallel else None
         self.kernel = kernel
         self.pvh = pvh
         self.preload = tuple(preload)
@@ -447,6 +455,9 @@ class Guest:
                           "security_model=none,multidevs=remap"]
         if self.icount:
             cmd += ["-icount", "shift=0,sleep=off"]
+        if self.parallel:
+            cmd += ["-chardev", f"file,id=lpt0,path={_qemu_path_arg(self.parallel)}",
+                    "-device", "isa-parallel,chardev=lpt0,iobase=0x378,irq=7"]
         cmd += self.qemu_args
         self.qemu_cmdline = cmd
         t0 = time.monotonic()
