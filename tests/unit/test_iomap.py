@@ -92,7 +92,7 @@ ERRORS = [
     ("%IW2 daq.0.0\n", "expected ':' and device.subdevice.channel, found 'daq.0.0'", 4, 6),
     ("%IW2 : daq.0\n", "expected device.subdevice.channel (numbers)", 4, 8),
     ("%IW2 : daq.0.0 FAST\n", "unexpected 'FAST'", 4, 16),
-    ("WIRE %IW2\n", "expected RESOURCE, DEVICE, SUBDEVICE or an address", 4, 1),
+    ("WIRE %IW2\n", "expected RESOURCE, DEVICE, SUBDEVICE, INTERRUPT or an address", 4, 1),
     ("RESOURCE Nowhere\n", "unknown resource 'Nowhere'", 4, 10),
 ]
 

@@ -1,0 +1,114 @@
+# SPDX-License-Identifier: MIT
+"""QEMU tier, issue 26: comedi_parport on QEMU's emulated parallel port.
+
+The guest has LPT1 (I/O base 0x378, IRQ 7) on a file of the host
+(Guest(parallel=...)); comedi is loaded with one legacy minor and
+comedi_parport attached to /dev/comedi0 with the COMEDI_DEVCONFIG ioctl
+(tests/qemu/comedi_legacy.py: what comedi_config does), its I/O base only.
+Project projects/io_parport: resource Lights drives a traffic light on the
+data lines and toggles STROBE every 10 ms; QEMU writes the data register to
+the file on each rising STROBE, so the host reads the light's sequence, one
+byte per two cycles.  Each cycle that writes STROBE low makes the port raise
+IRQ 7 (the control register's interrupt enable is set by resource Events,
+whose INTERRUPT binding requests the line); every interrupt runs event task
+onack once: its count equals the cycles that wrote STROBE low, the kernel's
+count of the line and the handler's own count logged at unload.  The status
+lines (comedi_parport's DI subdevice) are not bound: with a file chardev
+QEMU's port emulates them itself (a printer handshake) and nothing outside
+can set them, and reading them acknowledges the emulated interrupt."""
+
+from __future__ import annotations
+
+import compileall
+import json
+import re
+import time
+from pathlib import Path
+
+import pytest
+
+from kmod_helpers import gen_and_build, loaded_modules, pm
+
+pytestmark = pytest.mark.qemu
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+PROJECT = HERE / "projects" / "io_parport"
+LEGACY = HERE / "comedi_legacy.py"
+
+# the light's step per byte (lights.st): bits 0..5 = main R Y G, side R Y G
+STEPS = [0b001100] * 3 + [0b001010, 0b001001] + [0b100001] * 3 + [0b010001, 0b001001]
+
+
+def values(guest, *names) -> dict:
+    out = pm(guest, "read", "--json", *names)[1]
+    return {v["path"]: v["value"] for v in json.loads(out)}
+
+
+def irq7(guest) -> int:
+    """The kernel's count of IRQ 7 (every CPU), 0 when nobody holds it."""
+    for line in guest.run("cat /proc/interrupts").output.splitlines():
+        words = line.split()
+        if words and words[0] == "7:":
+            return sum(int(w) for w in words[1:] if w.isdigit())
+    return 0
+
+
+def parport_guest(guest_factory, lpt: Path):
+    lpt.write_bytes(b"")
+    g = guest_factory(parallel=str(lpt))
+    md = "/host" + g.kernel.moddir + "/drivers/comedi"
+    g.check_call(f"insmod {md}/comedi.ko comedi_num_legacy_minors=1 && "
+                 f"insmod {md}/kcomedilib/kcomedilib.ko && "
+                 f"insmod {md}/drivers/comedi_parport.ko")
+    legacy = LEGACY.read_text()
+    g.pyrun(code=legacy, argv=["config", "/dev/comedi0", "comedi_parport", "0x378"],
+            check=True)
+    # INIT and SELECT (control lines 2, 3) high: QEMU's port prints then
+    r = g.pyrun(code=legacy, argv=["bits", "/dev/comedi0", "2", "0xc", "0xc"], check=True)
+    assert r.output.split() == ["12"], r.output
+    return g
+
+
+def test_traffic_light_bytes_and_ack_interrupts(guest_factory, guest_workdir):
+    tree = Path(guest_workdir) / "io_parport"
+    manifest = gen_and_build(PROJECT, tree)
+    assert manifest["io"]["Events"]["interrupts"] == [
+        {"address": "%IX9.0", "device": "lpt", "source": "ACK", "irq": 7, "tasks": ["onack"]}]
+    compileall.compile_dir(str(ROOT / "manager"), quiet=1)
+    lpt = Path(guest_workdir) / "lpt1.bin"
+    g = parport_guest(guest_factory, lpt)
+
+    pm(g, "load", "--no-start", tree)
+    assert re.search(r"^\s*7:.*iec2kmod$", g.run("cat /proc/interrupts").output, re.M)
+    assert lpt.read_bytes() == b""
+    n0 = irq7(g)
+    pm(g, "start")
+    deadline = time.monotonic() + 60
+    while values(g, "Lights.bytes")["Lights.bytes"] < 25:
+        assert time.monotonic() < deadline
+        time.sleep(0.3)
+    pm(g, "stop", "--keep-loaded", "--resource", "Lights")
+    v = values(g, "Lights.bytes", "Lights.lows")
+    # outside the guest: one byte per rising STROBE, the light's steps in order
+    data = lpt.read_bytes()
+    assert len(data) == v["Lights.bytes"], (len(data), v)
+    assert list(data) == [STEPS[i % 10] for i in range(len(data))], data.hex()
+    # every STROBE-low write raised one interrupt, which ran onack once
+    deadline = time.monotonic() + 30
+    while (acks := values(g, "Events.acks")["Events.acks"]) < v["Lights.lows"]:
+        assert time.monotonic() < deadline, (acks, v)
+        time.sleep(0.2)
+    assert acks == v["Lights.lows"] == irq7(g) - n0 > 10, (acks, v, irq7(g), n0)
+    print(f"parport: {len(data)} bytes {data[:12].hex()}..., {v['Lights.lows']} STROBE-low "
+          f"writes, {irq7(g) - n0} IRQ 7, {acks} onack cycles")
+    status = g.run("cat /sys/kernel/iec2kmod/crossing/status").output
+    m = re.search(r"task events\.onack .*?cycles (\d+)", status)
+    assert m and int(m.group(1)) == acks, status
+
+    # unload with the line requested: freed before the threads stop
+    pm(g, "stop")
+    assert loaded_modules(g) == []
+    assert "iec2kmod" not in g.run("cat /proc/interrupts").output
+    log = g.run("dmesg").output
+    assert f"iec2kmod: resource Events: IRQ 7 (lpt.ACK) released after {acks} interrupts" \
+        in log, log
