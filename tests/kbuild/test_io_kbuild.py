@@ -5,6 +5,7 @@ kcomedilib (the project the QEMU test tests/qemu/test_io_comedi.py runs)."""
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -33,3 +34,28 @@ def test_an_io_resource_builds_with_zero_warnings(tmp_path):
     info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
                           text=True, timeout=60).stdout
     assert "kcomedilib" in info.split("\n")[0].split(","), info
+
+
+@pytest.mark.kbuild
+def test_an_interrupt_resource_builds_with_zero_warnings(tmp_path):
+    """projects/io_parport: resource Events has only an INTERRUPT (the
+    comedi provider's threaded IRQ), resource Lights only outputs."""
+    project = ROOT / "tests" / "qemu" / "projects" / "io_parport"
+    p = _cli("gen", str(project), "-o", str(tmp_path / "t"))
+    assert p.returncode == 0, p.stderr
+    main = (tmp_path / "t" / "iec_crossing_r_events" / "main.c").read_text()
+    assert "static struct iec_io_irq io_irqs[]" in main
+    assert 'ret = iec_io_irq_on(&io, &resource);' in main
+    p = _cli("build", str(tmp_path / "t"), "--sparse")
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "sparse: 0 warnings" in p.stdout, p.stdout
+
+
+@pytest.mark.kbuild
+def test_the_irq_benchmark_module_builds_with_zero_warnings(tmp_path):
+    from iec2kmod import kbuild
+    d = tmp_path / "irq_kthread"
+    shutil.copytree(ROOT / "benchmarks" / "irq_kthread", d)
+    r = kbuild.build_modules(str(d), sparse=True).check()
+    assert r.warnings() == [], r.output
+    assert (d / "irqwake.ko").is_file()
