@@ -6,6 +6,7 @@ comedi_num_legacy_minors=N), and read/write digital lines with
 COMEDI_INSN INSN_BITS.  Usage in the guest:
 
     comedi_legacy.py config /dev/comedi0 comedi_parport 0x378 [irq]
+    comedi_legacy.py detach /dev/comedi0
     comedi_legacy.py bits /dev/comedi0 SUBDEV MASK BITS     # prints the lines
 """
 
@@ -50,6 +51,15 @@ def config(path, board, *options):
         os.close(fd)
 
 
+def detach(path):
+    """COMEDI_DEVCONFIG with a NULL argument: the driver lets the device go."""
+    fd = os.open(path, os.O_RDWR)
+    try:
+        fcntl.ioctl(fd, COMEDI_DEVCONFIG, 0)
+    finally:
+        os.close(fd)
+
+
 def bits(fd, subdev, mask, value):
     data = (ctypes.c_uint * 2)(mask, value)
     fcntl.ioctl(fd, COMEDI_INSN, Insn(INSN_BITS, 2, data, subdev, 0))
@@ -60,6 +70,8 @@ if __name__ == "__main__":
     cmd, path, *rest = sys.argv[1:]
     if cmd == "config":
         config(path, *rest)
+    elif cmd == "detach":
+        detach(path)
     elif cmd == "bits":
         fd = os.open(path, os.O_RDWR)
         print(bits(fd, *(int(x, 0) for x in rest)))

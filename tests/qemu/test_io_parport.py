@@ -12,8 +12,9 @@ byte per two cycles.  Each cycle that writes STROBE low makes the port raise
 IRQ 7 (the control register's interrupt enable is set by resource Events,
 whose INTERRUPT binding requests the line); every interrupt runs event task
 onack once: its count equals the cycles that wrote STROBE low, the kernel's
-count of the line and the handler's own count logged at unload.  The status
-lines (comedi_parport's DI subdevice) are not bound: with a file chardev
+count of the line and the handler's own count logged at unload.  After the
+unload, comedi_parport re-attached with its own IRQ makes the load fail,
+naming the interrupt.  The status lines (comedi_parport's DI subdevice) are not bound: with a file chardev
 QEMU's port emulates them itself (a printer handshake) and nothing outside
 can set them, and reading them acknowledges the emulated interrupt."""
 
@@ -112,3 +113,13 @@ def test_traffic_light_bytes_and_ack_interrupts(guest_factory, guest_workdir):
     log = g.run("dmesg").output
     assert f"iec2kmod: resource Events: IRQ 7 (lpt.ACK) released after {acks} interrupts" \
         in log, log
+
+    # comedi_parport attached with its own IRQ holds the line: load refused
+    legacy = LEGACY.read_text()
+    g.pyrun(code=legacy, argv=["detach", "/dev/comedi0"], check=True)
+    g.pyrun(code=legacy, argv=["config", "/dev/comedi0", "comedi_parport", "0x378", "7"],
+            check=True)
+    rc, out = pm(g, "load", tree, check=1)
+    assert ("resource Events: interrupt lpt.ACK (IRQ 7) of %IX9.0: comedi_parport was attached "
+            "with an IRQ and holds it") in out, out
+    assert loaded_modules(g) == []
