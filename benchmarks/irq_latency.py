@@ -32,7 +32,7 @@ The guest runs in icount mode (-icount shift=0,sleep=off, one vCPU): the
 figures are instruction-count budgets that repeat from run to run, not
 bare-metal latencies; compare the two.
 
-    python benchmarks/irq_latency.py [--interrupts 1000] [--period-us 1000]
+    python benchmarks/irq_latency.py [--interrupts 1000] [--period-us 1000] [--smoke]
 """
 
 from __future__ import annotations
@@ -54,8 +54,8 @@ sys.path.insert(0, str(ROOT))
 
 from kmod_helpers import gen_and_build, pm  # noqa: E402
 
+import iec2kmod.testing.vm as vm  # noqa: E402
 from iec2kmod import kbuild  # noqa: E402
-from iec2kmod.testing.vm.guest import Guest  # noqa: E402
 
 LEGACY = ROOT / "tests" / "qemu" / "comedi_legacy.py"
 
@@ -233,7 +233,10 @@ def main(argv=None) -> int:
     ap.add_argument("--interrupts", type=int, default=1000)
     ap.add_argument("--period-us", type=int, default=1000)
     ap.add_argument("--no-icount", action="store_true", help="plain TCG (2 vCPUs)")
+    ap.add_argument("--smoke", action="store_true", help="50 interrupts (the test's size)")
     a = ap.parse_args(argv)
+    if a.smoke:
+        a.interrupts = 50
     work = Path(tempfile.mkdtemp(prefix="iec2kmod-irqlat-"))
     try:
         trees = {}
@@ -245,7 +248,7 @@ def main(argv=None) -> int:
         kbuild.build_modules(str(kt)).check()
         lpt = work / "lpt1.bin"
         lpt.write_bytes(b"")
-        with Guest(str(work), icount=not a.no_icount, parallel=str(lpt)) as g:
+        with vm.Guest(str(work), icount=not a.no_icount, parallel=str(lpt)) as g:
             md = "/host" + g.kernel.moddir + "/drivers/comedi"
             g.check_call(f"insmod {md}/comedi.ko comedi_num_legacy_minors=1 && "
                          f"insmod {md}/kcomedilib/kcomedilib.ko && "

@@ -50,6 +50,13 @@ GUEST = {
                      r"be; 0 unanswered",
                      r"^round 1 \(seed 1\): \d+ s, 0 problems$",
                      r"^plc-manager stop: exit 0; modules left: none$"],
+    "irq_latency": [rf"^IEC task onack \(PRIO 0\) +\d+ +{NUM} +{NUM} +{NUM} +{NUM} +"
+                    r"\(\d+ IRQ 7 entries, 0 merged\)$",
+                    rf"^kthread irqwake +\d+ +{NUM} +{NUM} +{NUM} +{NUM} +"
+                    r"\(\d+ IRQ 7 entries, 0 merged\)$",
+                    r"^plc: own: .* acks (\d+) of \1 STROBE-low writes$",
+                    r"^kthread: own: .* irqs (\d+) of \1 STROBE-low writes$",
+                    rf"^median ratio plc/kthread: {NUM}$"],
     "jitter": [rf"^iec2kmod ms1 alone \(overruns 0\) +n= +\d+ +min +{NUM} +median +{NUM}",
                r"^cyclictest loaded \(FIFO 48\) +n= +\d+ ",
                rf"^timerlat unloaded .* p99 +{NUM}",
