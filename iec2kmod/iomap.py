@@ -39,13 +39,14 @@ that address to an interrupt source of a device::
     VAR_GLOBAL ack AT %IX9.0 : BOOL; END_VAR          (the configuration)
     INTERRUPT %IX9.0 : lpt.ACK IRQ 7                  (the .iomap)
 
-Every interrupt runs each task whose SINGLE is that variable once (an
-interrupt that comes while the task's previous cycle still runs or waits
-gives one more cycle, not one per interrupt).  The cycle's release time,
+Every interrupt runs each task whose SINGLE is that variable once (one
+that comes during a cycle gives one more cycle after it; interrupts that
+come before the task has taken the previous one merge into one cycle).  The cycle's release time,
 which the programs' timers and the task's latency statistics use, is the
 moment the interrupt handler ran.  The variable itself is not written by
 the interrupt (it keeps its value, FALSE unless forced; a write of TRUE
-over FALSE by the manager still wakes the tasks, as for any SINGLE).  The
+over FALSE by the manager still wakes the tasks, as for any SINGLE, and
+is all ``iec2kmod sim``, which has no interrupts, runs them on).  The
 sources a board has are in INTERRUPTS; IRQ names the line, which the
 resource module requests at load (a threaded handler: on PREEMPT_RT it
 runs in its irq/N thread, at SCHED_FIFO 50, above every PLC task) and frees
