@@ -22,7 +22,7 @@ from .kernel import VMSetupError, check_prerequisites, find_kernel, pvh_vmlinux
 
 def _guest(a) -> Guest:
     workdir = a.workdir or tempfile.mkdtemp(prefix="iec2kmod-guestwork-")
-    g = Guest(workdir, icount=a.icount, smp=a.smp, memory=a.memory)
+    g = Guest(workdir, icount=a.icount, smp=a.smp, memory=a.memory, parallel=a.parallel)
     t0 = time.monotonic()
     g.start()
     print(f"[vm] guest up in {time.monotonic() - t0:.1f} s (work dir {g.workdir})",
@@ -44,6 +44,8 @@ def main(argv=None) -> int:
         p.add_argument("--smp", type=int, default=2)
         p.add_argument("--memory", type=int, default=1024)
         p.add_argument("--timeout", type=float, default=600)
+        p.add_argument("--parallel", metavar="FILE",
+                       help="an ISA parallel port (LPT1, 0x378, IRQ 7) writing to FILE")
         if name == "run":
             p.add_argument("command", nargs=argparse.REMAINDER)
     a = ap.parse_args(argv)
