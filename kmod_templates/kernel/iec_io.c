@@ -331,8 +331,9 @@ err:
  * The threaded handler of every interrupt source: runs in the line's irq
  * thread (preemptible on PREEMPT_RT, never sleeps here).  The primary
  * handler stamped the interrupt; the stamp is each task's release.
+ * (__maybe_unused: only a provider with interrupts refers to it.)
  */
-static irqreturn_t iec_io_irq_thread(int irq, void *arg)
+static __maybe_unused irqreturn_t iec_io_irq_thread(int irq, void *arg)
 {
 	struct iec_io_irq *q = arg;
 	ktime_t stamp = READ_ONCE(q->stamp);
