@@ -4,6 +4,7 @@ of plc.xml projects) in the PREEMPT_RT guest kernel (issue 28), each against
 the simulation.
 
     python3 benchmarks/plcopen_kernel.py PATH [PATH...] [--ms 500]
+    python3 benchmarks/plcopen_kernel.py --smoke     # one of tests/plcopen/cases, 100 ms
 
 PATH as for benchmarks/plcopen_corpus.py: a checkout the user fetched (its
 ``exemples/*/plc.xml`` and ``tests/projects/*/plc.xml``); nothing is copied
@@ -51,7 +52,8 @@ def candidates(paths):
     out = []
     for root in paths:
         for proj in projects(root):
-            rel = proj.relative_to(root) if proj.is_relative_to(root) else proj
+            rel = Path(proj.name) if root.is_file() else \
+                proj.relative_to(root) if proj.is_relative_to(root) else proj
             if extensions(proj):
                 continue
             res = frontend.run([str(proj)], use_cache=False)
@@ -77,9 +79,15 @@ def wall_paths(project) -> set[str]:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("paths", nargs="+", type=Path)
+    ap.add_argument("paths", nargs="*", type=Path)
     ap.add_argument("--ms", type=int, default=500, help="length of each run (default 500)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="without PATH: the LD case of tests/plcopen/cases, 100 ms")
     args = ap.parse_args(argv)
+    if args.smoke and not args.paths:
+        args.paths, args.ms = [ROOT / "tests" / "plcopen" / "cases" / "ld_rungs.xml"], 100
+    if not args.paths:
+        ap.error("give the PATH of a checkout or of plc.xml projects (or --smoke)")
     for p in args.paths:
         xsd = p / "plcopen" / "tc6_xml_v201.xsd"
         if xsd.is_file() and "IEC2KMOD_TC6_XSD" not in os.environ:

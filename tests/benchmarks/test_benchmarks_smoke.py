@@ -58,8 +58,8 @@ HOST = {
                            rf"{NUM} s$"],
 }
 
-QEMU_ONLY = {"irq_latency", "jitter", "netlink_flood", "netlink_fuzz", "serve_load", "soak",
-             "swap_latency"}
+QEMU_ONLY = {"irq_latency", "jitter", "netlink_flood", "netlink_fuzz", "plcopen_kernel",
+             "serve_load", "soak", "swap_latency"}
 
 
 def run_smoke(script: str, *extra: str, timeout: float = 900):

@@ -80,6 +80,9 @@ GUEST = {
                    r"+\(n=\d+\)|no sample \(n=0\))$",
                    r"^task t10: alone \d+ cycles, \d+ overruns; with the server \d+ cycles, "
                    r"\d+ overruns$"],
+    "plcopen_kernel": [r"^ld_rungs\.xml +same: \d+ variables after 100 ms",
+                       r"^kernel log clean$",
+                       r"^1 of 1 IEC-only projects ran in the kernel as simulated "],
     "scale": [rf"^ +4 +\d+ +{NUM} +{NUM} +{NUM} +configuration x1: ",
               rf"^  load \(command, tasks running\) min +{NUM} ",
               rf"^  stop \(command, all removed\) +min +{NUM} "],
