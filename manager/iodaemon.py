@@ -289,6 +289,114 @@ def parse_rules(dev: UserDevice, specs: List[str]) -> List[Rule]:
     return rules
 
 
+# --------------------------------------------------------- Modbus TCP --
+#
+# A register rule binds a slot to a Modbus table of a server (the daemon is
+# the master, pymodbus' client): an input slot is read from it after each
+# publication, an output slot written to it before.  Tables: hr (holding
+# registers), ir (input registers, read only), co (coils), di (discrete
+# inputs, read only); addresses from 0 as on the wire.  BOOL goes to a coil
+# or a discrete input (or a register, 0/1); a 16-bit type is one register
+# (two's complement for INT); a 32-bit type (DINT, UDINT, DWORD, REAL) is two
+# registers, the high word first (the common Modbus convention).
+
+_REG = re.compile(r"^\s*(?P<addr>%[IQ][A-Z]*[0-9.]+)\s*=\s*(?P<table>hr|ir|co|di)\s*:?\s*"
+                  r"(?P<at>\d+)\s*$", re.I)
+_WIDE = ("DINT", "UDINT", "DWORD", "REAL")
+
+
+@dataclass
+class RegRule:
+    slot: Slot
+    input: bool
+    table: str
+    at: int
+
+    @property
+    def count(self) -> int:
+        return 2 if self.slot.type in _WIDE else 1
+
+
+def parse_registers(dev: UserDevice, specs: List[str]) -> List[RegRule]:
+    """``%IW8=hr100``, ``%QD0=hr:200``, ``%IX0.0=di3``, ``%QX0.0=co5``."""
+    rules = []
+    for spec in specs:
+        m = _REG.match(spec)
+        if not m:
+            raise ValueError(f"{spec!r}: expected %I.../%Q... = hr|ir|co|di address "
+                             "(e.g. %IW8=hr100)")
+        hit = dev.by_address.get(m["addr"].upper())
+        if hit is None:
+            raise ValueError(f"{spec!r}: {m['addr']} is not a slot of {dev.path}")
+        kind, slot = hit
+        table = m["table"].lower()
+        if kind == "Q" and table in ("ir", "di"):
+            raise ValueError(f"{spec!r}: {table} is read-only: an output goes to hr or co")
+        if table in ("co", "di") and slot.type != "BOOL":
+            raise ValueError(f"{spec!r}: {slot.address} is {slot.type}: coils and discrete "
+                             "inputs carry BOOL")
+        rules.append(RegRule(slot, kind == "I", table, int(m["at"])))
+    return rules
+
+
+def _to_registers(type_name: str, raw: int) -> List[int]:
+    if type_name in _WIDE:
+        return [(raw >> 16) & 0xFFFF, raw & 0xFFFF]
+    return [raw & 0xFFFF]
+
+
+def _from_registers(type_name: str, regs: List[int]) -> int:
+    """Registers as a slot's 32 bits."""
+    if type_name in _WIDE:
+        return ((regs[0] & 0xFFFF) << 16) | (regs[1] & 0xFFFF)
+    v = regs[0] & 0xFFFF
+    if type_name in _SIGNED:
+        v = v - 0x10000 if v & 0x8000 else v
+    return encode(type_name, v)
+
+
+class ModbusError(Exception):
+    """The server refused or did not answer."""
+
+
+def _modbus_exception():
+    from pymodbus.exceptions import ModbusException
+    return ModbusException
+
+
+def modbus_exchange(client, unit: int, rules: List[RegRule], out: Optional[Outputs],
+                    raw: List[int]) -> None:
+    """Writes the output rules' slots of *out* to the server, then reads the
+    input rules' registers into *raw* (the input slots)."""
+    def ok(rr, what):
+        if rr is None or rr.isError():
+            raise ModbusError(f"{what}: {rr}")
+        return rr
+    if out is not None:
+        for r in rules:
+            if r.input:
+                continue
+            v = out.raw[r.slot.index]
+            if r.table == "co":
+                ok(client.write_coil(r.at, bool(v), device_id=unit), f"write coil {r.at}")
+            else:
+                ok(client.write_registers(r.at, _to_registers(r.slot.type, v), device_id=unit),
+                   f"write hr {r.at}")
+    for r in rules:
+        if not r.input:
+            continue
+        if r.table in ("co", "di"):
+            fn = client.read_coils if r.table == "co" else client.read_discrete_inputs
+            rr = ok(fn(r.at, count=1, device_id=unit), f"read {r.table} {r.at}")
+            raw[r.slot.index] = 1 if rr.bits[0] else 0
+        else:
+            fn = client.read_holding_registers if r.table == "hr" else \
+                client.read_input_registers
+            rr = ok(fn(r.at, count=r.count, device_id=unit), f"read {r.table} {r.at}")
+            raw[r.slot.index] = _from_registers(r.slot.type, rr.registers) \
+                if r.slot.type != "BOOL" else int(rr.registers[0] != 0)
+
+
 @dataclass
 class LoopStats:
     publications: int = 0
@@ -314,9 +422,14 @@ class LoopStats:
                              "max": round(max(self.react_us), 1) if self.react_us else None}}
 
 
-def answer(dev: UserDevice, rules: List[Rule], out: Outputs) -> List[int]:
-    """The input slots for outputs *out*: the rules applied, other slots kept."""
+def answer(dev: UserDevice, rules: List[Rule], out: Outputs, modbus=None) -> List[int]:
+    """The input slots for outputs *out*: the Modbus exchange (modbus:
+    (client, unit, register rules)) then the rules applied, other slots
+    kept."""
     raw = dev.current_inputs()
+    if modbus is not None:
+        client, unit, regs = modbus
+        modbus_exchange(client, unit, regs, out, raw)
     for r in rules:
         raw[r.dst.index] = encode(r.dst.type, r.value(out))
     return raw
@@ -324,7 +437,7 @@ def answer(dev: UserDevice, rules: List[Rule], out: Outputs) -> List[int]:
 
 def loop(dev: UserDevice, rules: List[Rule], *, cycles: Optional[int] = None,
          duration: Optional[float] = None, stats: Optional[LoopStats] = None,
-         trace=None, stop=lambda: False) -> LoopStats:
+         trace=None, stop=lambda: False, modbus=None) -> LoopStats:
     """The loopback: at each publication, the inputs computed from the
     outputs, tagged with the output cycle.  Ends after *cycles* answered
     publications, *duration* seconds, or when stop() is true."""
@@ -349,13 +462,16 @@ def loop(dev: UserDevice, rules: List[Rule], *, cycles: Optional[int] = None,
         last_rec = (out.cycle, out.flags)
         st.publications += 1
         if out.safe:
+            if modbus is not None:      # the safe state reaches the server too
+                raw = dev.current_inputs()
+                modbus_exchange(modbus[0], modbus[1], modbus[2], out, raw)
             if trace:
                 trace(out)
             continue
         if last is not None and out.cycle > last + 1:
             st.missed += out.cycle - last - 1
         last = out.cycle
-        dev.write_inputs(answer(dev, rules, out), tag=out.cycle)
+        dev.write_inputs(answer(dev, rules, out, modbus), tag=out.cycle)
         st.react_us.append((time.perf_counter() - t0) * 1e6)
         st.answered += 1
         if out.in_tag:
@@ -389,6 +505,14 @@ def add_arguments(p):
     p.add_argument("--map", action="append", default=[], metavar="RULE",
                    help="an input from the outputs: %%ID0=%%QD0, %%IW2=%%QW2+1, "
                         "%%IW4=%%QW4*0.5, %%IX0.0=TRUE (repeatable)")
+    p.add_argument("--modbus", metavar="HOST[:PORT]",
+                   help="Modbus TCP master: exchange the --reg slots with this server "
+                        "each cycle (outputs written, then inputs read)")
+    p.add_argument("--unit", type=int, default=1, help="Modbus device id (default 1)")
+    p.add_argument("--reg", action="append", default=[], metavar="RULE",
+                   help="a slot on a Modbus table: %%IW8=hr100, %%ID0=ir4 (two registers, "
+                        "high word first), %%IX0.0=di3, %%QW8=hr101, %%QX0.0=co5 "
+                        "(repeatable)")
     p.add_argument("--cycles", type=int, help="stop after answering N publications")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
     p.add_argument("--show", action="store_true", help="print the device's slots and exit")
@@ -424,9 +548,21 @@ def run(a) -> int:
             return 0
         try:
             rules = parse_rules(dev, a.map)
+            regs = parse_registers(dev, a.reg)
+            if regs and not a.modbus:
+                raise ValueError("--reg needs --modbus HOST[:PORT]")
         except ValueError as e:
             print(f"io-daemon: {e}", file=sys.stderr)
             return 2
+        modbus = None
+        if a.modbus:
+            from pymodbus.client import ModbusTcpClient
+            host, _, port = a.modbus.rpartition(":") if ":" in a.modbus else (a.modbus, "", "")
+            client = ModbusTcpClient(host, port=int(port or 502), timeout=1, retries=1)
+            if not client.connect():
+                print(f"io-daemon: no Modbus TCP server at {a.modbus}", file=sys.stderr)
+                return 2
+            modbus = (client, a.unit, regs)
         stopping = []
         signal.signal(signal.SIGTERM, lambda *_: stopping.append(1))
         trace = None
@@ -434,12 +570,23 @@ def run(a) -> int:
             def trace(out):
                 print(json.dumps({"cycle": out.cycle, "in_tag": out.in_tag, "flags": out.flags,
                                   "values": out.values}), flush=True)
-        print(f"io-daemon: {path}: {len(rules)} rules, answering each cycle", flush=True)
+        print(f"io-daemon: {path}: {len(rules)} rules"
+              f"{f', {len(regs)} Modbus registers at {a.modbus}' if modbus else ''}, "
+              "answering each cycle", flush=True)
         try:
             st = loop(dev, rules, cycles=a.cycles, duration=a.duration, trace=trace,
-                      stop=lambda: bool(stopping))
+                      stop=lambda: bool(stopping), modbus=modbus)
         except KeyboardInterrupt:
             return 130
+        except Exception as e:
+            if modbus is None or not isinstance(e, (ModbusError, _modbus_exception())):
+                raise
+            # no answer: the inputs go stale (the task faults after STALE ms)
+            print(f"io-daemon: Modbus {a.modbus}: {e}; stopping", file=sys.stderr)
+            return 1
+        finally:
+            if modbus is not None:
+                modbus[0].close()
         s = st.summary()
         print(json.dumps(s) if a.json else
               f"io-daemon: {s['answered']} cycles answered, {s['missed']} cycles "

@@ -4,6 +4,7 @@ the documented shared memory (built here from the documented offsets, not
 with the daemon's code) stands for the device."""
 
 import struct
+import time
 
 import pytest
 
@@ -127,3 +128,80 @@ def test_the_cli_reports_a_missing_device(capsys):
     assert iodaemon.main([str("/nonexistent/iec_io_x")]) == 2
     assert "no such device" in capsys.readouterr().err
     assert iodaemon.device_path("rig.bench.fb") == "/dev/iec_io_rig_bench_fb"
+
+
+def test_register_rules_are_checked(tmp_path):
+    buf, *_ = layout()
+    dev, _ = device(tmp_path, buf)
+    with dev:
+        regs = iodaemon.parse_registers(dev, ["%IW4=hr100", "%ID8=ir:4", "%IX0.0=di3",
+                                              "%QD4=hr200", "%QX0.0=co5"])
+        assert [(r.slot.address, r.input, r.table, r.at, r.count) for r in regs] == [
+            ("%IW4", True, "hr", 100, 1), ("%ID8", True, "ir", 4, 2),
+            ("%IX0.0", True, "di", 3, 1), ("%QD4", False, "hr", 200, 2),
+            ("%QX0.0", False, "co", 5, 1)]
+        for spec, msg in (("%QW2=ir4", "ir is read-only"), ("%IW4=co1", "coils and discrete"),
+                          ("%IW9=hr1", "not a slot"), ("%IW4=xx1", "expected %I")):
+            with pytest.raises(ValueError, match=msg):
+                iodaemon.parse_registers(dev, [spec])
+
+
+def test_a_modbus_server_closes_the_loop(tmp_path):
+    """Against pymodbus' own TCP server on localhost: the outputs of a record
+    are written to holding registers and coils, then the inputs read back
+    from the same registers (an echo through the server)."""
+    import asyncio
+    import socket
+    import threading
+    from pymodbus.client import ModbusTcpClient
+    from pymodbus.datastore import (ModbusDeviceContext, ModbusSequentialDataBlock,
+                                    ModbusServerContext)
+    from pymodbus.server import ModbusTcpServer
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    ctx = ModbusServerContext(devices=ModbusDeviceContext(
+        hr=ModbusSequentialDataBlock(1, [0] * 300), co=ModbusSequentialDataBlock(1, [0] * 16),
+        di=ModbusSequentialDataBlock(1, [0] * 16), ir=ModbusSequentialDataBlock(1, [0] * 16)),
+        single=True)
+    loop = asyncio.new_event_loop()
+    ready = threading.Event()
+    holder = {}
+
+    async def serve():
+        holder["server"] = ModbusTcpServer(ctx, address=("127.0.0.1", port))
+        ready.set()
+        await holder["server"].serve_forever()
+
+    t = threading.Thread(target=lambda: loop.run_until_complete(serve()), daemon=True)
+    t.start()
+    assert ready.wait(10)
+    buf, _, _, out_off, _ = layout(out_seq=2)
+    # outputs: %QX0.0 TRUE, %QW2 -5, %QD4 2.5, %QD8 70000
+    out_record(buf, out_off, 9, 8, 0, [1, 0xFFFFFFFB, REAL_2_5, 70000])
+    dev, _ = device(tmp_path, buf)
+    client = ModbusTcpClient("127.0.0.1", port=port, timeout=2)
+    try:
+        deadline = time.monotonic() + 10
+        while not client.connect():
+            assert time.monotonic() < deadline, "the server did not start"
+            time.sleep(0.1)
+        with dev:
+            regs = iodaemon.parse_registers(dev, [
+                "%QW2=hr10", "%QD4=hr20", "%QX0.0=co3",          # outputs to the server
+                "%IW4=hr10", "%ID8=hr20", "%IX0.0=co3"])         # and back
+            raw = dev.current_inputs()
+            iodaemon.modbus_exchange(client, 1, regs, dev.read_outputs(), raw)
+            assert client.read_holding_registers(10, count=1).registers == [0xFFFB]
+            assert client.read_holding_registers(20, count=2).registers == \
+                [REAL_2_5 >> 16, REAL_2_5 & 0xFFFF]                # high word first
+            assert iodaemon.decode("INT", raw[1]) == -5
+            assert iodaemon.decode("REAL", raw[3]) == 2.5 and raw[0] == 1
+            with pytest.raises(iodaemon.ModbusError):              # beyond the block
+                iodaemon.modbus_exchange(client, 1, iodaemon.parse_registers(
+                    dev, ["%IW4=hr5000"]), None, raw)
+    finally:
+        client.close()
+        asyncio.run_coroutine_threadsafe(holder["server"].shutdown(), loop).result(10)
+        t.join(10)
