@@ -13,7 +13,10 @@ on a plain file of the same layout, for tests) and runs a loopback: after
 each publication of the task's outputs (read() of the device wakes it) it
 computes inputs from outputs (``--map %ID0=%QD0+1``) and publishes them,
 tagged with the output cycle they answer, so that every output record tells
-how many cycles the loop took (``cycle - in_tag``).
+how many cycles the loop took (``cycle - in_tag``).  With ``--modbus`` it
+is also a Modbus TCP master (pymodbus' client): ``--reg`` rules write output
+slots to a server's registers or coils and read input slots from it, each
+cycle.
 
 Memory order: the latch needs the daemon's stores in program order and its
 loads in program order.  CPython performs each struct.pack_into/unpack_from

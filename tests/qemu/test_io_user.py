@@ -146,7 +146,9 @@ def test_a_daemon_closes_the_loop(guest, guest_workdir):
     # the daemon holds the device: the resource cannot go
     r = g.run("rmmod iec_rig_r_bench")
     assert r.exit_code != 0 and "iec_rig_r_bench" in loaded_modules(g), r.output
+    print("rmmod:", r.output.strip())
     rc, out = pm(g, "stop", check=None)
+    print("plc-manager stop:", out.strip())
     assert rc != 0, out
     assert f"pid {daemon}" in out and NODE in out, out
     assert "iec_rig_r_bench" in loaded_modules(g)
