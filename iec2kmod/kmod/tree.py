@@ -385,6 +385,9 @@ def _user_owner_tasks(io, tasks):
                                "one device per task")
         owner = next((t for t in tasks if t["name"] in users), None)
         u["interval"] = owner["interval"] if owner else 0
+        # a task that writes none of its outputs publishes at its cycles' start
+        u["publish_in"] = "false" if owner and any(
+            io["binds"][i]["dev"] == u["dev"] for i in owner["io_out"]) else "true"
 
 
 def _user_bind(b, index, lvalue, c_name):

@@ -69,7 +69,10 @@
  *
  * In step: read() of 8 bytes blocks until a publication (a cycle's outputs
  * or a safe state) this file has not been told of and returns the count of
- * publications (u64); poll() says POLLIN then.  O_NONBLOCK: -EAGAIN.
+ * publications (u64); poll() says POLLIN then.  O_NONBLOCK: -EAGAIN.  A
+ * device whose task writes none of its outputs publishes at the start of
+ * each cycle instead, after taking the inputs (its record has the cycle
+ * and in_tag): a daemon of an input-only device runs in step too.
  *
  * A slow or absent daemon: a cycle without new inputs keeps the previous
  * ones (a program sees its input unchanged; the output record's in_tag
@@ -159,6 +162,7 @@ struct iec_user_dev {
 	u32 stale_ms;
 	s64 interval_ns;
 	const struct iec_user_slot *slots;	/* nin inputs, nout outputs */
+	bool publish_in;		/* its task writes none of its outputs */
 
 	/* the layout: the kernel never reads it back from the shared header */
 	u32 in_off, in_stride, out_off, out_stride;
@@ -172,7 +176,7 @@ struct iec_user_dev {
 	u64 in_tag;
 	u32 in_seq;			/* the daemon's in_seq taken */
 	ktime_t fresh;			/* inputs last taken (or task start) */
-	bool idle;			/* outputs safe: the next cycle is a start */
+	u64 starts;			/* the task's starts at the last cycle */
 	u64 cycle;
 	u32 out_seq;
 	u32 status;
@@ -341,7 +345,6 @@ static int iec_user_open(struct iec_io_dev *d, const char **why)
 		strscpy(desc->address, u->slots[i].address, sizeof(desc->address));
 		desc->type = u->slots[i].type;
 	}
-	u->idle = true;
 	u->status = IEC_USER_SAFE;
 	h->status = u->status;
 	spin_lock_init(&u->lock);
@@ -436,6 +439,58 @@ static u32 iec_user_out(u16 type, u32 raw)
 	}
 }
 
+static int iec_user_read(struct iec_io_dev *d, const struct iec_io_bind *b,
+			 u32 *raw)
+{
+	struct iec_user_dev *u = d->handle;
+
+	*raw = iec_user_in(u->slots[b->chan].type, u->in_vals[b->chan]);
+	return 0;
+}
+
+static int iec_user_write(struct iec_io_dev *d, const struct iec_io_bind *b,
+			  u32 raw)
+{
+	struct iec_user_dev *u = d->handle;
+
+	u->out_vals[b->chan] = iec_user_out(u->slots[u->nin + b->chan].type, raw);
+	return 0;
+}
+
+static void iec_user_fill(struct iec_user_dev *u, u32 k, u32 flags)
+{
+	u32 *rec = iec_user_out_rec(u, k);
+	u32 i;
+
+	WRITE_ONCE(*(u64 *)rec, u->cycle);
+	WRITE_ONCE(*(u64 *)(rec + 2), u->in_tag);
+	WRITE_ONCE(rec[4], flags);
+	for (i = 0; i < u->nout; i++)
+		WRITE_ONCE(rec[6 + i], u->out_vals[i]);
+}
+
+/* A publication: the output record, whole, then the readers woken. */
+static void iec_user_publish(struct iec_user_dev *u, struct iec_task *t,
+			     u32 flags)
+{
+	struct iec_user_hdr *h = u->hdr;
+
+	spin_lock(&u->lock);
+	if (t)
+		u->cycle = t->stats.cycles + 1;	/* counted at the cycle's end */
+	smp_store_release(&h->out_seq, ++u->out_seq);	/* odd: record 1 */
+	smp_wmb();
+	iec_user_fill(u, 0, flags);
+	smp_store_release(&h->out_seq, ++u->out_seq);	/* even: record 0 */
+	smp_wmb();
+	iec_user_fill(u, 1, flags);
+	u->status = (u->status & ~IEC_USER_SAFE) | flags;
+	WRITE_ONCE(h->status, u->status);
+	spin_unlock(&u->lock);
+	atomic64_inc(&u->published);
+	wake_up_interruptible(&u->wq);
+}
+
 /* The start of a cycle: the daemon's latest complete inputs, or staleness. */
 static int iec_user_cycle_in(struct iec_io_dev *d, struct iec_task *t,
 			     const char **why)
@@ -446,8 +501,8 @@ static int iec_user_cycle_in(struct iec_io_dev *d, struct iec_task *t,
 	u32 seq = smp_load_acquire(&h->in_seq);
 	u32 try, i;
 
-	if (u->idle) {			/* a start: STALE counts from here */
-		u->idle = false;
+	if (READ_ONCE(t->stats.starts) != u->starts) {	/* STALE counts from a start */
+		u->starts = READ_ONCE(t->stats.starts);
 		u->fresh = now;
 	}
 	for (try = 0; seq != u->in_seq && try < IEC_USER_TRIES; try++) {
@@ -480,63 +535,16 @@ static int iec_user_cycle_in(struct iec_io_dev *d, struct iec_task *t,
 		*why = "inputs stale";
 		return -ETIMEDOUT;
 	}
+	if (u->publish_in)	/* no outputs to wait for: the cycle begins */
+		iec_user_publish(u, t, 0);
 	return 0;
 }
 
-static int iec_user_read(struct iec_io_dev *d, const struct iec_io_bind *b,
-			 u32 *raw)
-{
-	struct iec_user_dev *u = d->handle;
-
-	*raw = iec_user_in(u->slots[b->chan].type, u->in_vals[b->chan]);
-	return 0;
-}
-
-static int iec_user_write(struct iec_io_dev *d, const struct iec_io_bind *b,
-			  u32 raw)
-{
-	struct iec_user_dev *u = d->handle;
-
-	u->out_vals[b->chan] = iec_user_out(u->slots[u->nin + b->chan].type, raw);
-	return 0;
-}
-
-static void iec_user_fill(struct iec_user_dev *u, u32 k, u32 flags)
-{
-	u32 *rec = iec_user_out_rec(u, k);
-	u32 i;
-
-	WRITE_ONCE(*(u64 *)rec, u->cycle);
-	WRITE_ONCE(*(u64 *)(rec + 2), u->in_tag);
-	WRITE_ONCE(rec[4], flags);
-	for (i = 0; i < u->nout; i++)
-		WRITE_ONCE(rec[6 + i], u->out_vals[i]);
-}
-
-/* After copy-out (or a safe state): the outputs to the daemon, whole. */
+/* After copy-out (or a safe state): the outputs to the daemon. */
 static void iec_user_cycle_out(struct iec_io_dev *d, struct iec_task *t,
 			       bool safe)
 {
-	struct iec_user_dev *u = d->handle;
-	struct iec_user_hdr *h = u->hdr;
-	u32 flags = safe ? IEC_USER_SAFE : 0;
-
-	spin_lock(&u->lock);
-	if (t)
-		u->cycle = t->stats.cycles + 1;	/* counted at the cycle's end */
-	if (safe)
-		u->idle = true;
-	smp_store_release(&h->out_seq, ++u->out_seq);	/* odd: record 1 */
-	smp_wmb();
-	iec_user_fill(u, 0, flags);
-	smp_store_release(&h->out_seq, ++u->out_seq);	/* even: record 0 */
-	smp_wmb();
-	iec_user_fill(u, 1, flags);
-	u->status = (u->status & ~IEC_USER_SAFE) | flags;
-	WRITE_ONCE(h->status, u->status);
-	spin_unlock(&u->lock);
-	atomic64_inc(&u->published);
-	wake_up_interruptible(&u->wq);
+	iec_user_publish(d->handle, t, safe ? IEC_USER_SAFE : 0);
 }
 
 static const struct iec_io_provider iec_io_user = {

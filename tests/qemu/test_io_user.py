@@ -31,6 +31,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 PROJECT = HERE / "projects" / "io_user"
 NODE = "/dev/iec_io_rig_bench_fb"
+MON = "/dev/iec_io_rig_bench_mon"      # input-only: published as each cycle begins
 
 # a read-only look at the device, as a second process may take one
 PEEK = r"""
@@ -89,9 +90,12 @@ def test_a_daemon_closes_the_loop(guest, guest_workdir):
     manifest = gen_and_build(PROJECT, tree)
     assert manifest["io"]["Bench"]["devices"] == [
         {"name": "fb", "provider": "user", "board": None, "minor": 0, "node": NODE,
-         "inputs": 2, "outputs": 2, "stale_ms": 400}]
+         "inputs": 2, "outputs": 2, "stale_ms": 400},
+        {"name": "mon", "provider": "user", "board": None, "minor": 0, "node": MON,
+         "inputs": 1, "outputs": 0, "stale_ms": 0}]
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
     log = Path(guest_workdir) / "iodaemon.log"
+    mon_log = Path(guest_workdir) / "iodaemon-mon.log"
 
     # loaded, not started: the device is there, its outputs in the safe state
     pm(g, "load", "--no-start", tree)
@@ -111,19 +115,33 @@ def test_a_daemon_closes_the_loop(guest, guest_workdir):
     daemon = r.output.strip()
     wait_for("the daemon", lambda: log.exists() and "answering each cycle" in log.read_text(),
              timeout=60)
+    r = g.pyrun(code=DAEMON, argv=[str(mon_log), MON, "--map", "%IW10=-1234", "--trace"],
+                timeout=60)
+    assert r.exit_code == 0, r.output
+    mon = r.output.strip()
+    wait_for("the mon daemon", lambda: mon_log.exists() and
+             "answering each cycle" in mon_log.read_text(), timeout=60)
     # a second read-write opener is refused: the inputs have one writer
     r = g.pyrun(script="plc-manager", argv=["io-daemon", NODE, "--cycles", "1"], timeout=60)
     assert r.exit_code == 2 and "another daemon has it open read-write" in r.output, r.output
     pm(g, "start")
     wait_for("100 cycles", lambda: values(g, "Bench.n")["Bench.n"] >= 100, timeout=60)
     pm(g, "stop", "--keep-loaded")
-    v = values(g, "Bench.n", "Bench.count", "Bench.instep", "Bench.behind", "Bench.sig_out")
+    v = values(g, "Bench.n", "Bench.count", "Bench.instep", "Bench.behind", "Bench.sig_out",
+               "Bench.ext")
     print("loop:", v)
+    assert v.pop("Bench.ext") == -1234, v           # through the input-only device
+    mon_recs = [json.loads(ln) for ln in mon_log.read_text().splitlines()
+                if ln.startswith("{")]
+    assert len(mon_recs) >= 50 and all(r["values"] == {} for r in mon_recs), mon_recs[-3:]
+    assert all(b["cycle"] > a["cycle"] for a, b in zip(mon_recs, mon_recs[1:])), mon_recs
     # count advanced exactly in the cycles that saw the previous one's echo
     assert v["Bench.count"] == v["Bench.instep"], v
     assert v["Bench.instep"] + v["Bench.behind"] == v["Bench.n"], v
     assert v["Bench.sig_out"] == -v["Bench.count"], v      # signed INT through a slot
-    assert v["Bench.instep"] >= v["Bench.n"] // 2, v        # mostly in step
+    # in step most of the time on a quiet machine (benchmarks/io_user_latency.py:
+    # 78-95 %); two Python daemons in a TCG guest on a loaded host do less
+    assert v["Bench.instep"] >= v["Bench.n"] // 4, v
 
     # what the daemon saw: whole records, count never ahead of the cycles
     recs = wait_for("the safe record", lambda: [
@@ -150,14 +168,14 @@ def test_a_daemon_closes_the_loop(guest, guest_workdir):
     rc, out = pm(g, "stop", check=None)
     print("plc-manager stop:", out.strip())
     assert rc != 0, out
-    assert f"pid {daemon}" in out and NODE in out, out
+    assert f"pid {daemon}" in out and NODE in out and f"pid {mon}" in out and MON in out, out
     assert "iec_rig_r_bench" in loaded_modules(g)
 
     # running again; the daemon is killed: the inputs go stale, the task faults
     pm(g, "start")
     n0 = values(g, "Bench.n")["Bench.n"]
     wait_for("running", lambda: values(g, "Bench.n")["Bench.n"] >= n0 + 20, timeout=60)
-    g.run(f"kill -9 {daemon}")
+    g.run(f"kill -9 {daemon} {mon}")
     text = wait_for("the stale fault", lambda: (lambda t: t if "stopped on a fault" in t
                                                 else None)(pm(g, "status")[1]), timeout=30)
     assert "bench.fast: stopped on a fault: I/O device error in io fb: inputs stale " \
@@ -166,6 +184,6 @@ def test_a_daemon_closes_the_loop(guest, guest_workdir):
     assert p["status"] == 3 and p["flags"] == 1 and p["values"]["%QW8"] == -7, p
     pm(g, "stop")
     assert loaded_modules(g) == []
-    assert g.run(f"ls {NODE}").exit_code != 0
+    assert g.run(f"ls {NODE} {MON}").exit_code != 0
     assert "iec2kmod: task bench.fast stopped: I/O device error in io fb: inputs stale" \
         in g.run("dmesg").output
