@@ -55,6 +55,26 @@ the driver must be attached without an IRQ (options: the I/O base only),
 since the resource module requests the line itself and sets the control
 register's interrupt enable bit (comedi_parport's control-line writes keep
 it).
+The user-space provider (kmod_templates/kernel/iec_io_user.c): a device
+whose channels are 32-bit slots of a shared memory that a user-space daemon
+(a fieldbus master, a test harness: ``plc-manager io-daemon``) maps::
+
+    DEVICE fb : user INPUTS 4 OUTPUTS 4 STALE 500   # slots; ms, or STALE OFF
+    %ID0   : fb.0                            # input slot 0
+    %QW2   : fb.1 SAFE -1                    # output slot 1
+    %QX0.0 : fb.3 SAFE HOLD
+
+A user device is the character device /dev/iec_io_<config>_<resource>_<device>
+(lower case) while the resource module is loaded.  A binding is
+``device.slot``; the slot is an input slot for an %I address and an output
+slot for a %Q address (0..INPUTS-1, 0..OUTPUTS-1).  The variable is BOOL,
+SINT, INT, DINT, USINT, UINT, UDINT, BYTE, WORD, DWORD or REAL (a slot holds
+32 bits: 0/1, the value sign- or zero-extended, or the IEEE-754 bits of a
+REAL).  ``STALE n`` (default 1000) faults the task with an I/O fault when the
+daemon has not published inputs for n ms; ``STALE OFF`` keeps the last
+inputs for ever.  All the bound inputs and outputs of one user device belong
+to one task (its cycle is the device's cycle): declare a device per task.
+The shared-memory protocol is documented in iec_io_user.c and README.md.
 """
 
 from __future__ import annotations
@@ -71,7 +91,17 @@ INPUT_KINDS = ("AI", "DI", "DIO")
 OUTPUT_KINDS = ("AO", "DO", "DIO")
 ANALOG = ("AI", "AO")
 KINDS = ("AI", "AO", "DI", "DO", "DIO")
-PROVIDERS = ("comedi",)
+PROVIDERS = ("comedi", "user")
+
+# the user provider: the variable types a 32-bit slot carries, and their
+# codes in the device's slot descriptors (iec_io_user.c, manager/iodaemon.py)
+USER_TYPES = {"BOOL": 1, "SINT": 2, "INT": 3, "DINT": 4, "USINT": 5, "UINT": 6,
+              "UDINT": 7, "BYTE": 8, "WORD": 9, "DWORD": 10, "REAL": 11}
+USER_RANGES = {"SINT": (-128, 127), "INT": (-32768, 32767), "DINT": (-(1 << 31), (1 << 31) - 1),
+               "USINT": (0, 255), "UINT": (0, 65535), "UDINT": (0, (1 << 32) - 1),
+               "BYTE": (0, 255), "WORD": (0, 65535), "DWORD": (0, (1 << 32) - 1)}
+USER_MAX_SLOTS = 1024
+USER_STALE_MS = 1000
 
 
 @dataclass
@@ -115,6 +145,9 @@ class Device:
     minor: int
     subdevices: dict               # index -> Subdevice
     place: str                     # file:line of its declaration
+    inputs: int = 0                # user provider: input and output slots
+    outputs: int = 0
+    stale_ms: int = 0              # user provider: 0 = STALE OFF
 
 
 @dataclass
@@ -150,11 +183,22 @@ class ResourceIO:
     devices: dict = field(default_factory=dict)    # upper name -> Device
     bindings: list = field(default_factory=list)
     interrupts: list = field(default_factory=list)
+    config: str = ""
+
+    def user_node(self, dev) -> str:
+        """The character device of user device *dev* (iec_io_user.c)."""
+        return f"/dev/iec_io_{self.config}_{self.resource}_{dev.name}".lower()
+
+    def _device_manifest(self, d) -> dict:
+        m = {"name": d.name, "provider": d.provider, "board": d.board, "minor": d.minor}
+        if d.provider == "user":
+            m.update(node=self.user_node(d), inputs=d.inputs, outputs=d.outputs,
+                     stale_ms=d.stale_ms)
+        return m
 
     def manifest(self) -> dict:
         return {
-            "devices": [{"name": d.name, "provider": d.provider, "board": d.board,
-                         "minor": d.minor} for d in self.devices.values()],
+            "devices": [self._device_manifest(d) for d in self.devices.values()],
             "bindings": [{"address": b.address, "device": b.device, "subdevice": b.subdevice,
                           "channel": b.channel, "kind": b.kind, "type": b.type,
                           "scale": b.scale, "range": b.range, "safe": b.safe}
@@ -239,6 +283,7 @@ class _MapChecker:
         self.diags = diags
         self.res_names = {r.name.upper(): r.name for r in cfg.resources}
         self.bound = {}            # address -> place of its binding
+        self.user_out = {}         # (resource, device, output slot) -> place
 
     def error(self, src, line, col, message):
         self.diags.error(src, None, message, line=line, col=col)
@@ -261,7 +306,8 @@ class _MapChecker:
                     if name is None:
                         raise _Error(tok[2], f"unknown resource '{tok[1]}': the configuration "
                                              f"has {', '.join(self.res_names.values()) or 'none'}")
-                    resource = self.cfg.io.setdefault(name.upper(), ResourceIO(name))
+                    resource = self.cfg.io.setdefault(name.upper(),
+                                                      ResourceIO(name, config=self.cfg.name))
                     devices = resource.devices
                     continue
                 if resource is None:
@@ -269,7 +315,8 @@ class _MapChecker:
                         raise _Error(col, "which resource: the configuration has "
                                           f"{len(self.res_names)}; begin with RESOURCE name")
                     name = next(iter(self.res_names.values()))
-                    resource = self.cfg.io.setdefault(name.upper(), ResourceIO(name))
+                    resource = self.cfg.io.setdefault(name.upper(),
+                                                      ResourceIO(name, config=self.cfg.name))
                     devices = resource.devices
                 if kind == "word" and up == "DEVICE":
                     line.take()
@@ -297,6 +344,8 @@ class _MapChecker:
         if prov[1].lower() not in PROVIDERS:
             raise _Error(prov[2], f"unknown provider '{prov[1]}': the providers are "
                                   f"{', '.join(PROVIDERS)}")
+        if prov[1].lower() == "user":
+            return self.user_device(src, n, line, devices, name_tok)
         board = None
         subs = {}
         k, text, col = line.peek()
@@ -322,11 +371,53 @@ class _MapChecker:
             raise _Error(name_tok[2], f"device '{name_tok[1]}' is already declared "
                                       f"({devices[key].place})")
         for d in devices.values():
-            if d.provider == prov[1].lower() and d.minor == minor:
+            if d.provider == "comedi" and d.minor == minor:
                 raise _Error(name_tok[2], f"device '{name_tok[1]}' is /dev/comedi{minor}, "
                                           f"already declared as '{d.name}' ({d.place})")
         devices[key] = Device(name_tok[1], prov[1].lower(), board, minor, subs,
                               f"{src.path}:{n}")
+
+    def user_device(self, src, n, line, devices, name_tok):
+        counts = {"INPUTS": None, "OUTPUTS": None}
+        stale = None
+        while line.peek()[0] is not None:
+            k, text, col = line.peek()
+            up = text.upper()
+            if k == "word" and up in counts:
+                line.take()
+                if counts[up] is not None:
+                    raise _Error(col, f"{up} is given twice")
+                ct = line.peek()
+                counts[up] = _int(line.take(), f"a number of {up.lower()[:-1]} slots")
+                if counts[up] > USER_MAX_SLOTS:
+                    raise _Error(ct[2], f"{counts[up]} {up.lower()}: a user device has at "
+                                        f"most {USER_MAX_SLOTS}")
+            elif k == "word" and up == "STALE":
+                line.take()
+                if stale is not None:
+                    raise _Error(col, "STALE is given twice")
+                if line.keyword("OFF"):
+                    stale = 0
+                else:
+                    st = line.peek()
+                    stale = _int(line.take(), "a staleness timeout in ms, or OFF")
+                    if not 1 <= stale <= 3_600_000:
+                        raise _Error(st[2], f"STALE {stale}: 1 to 3600000 ms, or OFF")
+            elif k == "word" and up == "MINOR":
+                raise _Error(col, "a user device has no minor: its character device is "
+                                  "named after the configuration, resource and device")
+            else:
+                raise _Error(col, f"unexpected {text!r}: a user device takes INPUTS n, "
+                                  "OUTPUTS n and STALE ms|OFF")
+        if not counts["INPUTS"] and not counts["OUTPUTS"]:
+            raise _Error(line.end_col, "a user device needs slots: INPUTS n and/or OUTPUTS n")
+        key = name_tok[1].upper()
+        if key in devices:
+            raise _Error(name_tok[2], f"device '{name_tok[1]}' is already declared "
+                                      f"({devices[key].place})")
+        devices[key] = Device(name_tok[1], "user", None, 0, {}, f"{src.path}:{n}",
+                              inputs=counts["INPUTS"] or 0, outputs=counts["OUTPUTS"] or 0,
+                              stale_ms=USER_STALE_MS if stale is None else stale)
 
     def subdevice(self, src, n, line, devices):
         k, text, col = _expect(line, "target", "device.N")
@@ -335,6 +426,9 @@ class _MapChecker:
         if dev is None:
             raise _Error(col, f"unknown device '{dev_name}': declare it first "
                               "(DEVICE name : comedi MINOR n)")
+        if dev.provider == "user":
+            raise _Error(col, f"device '{dev.name}' is a user device: its slots are "
+                              "declared by INPUTS and OUTPUTS")
         if dev.board is not None:
             raise _Error(col, f"device '{dev.name}' is a {dev.board}, whose subdevices are "
                               "known; SUBDEVICE describes a board given without a name")
@@ -478,6 +572,9 @@ class _MapChecker:
             raise _Error(tcol, f"unknown device '{parts[0]}' in resource "
                                f"{resource.resource}: declare it with DEVICE "
                                f"{parts[0]} : comedi ... before its bindings")
+        if dev.provider == "user":
+            return self.user_binding(src, n, resource, dev, addr, acol, target, tcol,
+                                     vtype, range_tok, safe_tok, safe, place)
         if len(parts) != 3 or not all(p.isdigit() for p in parts[1:]):
             raise _Error(tcol, f"expected device.subdevice.channel (numbers), found {target!r}")
         si, ch = int(parts[1]), int(parts[2])
@@ -567,6 +664,59 @@ class _MapChecker:
         self.bound[addr] = place
         resource.bindings.append(Binding(addr, dev.name, si, ch, sub.kind, tname, scale,
                                          sub.bits, rng, lo, hi, safe, place))
+
+
+    def user_binding(self, src, n, resource, dev, addr, acol, target, tcol, vtype,
+                     range_tok, safe_tok, safe, place):
+        parts = target.split(".")
+        if len(parts) != 2 or not parts[1].isdigit():
+            raise _Error(tcol, f"expected device.slot (a number) for user device "
+                               f"'{dev.name}', found {target!r}")
+        slot = int(parts[1])
+        is_input = addr[1] == "I"
+        count = dev.inputs if is_input else dev.outputs
+        what = "input" if is_input else "output"
+        scol = tcol + len(parts[0]) + 1
+        if slot >= count:
+            raise _Error(scol, f"{what} slot {slot} is out of range: user device '{dev.name}' "
+                               f"has {count} {what} slots" +
+                               (f" (0..{count - 1})" if count else
+                                f"; declare them with {what.upper()}S n"))
+        base = getattr(vtype, "base", vtype)
+        tname = getattr(base, "name", "?")
+        if tname not in USER_TYPES:
+            raise _Error(acol, f"{addr} is {tname}: a user slot carries 32 bits: BOOL, SINT, "
+                               "INT, DINT, USINT, UINT, UDINT, BYTE, WORD, DWORD or REAL")
+        if range_tok is not None:
+            raise _Error(range_tok[2], "RANGE applies to analog comedi channels only")
+        if safe_tok is not None:
+            if is_input:
+                raise _Error(safe_tok[2], "SAFE applies to outputs: an input has no safe state")
+            if tname == "BOOL":
+                if safe not in ("HOLD", "TRUE", "FALSE", 0, 1):
+                    raise _Error(safe_tok[2], f"safe value {safe_tok[1]} of a BOOL output: "
+                                              "TRUE, FALSE or HOLD")
+                safe = {"TRUE": 1, "FALSE": 0}.get(safe, safe)
+            elif safe != "HOLD":
+                if isinstance(safe, str):
+                    raise _Error(safe_tok[2], f"safe value {safe_tok[1]} of a {tname} output: "
+                                              "a number or HOLD")
+                if tname != "REAL":
+                    lo, hi = USER_RANGES[tname]
+                    if not isinstance(safe, int) or not lo <= safe <= hi:
+                        raise _Error(safe_tok[2], f"safe value {safe_tok[1]} does not fit "
+                                                  f"{tname} ({lo}..{hi})")
+        elif not is_input:
+            safe = 0
+        if not is_input:
+            key = (resource.resource.upper(), dev.name.upper(), slot)
+            if key in self.user_out:
+                raise _Error(scol, f"output slot {dev.name}.{slot} is already driven "
+                                   f"({self.user_out[key]}): one output per slot")
+            self.user_out[key] = place
+        self.bound[addr] = place
+        resource.bindings.append(Binding(addr, dev.name, None, slot, "USER", tname, "word",
+                                         32, 0, 0.0, 0.0, safe, place))
 
 
 def check_maps(project, sources, diags) -> None:

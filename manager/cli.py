@@ -460,6 +460,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true")
     s.set_defaults(func=cmd_vars)
 
+    s = sub.add_parser("io-daemon", help="reference daemon of a user I/O device: maps "
+                                         "/dev/iec_io_*, answers each cycle's outputs "
+                                         "with inputs (loopback rules)")
+    from .iodaemon import add_arguments as _io_args, run as _io_run
+    _io_args(s)
+    s.set_defaults(func=_io_run)
+
     from .serve import add_parsers as _serve_parsers
     _serve_parsers(sub)
     return p

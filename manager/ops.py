@@ -297,8 +297,12 @@ def unload(config_module: str, progress: Progress = _quiet) -> List[str]:
         except kmod.ModuleError as e:
             if e.code == errno.ENOENT:          # gone already
                 return
-            problems.append(str(e))
-            progress(f"  could not remove {m}: {e}")
+            msg = str(e)
+            if e.code in (errno.EWOULDBLOCK, errno.EBUSY):   # a user I/O device held?
+                from .iodaemon import holders_hint
+                msg += holders_hint(m)
+            problems.append(msg)
+            progress(f"  could not remove {m}: {msg}")
             return
         removed.append(m)
         progress(f"  removed {m:<45} {_ms(t0, time.perf_counter()):8.1f} ms")
@@ -368,6 +372,13 @@ def stop(keep_loaded: bool = False, resource: Optional[str] = None,
             if keep_loaded:
                 return
     config = st.configuration
+    # a user I/O device (iec_io_user.c) held by a daemon holds its resource
+    # module: say so before removing anything (the tasks are stopped)
+    from .iodaemon import holders_hint
+    held = [f"{r.module}{hint}" for r in st.resources if (hint := holders_hint(r.module))]
+    if held:
+        raise PLCError(f"the tasks of {config} are stopped, but nothing is removed: "
+                       f"{'; '.join(held)}; then stop again")
     removed = unload(st.module, progress)
     State.remove(config)
     progress(f"removed {len(removed)} modules: nothing of {config} is loaded")

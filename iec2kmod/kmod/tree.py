@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import re
 import shutil
+import struct
 from pathlib import Path
 
 from jinja2 import Environment, FileSystemLoader, StrictUndefined
@@ -283,6 +284,7 @@ def _resource_source(env, comp, rm):
         for ip in tp.instances:
             for b in ip.bindings:
                 init += b.lines(ip.c_name, lambda g, n=tp.index: f"task{n}_image.{g.c_name}")
+    _user_owner_tasks(io, tasks)
     # an instance variable belongs to the task that runs its instance (1 + index in tasks[]):
     # the manager writes it between two cycles of that task
     task_no = {t["name"].upper(): n + 1 for n, t in enumerate(tasks)}
@@ -337,6 +339,9 @@ def _io_of(cfg, plan, r):
             raise CompileError(f"{b.place}: {b.address} is {b.type}: the kernel runtime does "
                                "not scale to REAL yet; bind an integer variable (the raw "
                                "sample)")
+        if b.kind == "USER":
+            binds.append(_user_bind(b, index, lvalue, c_name))
+            continue
         assert b.kind in _IO_KINDS
         maxdata = 1 if b.scale == "bit" else (1 << b.bits) - 1
         safe = 0 if b.safe in (None, "HOLD") else int(b.safe)
@@ -349,8 +354,68 @@ def _io_of(cfg, plan, r):
     irqs = [{"address": q.address, "source": f"{q.device}.{q.source}",
              "dev": index[q.device.upper()], "line": q.irq, "tasks": list(q.tasks)}
             for q in rio.interrupts]
-    return {"devs": [{"name": d.name, "provider": d.provider, "minor": d.minor} for d in devs],
-            "binds": binds, "irqs": irqs, "comedi": any(d.provider == "comedi" for d in devs)}
+    users = []
+    for i, d in enumerate(devs):
+        if d.provider != "user":
+            continue
+        slots = {(b["input"], b["chan"]): b for b in binds if b["dev"] == i}
+        users.append({"dev": i, "name": d.name, "node": rio.user_node(d)[len("/dev/"):],
+                      "inputs": d.inputs, "outputs": d.outputs, "stale_ms": d.stale_ms,
+                      "slots": [(N.c_string(slots[(inp, k)]["address"].encode()),
+                                 slots[(inp, k)]["type_code"]) if (inp, k) in slots else
+                                ('""', 0)
+                                for inp, count in ((1, d.inputs), (0, d.outputs))
+                                for k in range(count)]})
+    return {"devs": [{"name": d.name, "provider": d.provider, "minor": d.minor,
+                      "handle": f"&io_user{i}" if d.provider == "user" else "NULL"}
+                     for i, d in enumerate(devs)],
+            "binds": binds, "irqs": irqs,
+            "comedi": any(d.provider == "comedi" for d in devs), "users": users}
+
+
+def _user_owner_tasks(io, tasks):
+    """A user device is exchanged by one task (its cycle is the device's
+    cycle, iec_io_user.c): records it, or refuses two naming both."""
+    from ..compilation import CompileError
+    for u in (io or {}).get("users", []):
+        users = {}
+        for t in tasks:
+            for i in t["io_in"] + t["io_out"]:
+                b = io["binds"][i]
+                if b["dev"] == u["dev"]:
+                    users.setdefault(t["name"], b)
+        if len(users) > 1:
+            (t1, b1), (t2, b2) = list(users.items())[:2]
+            raise CompileError(f"{b2['place']}: user device '{u['name']}' is exchanged by "
+                               f"task {t1} ({b1['address']}, {b1['place']}) and task {t2} "
+                               f"({b2['address']}): a user device serves one task; declare "
+                               "one device per task")
+        owner = next((t for t in tasks if t["name"] in users), None)
+        u["interval"] = owner["interval"] if owner else 0
+        # a task that writes none of its outputs publishes at its cycles' start
+        u["publish_in"] = "false" if owner and any(
+            io["binds"][i]["dev"] == u["dev"] for i in owner["io_out"]) else "true"
+
+
+def _user_bind(b, index, lvalue, c_name):
+    """A binding of the user provider (iec_io_user.c): a 32-bit slot.  The
+    variable's bits reach the provider unclamped (maxdata U32_MAX, read as
+    unsigned); the provider sign-extends and saturates by the slot's type."""
+    from ..iomap import USER_TYPES
+    if b.safe in (None, "HOLD"):
+        safe = 0
+    elif b.type == "REAL":
+        safe = struct.unpack("<I", struct.pack("<f", float(b.safe)))[0]
+    else:
+        safe = int(b.safe) & 0xFFFFFFFF
+    inp = int(b.address[1] == "I")
+    return {"address": b.address, "channel": f"{b.device}.{b.channel}",
+            "dev": index[b.device.upper()], "subdev": 0, "chan": b.channel,
+            # the kind only tells the direction: the user provider reads no other
+            "kind": "DI" if inp else "DO", "input": inp, "range": 0,
+            "hold": int(b.safe == "HOLD"), "maxdata": 1 if b.type == "BOOL" else 0xFFFFFFFF,
+            "safe": safe, "lvalue": lvalue, "c_name": c_name, "signed": 0,
+            "type_code": USER_TYPES[b.type], "place": b.place}
 
 
 def _write_module(out, mod, files, objs, fp_objs, runtime):

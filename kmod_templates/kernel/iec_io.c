@@ -90,6 +90,16 @@ struct iec_io_provider {
 	 */
 	int (*irq_on)(struct iec_io_dev *d, struct iec_io_irq *q, const char **why);
 	void (*irq_off)(struct iec_io_dev *d, struct iec_io_irq *q);
+	 * Optional, for a device exchanged a whole cycle at a time
+	 * (iec_io_user.c); task thread, no lock held.  cycle_in() comes
+	 * before the reads of a task cycle that reads the device (an error
+	 * faults the task, located at "io <device>: <why>"), cycle_out()
+	 * after the writes of a cycle that writes it (t: that task) and
+	 * after a safe state (safe true; t NULL).
+	 */
+	int (*cycle_in)(struct iec_io_dev *d, struct iec_task *t,
+			const char **why);
+	void (*cycle_out)(struct iec_io_dev *d, struct iec_task *t, bool safe);
 };
 
 struct iec_io_dev {
@@ -202,6 +212,33 @@ static void iec_io_fault(struct iec_io *io, struct iec_task *t,
 	iec_fault_locate(&t->ctx, text, 0);
 }
 
+/* Does one of the bindings idx[] (all: idx NULL) use device dev? */
+static __maybe_unused bool iec_io_uses(const struct iec_io *io,
+				       const u16 *idx, u32 n, u32 dev)
+{
+	u32 i;
+
+	for (i = 0; i < n; i++)
+		if (io->binds[idx ? idx[i] : i].dev == dev)
+			return true;
+	return false;
+}
+
+/* cycle_out() of the devices that have one among idx[] (all: idx NULL) */
+static __maybe_unused void iec_io_cycle_out(struct iec_io *io,
+					    struct iec_task *t,
+					    const u16 *idx, u32 n, bool safe)
+{
+	u32 j;
+
+	for (j = 0; j < io->nopen; j++) {
+		struct iec_io_dev *d = &io->devs[j];
+
+		if (d->prov->cycle_out && iec_io_uses(io, idx, n, j))
+			d->prov->cycle_out(d, t, safe);
+	}
+}
+
 /*
  * Steps 1, 2, 4 and 5 (__maybe_unused: a resource whose tasks only read, or
  * only write, or only wait for interrupts uses some of them).
@@ -211,8 +248,27 @@ static void iec_io_fault(struct iec_io *io, struct iec_task *t,
 static __maybe_unused bool iec_io_read(struct iec_io *io, struct iec_task *t,
 			const u16 *idx, u32 *raw, u32 n)
 {
+	const char *why = "";
 	u32 i;
 
+	for (i = 0; i < io->ndevs; i++) {
+		struct iec_io_dev *d = &io->devs[i];
+		char *text = io->fault_text[t - t->res->tasks];
+		int ret;
+
+		if (!d->prov->cycle_in || !iec_io_uses(io, idx, n, i))
+			continue;
+		ret = d->prov->cycle_in(d, t, &why);
+		if (ret < 0) {
+			if (t->ctx.fault == IEC_FAULT_NONE) {
+				snprintf(text, sizeof(io->fault_text[0]),
+					 "io %s: %s errno %d", d->name, why, -ret);
+				iec_fault_raise(&t->ctx, IEC_FAULT_IO);
+				iec_fault_locate(&t->ctx, text, 0);
+			}
+			return false;
+		}
+	}
 	for (i = 0; i < n; i++) {
 		const struct iec_io_bind *b = &io->binds[idx[i]];
 		struct iec_io_dev *d = &io->devs[b->dev];
@@ -261,6 +317,7 @@ static __maybe_unused void iec_io_write(struct iec_io *io, struct iec_task *t,
 			return;
 		}
 	}
+	iec_io_cycle_out(io, t, idx, n, false);
 }
 
 /* Outputs idx[] (all outputs: idx NULL) to their safe state; best effort. */
@@ -280,6 +337,7 @@ static void iec_io_safe(struct iec_io *io, const u16 *idx, u32 n)
 			pr_warn_ratelimited("iec2kmod: resource %s: %s %s: safe value not written\n",
 					    io->resource, b->channel, b->address);
 	}
+	iec_io_cycle_out(io, NULL, idx, n, true);
 }
 
 static void iec_io_close(struct iec_io *io)

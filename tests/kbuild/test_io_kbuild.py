@@ -59,3 +59,22 @@ def test_the_irq_benchmark_module_builds_with_zero_warnings(tmp_path):
     r = kbuild.build_modules(str(d), sparse=True).check()
     assert r.warnings() == [], r.output
     assert (d / "irqwake.ko").is_file()
+USER_PROJECT = ROOT / "tests" / "qemu" / "projects" / "io_user"
+
+
+@pytest.mark.kbuild
+def test_a_user_io_resource_builds_with_zero_warnings(tmp_path):
+    """The user-space provider (iec_io_user.c: misc device, mmap of
+    vmalloc_user memory, poll) under W=1 and sparse; it needs no comedi."""
+    p = _cli("gen", str(USER_PROJECT), "-o", str(tmp_path / "t"))
+    assert p.returncode == 0, p.stderr
+    main = (tmp_path / "t" / "iec_rig_r_bench" / "main.c").read_text()
+    assert '#include "iec_io_user.c"' in main and "iec_io_comedi.c" not in main
+    p = _cli("build", str(tmp_path / "t"), "--sparse")
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "sparse: 0 warnings" in p.stdout, p.stdout
+    assert "warning:" not in p.stdout + p.stderr, (p.stdout + p.stderr)[-3000:]
+    ko = tmp_path / "t" / "iec_rig_r_bench" / "iec_rig_r_bench.ko"
+    info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
+                          text=True, timeout=60).stdout
+    assert "kcomedilib" not in info, info
