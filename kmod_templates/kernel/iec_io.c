@@ -90,6 +90,7 @@ struct iec_io_provider {
 	 */
 	int (*irq_on)(struct iec_io_dev *d, struct iec_io_irq *q, const char **why);
 	void (*irq_off)(struct iec_io_dev *d, struct iec_io_irq *q);
+	/*
 	 * Optional, for a device exchanged a whole cycle at a time
 	 * (iec_io_user.c); task thread, no lock held.  cycle_in() comes
 	 * before the reads of a task cycle that reads the device (an error
