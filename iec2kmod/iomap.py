@@ -34,7 +34,9 @@ count, resolution) and refuses the load naming the device when they differ.
 
 from __future__ import annotations
 
+import math
 import re
+import struct
 from dataclasses import dataclass, field
 
 from .diagnostics import SourceFile
@@ -114,7 +116,8 @@ class ResourceIO:
                          "minor": d.minor} for d in self.devices.values()],
             "bindings": [{"address": b.address, "device": b.device, "subdevice": b.subdevice,
                           "channel": b.channel, "kind": b.kind, "type": b.type,
-                          "scale": b.scale, "range": b.range, "safe": b.safe}
+                          "scale": b.scale, "range": b.range, "safe": b.safe,
+                          "bits": b.bits, "lo": b.lo, "hi": b.hi}
                          for b in self.bindings],
         }
 
@@ -461,6 +464,35 @@ class _MapChecker:
         self.bound[addr] = place
         resource.bindings.append(Binding(addr, dev.name, si, ch, sub.kind, tname, scale,
                                          sub.bits, rng, lo, hi, safe, place))
+
+
+def _real(x: float, type_name: str) -> float:
+    """x as the variable holds it: a REAL is the nearest binary32."""
+    if type_name.upper() == "LREAL":
+        return float(x)
+    return struct.unpack("<f", struct.pack("<f", float(x)))[0]
+
+
+def phys_of(lo: float, hi: float, bits: int, raw: int, type_name: str = "REAL") -> float:
+    """The REAL/LREAL value of raw sample *raw* of a channel with range
+    lo..hi: the kernel's arithmetic (kmod_templates/kernel/iec_io_real.c),
+    IEEE binary64 operation by operation, then rounded to a REAL."""
+    maxdata = (1 << bits) - 1
+    return _real(float(lo) + float(raw) * (float(hi) - float(lo)) / float(maxdata), type_name)
+
+
+def raw_of(lo: float, hi: float, bits: int, value: float, type_name: str = "REAL") -> int:
+    """The raw sample the kernel writes for output value *value*: the
+    nearest one (halves up), clamped to 0..2**bits-1, NaN gives 0
+    (iec_io_real.c, the same binary64 arithmetic)."""
+    maxdata = (1 << bits) - 1
+    v = _real(value, type_name)
+    t = (v - float(lo)) * float(maxdata) / (float(hi) - float(lo)) + 0.5
+    if not t >= 1.0:
+        return 0
+    if t >= float(maxdata):
+        return maxdata
+    return int(math.floor(t))
 
 
 def check_maps(project, sources, diags) -> None:
