@@ -68,6 +68,11 @@
 #include "iec_kmod.h"
 #include "iec_io_real.h"
 
+/* 1 when a binding is REAL-scaled: the module links iec_io_real.o */
+#ifndef IEC_IO_PHYS
+#define IEC_IO_PHYS 0
+#endif
+
 enum iec_io_kind { IEC_IO_AI, IEC_IO_AO, IEC_IO_DI, IEC_IO_DO, IEC_IO_DIO };
 
 struct iec_io_dev;
@@ -224,7 +229,7 @@ static void iec_io_store(struct iec_io *io, const u16 *idx, const u32 *raw,
 	for (i = 0; i < n; i++) {
 		const struct iec_io_bind *b = &io->binds[idx[i]];
 
-		if (!b->phys) {
+		if (!IEC_IO_PHYS || !b->phys) {
 			iec_io_put(b, raw[i]);
 			continue;
 		}
@@ -247,7 +252,7 @@ static void iec_io_stage(struct iec_io *io, const u16 *idx, u32 *raw, u32 n)
 	for (i = 0; i < n; i++) {
 		const struct iec_io_bind *b = &io->binds[idx[i]];
 
-		if (!b->phys) {
+		if (!IEC_IO_PHYS || !b->phys) {
 			raw[i] = iec_io_get(b);
 			continue;
 		}

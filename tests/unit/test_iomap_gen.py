@@ -93,6 +93,7 @@ def test_a_real_binding_is_scaled_in_an_fpu_object(tmp_path):
            ".maxdata = 65535U }" in main
     # SAFE 0.0 (volts) on -10..10 V: (0 + 10) * 65535 / 20 + 0.5 = 32768.0
     assert '.address = "%QD4", .channel = "daq.1.1"' in main and ".safe = 32768U" in main
+    assert main.index("#define IEC_IO_PHYS 1") < main.index('#include "iec_io.c"')
     kbuild = (out / "iec_plant_r_tank" / "Kbuild").read_text()
     assert "iec_plant_r_tank-y := main.o iec_io_real.o\n" in kbuild
     assert "CFLAGS_iec_io_real.o += -mhard-float" in kbuild
@@ -104,6 +105,8 @@ def test_a_real_binding_is_scaled_in_an_fpu_object(tmp_path):
     p, out2 = gen(tmp_path / "b", PROJECT)
     assert p.returncode == 0, p.stderr
     assert "iec_io_real" not in (out2 / "iec_rig_r_bench" / "Kbuild").read_text()
+    # (its main.c calls no scaling function: none would link)
+    assert "IEC_IO_PHYS" not in (out2 / "iec_rig_r_bench" / "main.c").read_text()
 
 
 def test_phys_of_and_raw_of_invert_each_other():
