@@ -24,7 +24,8 @@ is bound once.  Scaling: a digital channel is a BOOL at a bit address
 (UINT, WORD, UDINT, DWORD) the raw sample 0..2**bits-1, a signed one (INT,
 DINT) the same count when it fits, and a REAL or LREAL the physical value of
 the range (lo + raw * (hi - lo) / (2**bits - 1), written back by the inverse,
-rounded and clamped).  An output's safe state (on stop, fault and unload) is
+rounded and clamped: phys_of and raw_of below, which the kernel's
+iec_io_real.c computes bit for bit; a SAFE value of a REAL is in volts).  An output's safe state (on stop, fault and unload) is
 0 / FALSE unless ``SAFE value`` or ``SAFE HOLD`` says otherwise.
 
 The boards in BOARDS are described as their drivers report them; the kernel
