@@ -14,7 +14,8 @@ AO channel of the same number).
   iec2kmod.iomap.phys_of computes them, and the REAL outputs reach the
   device as raw_of of the variables;
 - status shows the bindings and the last samples (raw and volts);
-- force by address: a forced analog output is what reaches the device
+- force by address: a forced input is what the program sees while status
+  shows the device's sample; a forced analog output is what reaches the device
   (read back through comedi_test's AI loopback, from user space and by the
   program), while the variable and the device differ after a stop (the
   safe value)."""
@@ -112,6 +113,15 @@ def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     v = values(g, "%QD4", "Tank.valve_fb")
     assert v["Tank.valve"] == 2.5
     assert v["Tank.valve_fb"] == phys_of(-10.0, 10.0, 16, want) != 2.5, v
+
+    # a forced input: the program sees the forced volts, status the device's
+    pm(g, "force", "%ID0", "1.0")
+    time.sleep(0.5)
+    st = io_status(g)
+    assert values(g, "%ID0")["Tank.level"] == 1.0
+    assert st["%ID0"]["last"] is not None
+    assert abs(phys_of(-10.0, 10.0, 16, st["%ID0"]["last"]) - 1.0) > 1.0, st
+    pm(g, "unforce", "%ID0")
 
     # stopped: every REAL input is phys_of its last sample, every REAL
     # output went out as raw_of its value; AO 0 holds, the valve is safe
