@@ -14,6 +14,8 @@ AO channel of the same number).
   iec2kmod.iomap.phys_of computes them, and the REAL outputs reach the
   device as raw_of of the variables;
 - status shows the bindings and the last samples (raw and volts);
+- an LREAL on the channel's range 1 (-5..5 V): the same sample, half the
+  volts, not rounded to a REAL;
 - force by address: a forced input is what the program sees while status
   shows the device's sample; a forced analog output is what reaches the device
   (read back through comedi_test's AI loopback, from user space and by the
@@ -52,9 +54,28 @@ def wait_io(guest, address, raw, timeout=30.0) -> dict:
     return st
 
 
+def lreal_variant(dest: Path) -> Path:
+    """tank_io with its level input an LREAL on AI 0's range 1 (-5..5 V)."""
+    dest.mkdir(parents=True, exist_ok=True)
+    st = (PROJECT / "tank_io.st").read_text()
+    st = st.replace("level AT %ID0 : REAL;", "level AT %IL0 : LREAL;")
+    st = st.replace("    level : REAL;                     (* V, the level transmitter",
+                    "    level : LREAL;                    (* V, the level transmitter")
+    st = st.replace("err := setpoint - level;", "err := setpoint - LREAL_TO_REAL(level);")
+    iomap = (PROJECT / "tank_io.iomap").read_text().replace("%ID0 : daq.0.0 RANGE 0",
+                                                            "%IL0 : daq.0.0 RANGE 1")
+    assert "level AT %IL0 : LREAL;" in st and "LREAL_TO_REAL(level)" in st
+    assert "%IL0 : daq.0.0 RANGE 1" in iomap
+    (dest / "tank_io.st").write_text(st)
+    (dest / "tank_io.iomap").write_text(iomap)
+    return dest
+
+
 def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     tree = Path(guest_workdir) / "tank_io"
     manifest = gen_and_build(PROJECT, tree)
+    tree_l = Path(guest_workdir) / "tank_io_lreal"
+    gen_and_build(lreal_variant(Path(guest_workdir) / "src_lreal"), tree_l)
     res = next(m["name"] for m in manifest["modules"] if m["kind"] == "resource")
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
     g = guest_factory(extra_modules=COMEDI)
@@ -136,5 +157,25 @@ def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     assert values(g, "%QD4")["Tank.valve"] == 2.5    # the variable its forced one
     assert channels(g, "0.0")[0] == st["%QD0"]["last"]   # AI 0 loops AO 0 back
     pm(g, "unforce", "--all")
+    pm(g, "stop")
+    assert loaded_modules(g) == []
+
+    # an LREAL on range 1 (-5..5 V) of the same channel: the same sample,
+    # half the volts, in binary64
+    pm(g, "load", tree_l)
+    deadline = time.monotonic() + 60
+    while io_status(g)["%IL0"]["last"] is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.3)
+    time.sleep(1.0)
+    pm(g, "stop", "--keep-loaded")
+    st = io_status(g)
+    raw = st["%IL0"]["last"]
+    level = values(g, "%IL0")["Tank.level"]
+    assert level == phys_of(-5.0, 5.0, 16, raw, "LREAL"), (level, raw)
+    if raw % 13107:     # (only k * 13107 give a value exact in binary32 too)
+        assert level != phys_of(-5.0, 5.0, 16, raw, "REAL")     # not rounded to binary32
+    assert abs(level - phys_of(-10.0, 10.0, 16, raw) / 2) < 1e-3
+    assert channels(g, "0.0") == [raw] == [st["%QD0"]["last"]]
     pm(g, "stop")
     assert loaded_modules(g) == []
