@@ -24,7 +24,8 @@ is bound once.  Scaling: a digital channel is a BOOL at a bit address
 (UINT, WORD, UDINT, DWORD) the raw sample 0..2**bits-1, a signed one (INT,
 DINT) the same count when it fits, and a REAL or LREAL the physical value of
 the range (lo + raw * (hi - lo) / (2**bits - 1), written back by the inverse,
-rounded and clamped).  An output's safe state (on stop, fault and unload) is
+rounded and clamped: phys_of and raw_of below, which the kernel's
+iec_io_real.c computes bit for bit; a SAFE value of a REAL is in volts).  An output's safe state (on stop, fault and unload) is
 0 / FALSE unless ``SAFE value`` or ``SAFE HOLD`` says otherwise.
 
 The boards in BOARDS are described as their drivers report them; the kernel
@@ -79,7 +80,9 @@ The shared-memory protocol is documented in iec_io_user.c and README.md.
 
 from __future__ import annotations
 
+import math
 import re
+import struct
 from dataclasses import dataclass, field
 
 from .diagnostics import SourceFile
@@ -201,7 +204,8 @@ class ResourceIO:
             "devices": [self._device_manifest(d) for d in self.devices.values()],
             "bindings": [{"address": b.address, "device": b.device, "subdevice": b.subdevice,
                           "channel": b.channel, "kind": b.kind, "type": b.type,
-                          "scale": b.scale, "range": b.range, "safe": b.safe}
+                          "scale": b.scale, "range": b.range, "safe": b.safe,
+                          "bits": b.bits, "lo": b.lo, "hi": b.hi}
                          for b in self.bindings],
             "interrupts": [{"address": q.address, "device": q.device, "source": q.source,
                             "irq": q.irq, "tasks": q.tasks} for q in self.interrupts],
@@ -717,6 +721,34 @@ class _MapChecker:
         self.bound[addr] = place
         resource.bindings.append(Binding(addr, dev.name, None, slot, "USER", tname, "word",
                                          32, 0, 0.0, 0.0, safe, place))
+
+def _real(x: float, type_name: str) -> float:
+    """x as the variable holds it: a REAL is the nearest binary32."""
+    if type_name.upper() == "LREAL":
+        return float(x)
+    return struct.unpack("<f", struct.pack("<f", float(x)))[0]
+
+
+def phys_of(lo: float, hi: float, bits: int, raw: int, type_name: str = "REAL") -> float:
+    """The REAL/LREAL value of raw sample *raw* of a channel with range
+    lo..hi: the kernel's arithmetic (kmod_templates/kernel/iec_io_real.c),
+    IEEE binary64 operation by operation, then rounded to a REAL."""
+    maxdata = (1 << bits) - 1
+    return _real(float(lo) + float(raw) * (float(hi) - float(lo)) / float(maxdata), type_name)
+
+
+def raw_of(lo: float, hi: float, bits: int, value: float, type_name: str = "REAL") -> int:
+    """The raw sample the kernel writes for output value *value*: the
+    nearest one (halves up), clamped to 0..2**bits-1, NaN gives 0
+    (iec_io_real.c, the same binary64 arithmetic)."""
+    maxdata = (1 << bits) - 1
+    v = _real(value, type_name)
+    t = (v - float(lo)) * float(maxdata) / (float(hi) - float(lo)) + 0.5
+    if not t >= 1.0:
+        return 0
+    if t >= float(maxdata):
+        return maxdata
+    return int(math.floor(t))
 
 
 def check_maps(project, sources, diags) -> None:

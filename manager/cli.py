@@ -143,10 +143,28 @@ def status_text(st) -> str:
         out += ["", "faults (the last one of each task since the load):"] + faults
     if long:
         out += ["", "tasks inside a long cycle (stop and unload wait for them, with a bound):"] + long
+    io = io_bindings(st)
+    if io:
+        out += ["", "I/O (LAST: the sample last read from or written to the device; "
+                "/sys/module/<module>/iec_io):",
+                table(["RESOURCE", "ADDRESS", "VARIABLE", "CHANNEL", "DIR", "SAFE", "LAST RAW",
+                       "LAST VALUE"],
+                      [[b.resource, b.address, b.variable, b.where, "in" if b.input else "out",
+                        b.safe_text, "-" if b.last is None else b.last, b.value or "-"]
+                       for b in io], right=(6,))]
     out += ["", table(["SLOT", "PROGRAM TYPE", "MODULE", "BUILD", "SINCE"],
                       [[s.index, s.type_name, s.module or "(empty)", s.build_id or "-",
                         fmt_since(s.since_ns, st.now_ns)] for s in st.slots])]
     return "\n".join(out)
+
+
+def io_bindings(st) -> list:
+    """The running configuration's I/O bindings with their last values
+    (manager/io.py), from the state saved at load; [] without."""
+    from . import io
+    from .ops import running_state
+    s = running_state(st)
+    return io.bindings(s.data.get("io") or {}) if s is not None else []
 
 
 def status_json(st) -> dict:
@@ -158,6 +176,7 @@ def status_json(st) -> dict:
                        "tasks": [dict(t.__dict__, path=t.path) for t in r.tasks]}
                       for r in st.resources],
         "slots": [dict(s.__dict__) for s in st.slots],
+        "io": [dict(b.__dict__, where=b.where, last_value=b.value) for b in io_bindings(st)],
     }
 
 

@@ -186,6 +186,11 @@ def load(path: str, start: bool = True, progress: Progress = _quiet) -> LoadRepo
     proj.check_modules()
     t2 = time.perf_counter()
     phases["check modules"] = _ms(t, t2)
+    from . import io
+    if io.check_devices(proj.m):    # the I/O map's devices, before any insert
+        t = t2
+        t2 = time.perf_counter()
+        phases["check devices"] = _ms(t, t2)
     loaded = kmod.loaded()
     running = _loaded_configurations()
     if running:

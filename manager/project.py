@@ -269,6 +269,11 @@ def state_dir() -> Path:
     return Path(os.environ.get("PLC_MANAGER_STATE_DIR", "/run/plc-manager"))
 
 
+def _io_summary(m: dict) -> dict:
+    from .io import summary
+    return summary(m)
+
+
 class State:
     """What plc-manager remembers about the running configuration, in two
     files of state_dir():
@@ -370,7 +375,10 @@ class State:
         m = project.m
         return cls({"configuration": project.configuration, "project": str(project.path),
                     "interface_hash": m.get("interface_hash"),
-                    "source_hash": m.get("source_hash"), "slots": {}},
+                    "source_hash": m.get("source_hash"), "slots": {},
+                    # the I/O bindings (plc-manager status): a few lines,
+                    # where the manifest may be megabytes
+                    **({"io": _io_summary(m)} if m.get("io") else {})},
                    m, manifest_dirty=True, manifest_text=getattr(project, "text", None))
 
     @staticmethod

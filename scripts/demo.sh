@@ -8,6 +8,8 @@
 #   5. boot Debian's PREEMPT_RT kernel in QEMU, and inside it:
 #      plc-manager load, status, watch and write variables, swap to the
 #      variant while the PLC runs, stop; check the kernel log.
+# Real I/O (a tank level loop on the comedi_test driver, plc-manager status
+# with its bindings, a forced output seen on the device): scripts/demo_io.sh.
 # A few minutes on a 2-core machine.  IEC2KMOD_DEMO_DIR sets the work
 # directory (default /tmp/iec2kmod-demo; no whitespace).
 set -euo pipefail
@@ -57,3 +59,4 @@ step "5/5 run it for real: PREEMPT_RT kernel in QEMU, plc-manager inside"
     %QX0.2 %QX0.1 %QX0.5
 
 step "done in $((SECONDS - T0)) s"
+echo "Real I/O in the guest (examples/tank_io on comedi_test): ./scripts/demo_io.sh"

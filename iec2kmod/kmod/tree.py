@@ -156,10 +156,15 @@ def write_tree(comp, out: Path) -> dict:
     for rm in mp.resources:
         text = _resource_source(env, comp, rm)
         runtime = _runtime_used([text, gen.header], False)
-        _write_module(out, rm.name, {"main.c": text}, ["main.o"] + [f[:-2] + ".o" for f in runtime],
-                      [], runtime=runtime)
+        # REAL-scaled I/O: iec_io_real.c, the module's one FPU object, runs
+        # between kernel_fpu_begin() and kernel_fpu_end() (iec_io.c)
+        io = _io_of(project.configurations[0], plan, rm.resource)
+        fp = ["iec_io_real.c"] if io and io["phys"] else []
+        _write_module(out, rm.name, {"main.c": text},
+                      ["main.o"] + [f[:-2] + ".o" for f in runtime + fp],
+                      [f[:-2] + ".o" for f in fp], runtime=runtime + fp)
         res_modules.append({"name": rm.name, "kind": "resource", "resource": rm.resource.name,
-                            "dir": rm.name, "cpu": rm.cpu})
+                            "dir": rm.name, "cpu": rm.cpu, **({"uses_fpu": True} if fp else {})})
 
     manifest = manifest_of(cfg, plan, mp.config_module, prog_modules, res_modules,
                            mp.source_hash, mp.iface_hash)
@@ -315,6 +320,7 @@ def _io_of(cfg, plan, r):
     variable (a global of the configuration or the resource, or a direct
     address of a program connection)."""
     from ..compilation import CompileError
+    from ..iomap import raw_of
     rio = (getattr(cfg, "io", None) or {}).get(r.name.upper())
     if rio is None or not (rio.bindings or rio.interrupts):
         return None
@@ -335,22 +341,25 @@ def _io_of(cfg, plan, r):
                                    "the resource's VAR_GLOBAL")
             c_name = g.c_name
             lvalue = f"res_image.{c_name}" if g.resource else f"iec2kmod_image.{c_name}"
-        if b.scale == "phys":
-            raise CompileError(f"{b.place}: {b.address} is {b.type}: the kernel runtime does "
-                               "not scale to REAL yet; bind an integer variable (the raw "
-                               "sample)")
         if b.kind == "USER":
             binds.append(_user_bind(b, index, lvalue, c_name))
             continue
         assert b.kind in _IO_KINDS
         maxdata = 1 if b.scale == "bit" else (1 << b.bits) - 1
-        safe = 0 if b.safe in (None, "HOLD") else int(b.safe)
+        phys = b.scale == "phys"
+        if b.safe in (None, "HOLD"):
+            safe = 0
+        elif phys:      # volts: the sample the kernel writes for them
+            safe = raw_of(b.lo, b.hi, b.bits, float(b.safe), b.type)
+        else:
+            safe = int(b.safe)
         binds.append({"address": b.address, "channel": f"{b.device}.{b.subdevice}.{b.channel}",
                       "dev": index[b.device.upper()], "subdev": b.subdevice, "chan": b.channel,
                       "kind": b.kind, "input": int(b.address[1] == "I"), "range": b.range,
                       "hold": int(b.safe == "HOLD"), "maxdata": maxdata, "safe": safe,
                       "lvalue": lvalue, "c_name": c_name,
-                      "signed": int(b.type in ("SINT", "INT", "DINT", "LINT"))})
+                      "signed": int(b.type in ("SINT", "INT", "DINT", "LINT")),
+                      "phys": int(phys), "lo": _double_bits(b.lo), "hi": _double_bits(b.hi)})
     irqs = [{"address": q.address, "source": f"{q.device}.{q.source}",
              "dev": index[q.device.upper()], "line": q.irq, "tasks": list(q.tasks)}
             for q in rio.interrupts]
@@ -370,7 +379,8 @@ def _io_of(cfg, plan, r):
                       "handle": f"&io_user{i}" if d.provider == "user" else "NULL"}
                      for i, d in enumerate(devs)],
             "binds": binds, "irqs": irqs,
-            "comedi": any(d.provider == "comedi" for d in devs), "users": users}
+            "comedi": any(d.provider == "comedi" for d in devs), "users": users,
+            "phys": any(b["phys"] for b in binds)}
 
 
 def _user_owner_tasks(io, tasks):
@@ -414,8 +424,15 @@ def _user_bind(b, index, lvalue, c_name):
             # the kind only tells the direction: the user provider reads no other
             "kind": "DI" if inp else "DO", "input": inp, "range": 0,
             "hold": int(b.safe == "HOLD"), "maxdata": 1 if b.type == "BOOL" else 0xFFFFFFFF,
-            "safe": safe, "lvalue": lvalue, "c_name": c_name, "signed": 0,
+            "safe": safe, "lvalue": lvalue, "c_name": c_name, "signed": 0, "phys": 0,
             "type_code": USER_TYPES[b.type], "place": b.place}
+
+
+def _double_bits(x: float) -> str:
+    """A double as the C literal of its IEEE bits (a non-FP object holds
+    no floating-point constant: iec_io_real.h)."""
+    import struct
+    return f"0x{struct.unpack('<Q', struct.pack('<d', float(x)))[0]:016x}ULL"
 
 
 def _write_module(out, mod, files, objs, fp_objs, runtime):

@@ -51,18 +51,39 @@
  * Unload frees the line first (iec_io_irq_off(): free_irq() waits for a
  * running handler), then stops the task threads.
  *
- * Scaling (the generator accepts only these): a digital channel is 0/1 in
- * a BOOL; an analog channel's raw sample 0..maxdata is the value of an
- * integer variable.  An output's value is clamped to 0..maxdata before it
- * is written.
+ * Scaling: a digital channel is 0/1 in a BOOL; an analog channel's raw
+ * sample 0..maxdata is the value of an integer variable, or, in a REAL or
+ * LREAL (phys), the physical value lo + raw * (hi - lo) / maxdata of the
+ * channel's range, written back by the inverse, rounded and clamped
+ * (iec_io_real.c, built with the FPU flags: the conversions run between
+ * kernel_fpu_begin() and kernel_fpu_end(), under the image lock, which
+ * only disables preemption a little longer).  An integer output's value is
+ * clamped to 0..maxdata before it is written.
+ *
+ * Last values.  Each binding keeps the raw sample it last exchanged with
+ * its device: the one read (before a force of the input replaces it in
+ * the variable), the one written (a forced output's forced value, clamped
+ * or scaled), or the safe value written on stop, fault, load and unload.
+ * /sys/module/<resource module>/iec_io shows them, one line a binding:
+ * "<address> <device.subdevice.channel> <raw>", "-" for none yet.  They
+ * are not the variables' values: a forced input, a scaled REAL, a clamped
+ * output, a safe state or a failed read each make the two differ.
  */
 #include <linux/errno.h>
 #include <linux/interrupt.h>
 #include <linux/kernel.h>
 #include <linux/minmax.h>
 #include <linux/string.h>
+#include <linux/sysfs.h>
+#include <asm/fpu/api.h>
 
 #include "iec_kmod.h"
+#include "iec_io_real.h"
+
+/* 1 when a binding is REAL-scaled: the module links iec_io_real.o */
+#ifndef IEC_IO_PHYS
+#define IEC_IO_PHYS 0
+#endif
 
 enum iec_io_kind { IEC_IO_AI, IEC_IO_AO, IEC_IO_DI, IEC_IO_DO, IEC_IO_DIO };
 
@@ -125,6 +146,8 @@ struct iec_io_bind {
 	void *var;			/* the located variable */
 	u8 size;			/* its size: 1, 2, 4 or 8 */
 	u8 is_signed;
+	u8 phys;			/* a REAL/LREAL: scaled by .scale */
+	struct iec_io_scale scale;	/* phys: the range (iec_io_real.h) */
 };
 
 /* An interrupt source bound to the event tasks of one SINGLE variable. */
@@ -154,7 +177,20 @@ struct iec_io {
 	char (*fault_text)[64];
 	struct iec_io_irq *irqs;
 	u32 nirqs;
+	/* per binding: the raw sample last exchanged with the device, valid
+	 * once seen[] is set (the sysfs file iec_io) */
+	u32 *last;
+	u8 *seen;
 };
+
+static void iec_io_seen(struct iec_io *io, const struct iec_io_bind *b, u32 raw)
+{
+	u32 i = b - io->binds;
+
+	WRITE_ONCE(io->last[i], raw);
+	smp_wmb();	/* the value before the mark (iec_io_show) */
+	WRITE_ONCE(io->seen[i], 1);
+}
 
 static u32 iec_io_get(const struct iec_io_bind *b)
 {
@@ -279,6 +315,7 @@ static __maybe_unused bool iec_io_read(struct iec_io *io, struct iec_task *t,
 			iec_io_fault(io, t, b, ret);
 			return false;
 		}
+		iec_io_seen(io, b, raw[i]);
 	}
 	return true;
 }
@@ -287,19 +324,47 @@ static __maybe_unused bool iec_io_read(struct iec_io *io, struct iec_task *t,
 static __maybe_unused void iec_io_store(struct iec_io *io, const u16 *idx, const u32 *raw,
 			 u32 n)
 {
+	bool fpu = false;
 	u32 i;
 
-	for (i = 0; i < n; i++)
-		iec_io_put(&io->binds[idx[i]], raw[i]);
+	for (i = 0; i < n; i++) {
+		const struct iec_io_bind *b = &io->binds[idx[i]];
+
+		if (!IEC_IO_PHYS || !b->phys) {
+			iec_io_put(b, raw[i]);
+			continue;
+		}
+		if (!fpu) {
+			kernel_fpu_begin();
+			fpu = true;
+		}
+		iec_io_real_store(&b->scale, b->var, b->size, raw[i]);
+	}
+	if (fpu)
+		kernel_fpu_end();
 }
 
 /* Step 4, under the image lock: the task's outputs into raw[]. */
 static __maybe_unused void iec_io_stage(struct iec_io *io, const u16 *idx, u32 *raw, u32 n)
 {
+	bool fpu = false;
 	u32 i;
 
-	for (i = 0; i < n; i++)
-		raw[i] = iec_io_get(&io->binds[idx[i]]);
+	for (i = 0; i < n; i++) {
+		const struct iec_io_bind *b = &io->binds[idx[i]];
+
+		if (!IEC_IO_PHYS || !b->phys) {
+			raw[i] = iec_io_get(b);
+			continue;
+		}
+		if (!fpu) {
+			kernel_fpu_begin();
+			fpu = true;
+		}
+		raw[i] = iec_io_real_load(&b->scale, b->var, b->size);
+	}
+	if (fpu)
+		kernel_fpu_end();
 }
 
 /* Step 5: raw[] to the devices; a fault on the first error. */
@@ -317,6 +382,7 @@ static __maybe_unused void iec_io_write(struct iec_io *io, struct iec_task *t,
 			iec_io_fault(io, t, b, ret);
 			return;
 		}
+		iec_io_seen(io, b, raw[i]);
 	}
 	iec_io_cycle_out(io, t, idx, n, false);
 }
@@ -337,9 +403,46 @@ static void iec_io_safe(struct iec_io *io, const u16 *idx, u32 n)
 		if (d->prov->write(d, b, b->safe) < 0)
 			pr_warn_ratelimited("iec2kmod: resource %s: %s %s: safe value not written\n",
 					    io->resource, b->channel, b->address);
+		else
+			iec_io_seen(io, b, b->safe);
 	}
 	iec_io_cycle_out(io, NULL, idx, n, true);
 }
+
+/*
+ * /sys/module/<resource module>/iec_io: per binding, the raw sample last
+ * exchanged with its device (plc-manager status).  Root-only, as
+ * iec_latency.
+ */
+static struct iec_io *iec_io_this;
+
+static ssize_t iec_io_show(struct kobject *kobj, struct kobj_attribute *attr,
+			   char *buf)
+{
+	struct iec_io *io = iec_io_this;
+	int len = 0;
+	u32 i;
+
+	for (i = 0; io && i < io->nbinds; i++) {
+		const struct iec_io_bind *b = &io->binds[i];
+
+		if (len > PAGE_SIZE - 128) {
+			len += sysfs_emit_at(buf, len, "...\n");
+			break;
+		}
+		if (READ_ONCE(io->seen[i])) {
+			smp_rmb();	/* pairs with iec_io_seen() */
+			len += sysfs_emit_at(buf, len, "%s %s %u\n", b->address,
+					     b->channel, READ_ONCE(io->last[i]));
+		} else {
+			len += sysfs_emit_at(buf, len, "%s %s -\n", b->address,
+					     b->channel);
+		}
+	}
+	return len;
+}
+
+static struct kobj_attribute iec_io_attr = __ATTR(iec_io, 0400, iec_io_show, NULL);
 
 static void iec_io_close(struct iec_io *io)
 {
@@ -380,6 +483,9 @@ static int iec_io_open(struct iec_io *io)
 		}
 	}
 	iec_io_safe(io, NULL, 0);	/* outputs start in their safe state */
+	iec_io_this = io;
+	if (sysfs_create_file(&THIS_MODULE->mkobj.kobj, &iec_io_attr.attr))
+		pr_warn("iec2kmod: resource %s: no iec_io file in sysfs\n", io->resource);
 	return 0;
 err:
 	iec_io_close(io);
@@ -457,6 +563,7 @@ static int iec_io_irq_on(struct iec_io *io, struct iec_resource *res)
 /* Module exit, the threads stopped: safe state, then the devices go. */
 static void iec_io_exit(struct iec_io *io)
 {
+	sysfs_remove_file(&THIS_MODULE->mkobj.kobj, &iec_io_attr.attr);
 	iec_io_safe(io, NULL, 0);
 	iec_io_close(io);
 }

@@ -497,6 +497,30 @@ def test_pid_reaches_the_setpoint_without_windup_and_transfers_bumplessly(tmp_pa
     assert tr.at("%QX0.0", 1800 * S) == "TRUE"
 
 
+# ----------------------------------------------------------------- tank_io
+@behaviour("tank_io")
+def test_tank_io_controls_the_level_in_volts(tmp_path):
+    """The simulator has no device: the I/O map's addresses are plain
+    located variables the input trace sets (in volts, as the kernel's REAL
+    scaling gives them); the model integrates the valve read back."""
+    tr = simulate(tmp_path, "tank_io", "3s",
+                  ["Tank.valve", "Tank.level_tx", "Tank.high_alarm", "Tank.ctl.integ"],
+                  [("0s", "%ID0", "2.0"), ("0s", "%ID4", "5.0"), ("2s", "%ID0", "9.5")])
+    # PI: 2 * (6 - 2) + 0.4; the model: 2 + 0.04 * 5 - 0.02 * 2
+    assert abs(float(tr.at("Tank.valve", 0)) - 8.4) < 1e-5
+    assert abs(float(tr.at("Tank.level_tx", 0)) - 2.16) < 1e-5
+    # the valve saturates at 10 V, the integral stays within 0..10
+    assert float(tr.at("Tank.valve", 1900 * MS)) == 10.0
+    assert all(0.0 <= float(i) <= 10.0 for _, i in tr.each_row("Tank.ctl.integ"))
+    assert tr.changes("Tank.high_alarm") == [(0, "FALSE"), (2 * S, "TRUE")]
+    # above the setpoint the valve closes within three cycles
+    assert 0.0 < float(tr.at("Tank.valve", 2 * S)) < 1.0
+    assert tr.changes("Tank.valve", 2200 * MS, 3 * S) == [(2200 * MS, "0.0")]
+    # the model's level rises towards 0.04 * 5 / 0.02 = 10 V
+    levels = [float(v) for _, v in tr.each_row("Tank.level_tx")]
+    assert levels == sorted(levels) and 5.5 < levels[-1] < 10.0
+
+
 # ----------------------------------------------------------- two_resources
 @behaviour("two_resources")
 def test_bottling_line_fills_caps_and_stops_on_either_emergency_event(tmp_path):

@@ -10,10 +10,13 @@ import subprocess
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECT = ROOT / "tests" / "qemu" / "projects" / "io_comedi"
+TANK_IO = ROOT / "examples" / "tank_io"
 
 
 def _cli(*args):
@@ -59,6 +62,8 @@ def test_the_irq_benchmark_module_builds_with_zero_warnings(tmp_path):
     r = kbuild.build_modules(str(d), sparse=True).check()
     assert r.warnings() == [], r.output
     assert (d / "irqwake.ko").is_file()
+
+
 USER_PROJECT = ROOT / "tests" / "qemu" / "projects" / "io_user"
 
 
@@ -78,3 +83,21 @@ def test_a_user_io_resource_builds_with_zero_warnings(tmp_path):
     info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
                           text=True, timeout=60).stdout
     assert "kcomedilib" not in info, info
+
+
+@pytest.mark.kbuild
+def test_real_scaling_uses_the_fpu_only_in_iec_io_real(tmp_path):
+    """examples/tank_io (REALs in volts): zero warnings with W=1 and sparse,
+    and no FPU/SIMD register outside iec_io_real.c's two functions, which
+    iec_io.c calls between kernel_fpu_begin() and kernel_fpu_end()."""
+    from test_execution_kbuild import fpu_outside_sections
+    p = _cli("gen", str(TANK_IO), "-o", str(tmp_path / "t"))
+    assert p.returncode == 0, p.stderr
+    p = _cli("build", str(tmp_path / "t"), "--sparse")
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "sparse: 0 warnings" in p.stdout, p.stdout
+    assert fpu_outside_sections(tmp_path / "t") == []
+    dis = subprocess.run(["objdump", "-d", str(tmp_path / "t" / "iec_plant_r_tank" /
+                                               "iec_plant_r_tank.ko")],
+                         capture_output=True, text=True, timeout=120).stdout
+    assert "%xmm" in dis          # the scaling is there, and allowed where it is

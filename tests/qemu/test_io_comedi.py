@@ -94,7 +94,7 @@ def test_comedi_test_channels_in_the_cycle(guest_factory, guest_workdir):
     # the device missing at load: refused, the device named, nothing left
     g.check_call("rmmod comedi_test")
     rc, out = pm(g, "load", tree, check=1)
-    assert "resource Bench: device daq (comedi minor 0): no attached comedi device" in out, out
+    assert "resource Bench: device daq (/dev/comedi0, comedi_test) is missing" in out, out
     assert loaded_modules(g) == []
     g.check_call("insmod /lib/modules/comedi_test.ko")
 

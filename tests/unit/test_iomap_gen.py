@@ -4,9 +4,12 @@ task's bound inputs and outputs, and where the device access sits in the
 copies: inputs read before copy-in's image lock and stored under it,
 outputs staged under copy-out's lock and written after it (a provider may
 sleep; the image lock is a raw spinlock).  What the kernel cannot do yet
-is a gen error, not a silent module."""
+is a gen error, not a silent module.  REAL scaling: the iomap's Python
+mirror (phys_of, raw_of) of the kernel's arithmetic."""
 
+import json
 import os
+import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -17,6 +20,10 @@ pytestmark = pytest.mark.unit
 ROOT = Path(__file__).resolve().parents[2]
 PROJECT = ROOT / "tests" / "qemu" / "projects" / "io_comedi"
 PLANT = ROOT / "tests" / "unit" / "iomap" / "plant.st"
+TANK_IO = ROOT / "examples" / "tank_io"
+
+from iec2kmod.iomap import phys_of, raw_of  # noqa: E402
+from plc_manager.io import phys_of as manager_phys_of  # noqa: E402
 
 
 def gen(tmp_path, *files):
@@ -73,13 +80,53 @@ def test_an_output_no_task_writes_is_in_no_task_list(tmp_path):
     assert "static const u16 task0_io_out[] = { 2 };" in main
 
 
-def test_a_real_binding_is_refused_by_gen(tmp_path):
-    m = tmp_path / "plant.iomap"
-    m.write_text("RESOURCE Station\nDEVICE daq : comedi comedi_test\n%ID8 : daq.0.1\n")
-    p, out = gen(tmp_path, PLANT, m)
-    assert p.returncode == 2
-    assert f"{m}:3:1: %ID8 is REAL: the kernel runtime does not scale to REAL yet" in p.stderr
-    assert "Traceback" not in p.stderr
+def test_a_real_binding_is_scaled_in_an_fpu_object(tmp_path):
+    """A REAL on an analog channel: the binding carries the range's IEEE
+    bits, the module gets iec_io_real.c with the FPU flags (and only that
+    object), the manifest marks the module uses_fpu (the kbuild tier's
+    FPU-register check), and a SAFE value in volts becomes its sample."""
+    p, out = gen(tmp_path, TANK_IO)
+    assert p.returncode == 0, p.stderr
+    main = (out / "iec_plant_r_tank" / "main.c").read_text()
+    assert '.address = "%ID0", .channel = "daq.0.0"' in main
+    assert ".phys = 1, .scale = { .lo = 0xc024000000000000ULL, .hi = 0x4024000000000000ULL, " \
+           ".maxdata = 65535U }" in main
+    # SAFE 0.0 (volts) on -10..10 V: (0 + 10) * 65535 / 20 + 0.5 = 32768.0
+    assert '.address = "%QD4", .channel = "daq.1.1"' in main and ".safe = 32768U" in main
+    assert main.index("#define IEC_IO_PHYS 1") < main.index('#include "iec_io.c"')
+    kbuild = (out / "iec_plant_r_tank" / "Kbuild").read_text()
+    assert "iec_plant_r_tank-y := main.o iec_io_real.o\n" in kbuild
+    assert "CFLAGS_iec_io_real.o += -mhard-float" in kbuild
+    assert "CFLAGS_main.o" not in kbuild
+    m = json.loads((out / "manifest.json").read_text())
+    res = next(x for x in m["modules"] if x["kind"] == "resource")
+    assert res.get("uses_fpu") is True
+    # the integer-only map has no FPU object
+    p, out2 = gen(tmp_path / "b", PROJECT)
+    assert p.returncode == 0, p.stderr
+    assert "iec_io_real" not in (out2 / "iec_rig_r_bench" / "Kbuild").read_text()
+    # (its main.c calls no scaling function: none would link)
+    assert "IEC_IO_PHYS" not in (out2 / "iec_rig_r_bench" / "main.c").read_text()
+
+
+def test_phys_of_and_raw_of_invert_each_other():
+    """Every 16-bit sample of a -10..10 V channel survives REAL and back;
+    halves round up, out of range and NaN clamp."""
+    for raw in range(0, 65536):
+        assert raw_of(-10.0, 10.0, 16, phys_of(-10.0, 10.0, 16, raw)) == raw
+    assert phys_of(-10.0, 10.0, 16, 0) == -10.0 and phys_of(-10.0, 10.0, 16, 65535) == 10.0
+    assert raw_of(-10.0, 10.0, 16, 0.0) == 32768          # 32767.5 rounds up
+    assert raw_of(-10.0, 10.0, 16, -11.0) == 0 and raw_of(-10.0, 10.0, 16, 1e30) == 65535
+    assert raw_of(-10.0, 10.0, 16, float("nan")) == 0
+    assert raw_of(-10.0, 10.0, 16, float("inf")) == 65535
+    # a REAL is the nearest binary32 of the binary64 value; an LREAL is that value
+    v = -10.0 + 12345 * 20.0 / 65535
+    assert phys_of(-10.0, 10.0, 16, 12345, "LREAL") == v
+    assert phys_of(-10.0, 10.0, 16, 12345) == struct.unpack("<f", struct.pack("<f", v))[0]
+    # plc-manager's copy computes the same bits
+    for raw in (0, 1, 12345, 32767, 65534, 65535):
+        for t in ("REAL", "LREAL"):
+            assert manager_phys_of(-5.0, 5.0, 16, raw, t) == phys_of(-5.0, 5.0, 16, raw, t)
 
 
 def test_a_program_located_variable_is_refused_by_gen(tmp_path):
