@@ -46,7 +46,7 @@ class Binding:
     address: str
     variable: str
     device: str
-    subdevice: int
+    subdevice: Optional[int]    # None: a user device's slot
     channel: int
     input: bool
     type: str
@@ -59,6 +59,8 @@ class Binding:
 
     @property
     def where(self) -> str:
+        if self.subdevice is None:
+            return f"{self.device}.{self.channel}"
         return f"{self.device}.{self.subdevice}.{self.channel}"
 
     @property
@@ -70,6 +72,8 @@ class Binding:
             return "TRUE" if self.last else "FALSE"
         if self.scale == "phys":
             return f"{phys_of(self.lo, self.hi, self.bits, self.last, self.type):.6g} V"
+        if self.scale == "word":        # a user slot: 32 bits (iec_io_user.c)
+            return _slot_text(self.last, self.type)
         return str(self.last)
 
     @property
@@ -81,6 +85,20 @@ class Binding:
         if self.scale == "bit":
             return "TRUE" if self.safe else "FALSE"
         return f"{self.safe:g} V" if self.scale == "phys" else str(self.safe)
+
+
+def _slot_text(raw: int, type_name: str) -> str:
+    """A user slot's 32 bits as its variable's type reads them."""
+    import struct
+    t = type_name.upper()
+    raw &= 0xFFFFFFFF
+    if t == "BOOL":
+        return "TRUE" if raw else "FALSE"
+    if t == "REAL":
+        return f"{struct.unpack('<f', struct.pack('<I', raw))[0]:.6g}"
+    if t in ("SINT", "INT", "DINT"):
+        return str(raw - (1 << 32) if raw & 0x80000000 else raw)
+    return str(raw)
 
 
 def summary(m: dict) -> Dict[str, list]:
@@ -120,7 +138,8 @@ def bindings(io: Dict[str, list], sysroot: Optional[str] = None) -> List[Binding
         for b in binds:
             safe = b.get("safe")
             out.append(Binding(res, b["module"], b["address"], b["variable"], b["device"],
-                               int(b["subdevice"]), int(b["channel"]),
+                               None if b.get("subdevice") is None else int(b["subdevice"]),
+                               int(b["channel"]),
                                b["address"].upper().startswith("%I"), b.get("type", "?"),
                                b.get("scale", "raw"), int(b.get("bits", 1)),
                                float(b.get("lo", 0.0)), float(b.get("hi", 0.0)),
@@ -162,6 +181,8 @@ def check_devices(m: dict, dev_dir: str = "/dev", proc_comedi: str = PROC_COMEDI
             if d.get("provider") == "comedi":
                 devices.append((res, d))
         for b in io.get("bindings", []):
+            if b.get("subdevice") is None:      # a user device's slot
+                continue
             key = (res, b["device"].upper())
             used[key] = max(used.get(key, -1), int(b["subdevice"]))
     if not devices:

@@ -136,3 +136,26 @@ def test_status_without_saved_state_shows_no_io(tmp_path, monkeypatch):
     monkeypatch.setenv("PLC_MANAGER_STATE_DIR", str(tmp_path / "none"))
     assert "I/O" not in status_text(_status())
     assert status_json(_status())["io"] == []
+
+
+def test_user_slots_in_status_and_the_device_check():
+    """A user device's bindings have no subdevice (iomap: device.slot): the
+    load's device check skips them (no comedi device to look for) and status
+    shows slot and value by the variable's type (the 32 bits of iec_io_user.c).
+    Both raised TypeError (int(None)) before."""
+    m = {"addresses": {"%ID0": "rig.x", "%QD0": "rig.y"},
+         "resources": [{"name": "BENCH", "module": "iec_rig_r_bench"}],
+         "io": {"BENCH": {"devices": [{"name": "fb", "provider": "user"}],
+                          "bindings": [
+                              {"address": "%ID0", "device": "fb", "subdevice": None,
+                               "channel": 0, "kind": "USER", "type": "DINT", "scale": "word",
+                               "safe": None},
+                              {"address": "%QD0", "device": "fb", "subdevice": None,
+                               "channel": 1, "kind": "USER", "type": "REAL", "scale": "word",
+                               "safe": 1.5}]}}}
+    assert io.check_devices(m) == 0
+    dint, real = io.bindings(io.summary(m), sysroot="/nonexistent")
+    assert (dint.where, dint.safe_text, real.where, real.safe_text) == \
+        ("fb.0", "-", "fb.1", "1.5")
+    dint.last, real.last = 0xFFFFFFFE, 0x3FC00000
+    assert (dint.value, real.value) == ("-2", "1.5")
