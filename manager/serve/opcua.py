@@ -1,9 +1,11 @@
 # SPDX-License-Identifier: MIT
 """OPC UA server (asyncua) on the model.
 
-Address space (namespace "urn:iec2kmod:<configuration>", node ids
-``ns=2;s=<path>`` so they stay the same across a swap that keeps the
-interface): Objects/<configuration>/
+Address space (namespace "urn:iec2kmod:<configuration>", also the
+application URI, so index 1 in the NamespaceArray: clients find it by URI;
+string node ids ``ns=1;s=<path>`` so they stay the same across a swap that
+keeps the interface; an enumeration type ``type:<name>``):
+Objects/<configuration>/
     Build (InterfaceHash, SourceHash), Globals/, DirectVariables/,
     AccessPaths/ (one variable per VAR_ACCESS path, with its access),
     <resource>/Globals/, <resource>/<task>/{State, Cycles, Overruns,
@@ -242,6 +244,7 @@ class OpcUaServer:
         self.last: Dict[str, object] = {}
         self.task_nodes: Dict[str, Dict[str, object]] = {}
         self.path_of: Dict[object, str] = {}   # node id -> lower path
+        self.enum_types: Dict[str, object] = {}   # lower IEC type name -> DataType node id
         self.flagged: Dict[str, int] = {}      # lower path -> the bad status it shows
         self.halted = False
         self.fresh_reads = 0
@@ -357,7 +360,7 @@ class OpcUaServer:
             from .model import EPOCH
             init = EPOCH
         node = await parent.add_variable(ua.NodeId(sid, self.ns), ua.QualifiedName(name, self.ns),
-                                         ua.Variant(init, vt), datatype=_datatype(t))
+                                         ua.Variant(init, vt), datatype=await self._datatype(t))
         if access is not None:
             w = access.read_write and t.writable
         else:
@@ -365,10 +368,6 @@ class OpcUaServer:
         if w:
             await node.set_writable(True)
             self.writable_nodes[node.nodeid.to_string()] = path
-        if t.kind == "e" and t.enum:
-            names = sorted(t.enum.items(), key=lambda kv: kv[1])
-            await node.add_property(ua.NodeId(sid + "/EnumStrings", self.ns), "EnumStrings",
-                                    [ua.LocalizedText(n) for n, _ in names])
         if t.kind in "sw" and t.length is not None:
             await node.write_attribute(ua.AttributeIds.ArrayDimensions,
                                        ua.DataValue(ua.Variant([], ua.VariantType.UInt32)))
@@ -378,6 +377,41 @@ class OpcUaServer:
         self.nodes.setdefault(path.lower(), [])
         self.nodes[path.lower()].append(node)
         self.path_of[node.nodeid] = path.lower()
+
+    async def _datatype(self, t):
+        """The DataType of *t*'s variables: a built-in type, or for an
+        enumeration a DataType node of its own, a subtype of Enumeration
+        (node id ``type:<name>``, made once per IEC type), with its
+        DataTypeDefinition (an EnumDefinition: the IEC names and values)
+        and EnumStrings (values 0..n-1) or else EnumValues; its values
+        travel as Int32 (OPC UA part 3, 8.14 and 5.8.3)."""
+        from asyncua import ua
+        if t.kind != "e" or not t.enum:
+            return _datatype(t)
+        name = t.type if t.type not in (None, "?") else t.path
+        key = name.lower()
+        if key in self.enum_types:
+            return self.enum_types[key]
+        items = sorted(t.enum.items(), key=lambda kv: kv[1])
+        node = await self.server.nodes.enum_data_type.add_data_type(
+            ua.NodeId(f"type:{name}", self.ns), ua.QualifiedName(name, self.ns))
+        await node.write_data_type_definition(ua.EnumDefinition(Fields=[
+            ua.EnumField(Value=v, DisplayName=ua.LocalizedText(n),
+                         Description=ua.LocalizedText(n), Name=n) for n, v in items]))
+        if [v for _, v in items] == list(range(len(items))):
+            await node.add_property(
+                ua.NodeId(f"type:{name}/EnumStrings", self.ns), ua.QualifiedName("EnumStrings", 0),
+                ua.Variant([ua.LocalizedText(n) for n, _ in items], ua.VariantType.LocalizedText,
+                           is_array=True), datatype=ua.NodeId(ua.ObjectIds.LocalizedText))
+        else:
+            await node.add_property(
+                ua.NodeId(f"type:{name}/EnumValues", self.ns), ua.QualifiedName("EnumValues", 0),
+                ua.Variant([ua.EnumValueType(Value=v, DisplayName=ua.LocalizedText(n),
+                                             Description=ua.LocalizedText(n))
+                            for n, v in items], ua.VariantType.ExtensionObject, is_array=True),
+                datatype=ua.NodeId(ua.ObjectIds.EnumValueType))
+        self.enum_types[key] = node.nodeid
+        return node.nodeid
 
     async def _array(self, parent, path: str, elements: List[str], name: str) -> None:
         """One array variable for *elements* (ValueRank 1, ArrayDimensions
@@ -393,7 +427,8 @@ class OpcUaServer:
             init = EPOCH
         node = await parent.add_variable(
             ua.NodeId(path, self.ns), ua.QualifiedName(name, self.ns),
-            ua.Variant([init] * len(elements), vt, is_array=True), datatype=_datatype(t))
+            ua.Variant([init] * len(elements), vt, is_array=True),
+            datatype=await self._datatype(t))
         await node.write_attribute(ua.AttributeIds.ValueRank,
                                    ua.DataValue(ua.Variant(1, ua.VariantType.Int32)))
         await node.write_attribute(ua.AttributeIds.ArrayDimensions, ua.DataValue(

@@ -466,6 +466,137 @@ def test_opcua_arrays(tmp_path, pki):
     asyncio.run(go())
 
 
+ENUM = """
+TYPE
+    Mode : (Off, Manual, Auto);
+    Level : INT (Low := 1, High := 5);
+END_TYPE
+PROGRAM P
+VAR_OUTPUT n : INT; END_VAR
+n := n + 1;
+END_PROGRAM
+CONFIGURATION C
+    VAR_GLOBAL mode : Mode := Manual; mode2 : Mode; lvl : Level := High; END_VAR
+    RESOURCE r ON CPU0
+        TASK t (INTERVAL := T#10ms, PRIORITY := 1);
+        PROGRAM p WITH t : P;
+    END_RESOURCE
+    VAR_ACCESS
+        MODE : mode : Mode READ_WRITE;
+        LVL  : lvl : Level READ_WRITE;
+    END_VAR
+END_CONFIGURATION
+"""
+
+
+def test_opcua_enumerations(tmp_path, pki):
+    """An enumeration is a DataType of its own, a subtype of Enumeration with
+    its EnumDefinition and EnumStrings (values 0..n-1) or EnumValues (other
+    values), one per IEC type; its variables have that DataType and Int32
+    values; asyncua's client builds the enumeration from the server; an
+    ordinal outside the enumeration is BadOutOfRange, another type
+    BadTypeMismatch."""
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer, add_user, read_users
+    m = _gen(tmp_path, ENUM)
+    mo = M.Model.from_manifest(m)
+    fake = FakeClient(m)
+    fake.set("mode", 1)
+    fake.set("lvl", 5)
+    kernel = Kernel(mo, fake)
+    url = f"opc.tcp://127.0.0.1:{_port()}"
+    add_user(str(tmp_path / "users"), "op", "write", "operator-pw", n=2 ** 12)
+
+    async def go():
+        srv = OpcUaServer(mo, kernel, url, writable_all=False,
+                          users=read_users(str(tmp_path / "users")),
+                          allow_anonymous=False, security="none", cert_dir=pki)
+        await srv.start()
+        c = Client(url)
+        c.set_user("op")
+        c.set_password("operator-pw")
+        await c.connect()
+        try:
+            ns = await c.get_namespace_index("urn:iec2kmod:C")
+            mode = c.get_node(ua.NodeId("access:MODE", ns))
+            lvl = c.get_node(ua.NodeId("access:LVL", ns))
+            dt = await mode.read_data_type()
+            assert dt == ua.NodeId("type:Mode", ns)
+            assert dt == await c.get_node(ua.NodeId("mode2", ns)).read_data_type()
+            assert dt == await c.get_node(ua.NodeId("mode", ns)).read_data_type()
+            tnode = c.get_node(dt)
+            assert (await tnode.read_browse_name()).Name == "Mode"
+            assert await tnode.read_node_class() == ua.NodeClass.DataType
+            sup = await tnode.get_parent()
+            assert sup.nodeid == ua.NodeId(ua.ObjectIds.Enumeration)
+            strings = await c.get_node(ua.NodeId("type:Mode/EnumStrings", ns)).read_value()
+            assert [x.Text for x in strings] == ["Off", "Manual", "Auto"]
+            ldt = await lvl.read_data_type()
+            vals = await c.get_node(ua.NodeId("type:Level/EnumValues", ns)).read_value()
+            assert [(v.Value, v.DisplayName.Text) for v in vals] == [(1, "Low"), (5, "High")]
+            assert {(await n.read_browse_name()).Name
+                    for n in await c.get_node(ldt).get_properties()} == {"EnumValues"}
+            # the client makes Python enumerations of the server's types
+            await c.load_data_type_definitions()
+            assert {e.name: e.value for e in ua.Mode} == {"Off": 0, "Manual": 1, "Auto": 2}
+            assert {e.name: e.value for e in ua.Level} == {"Low": 1, "High": 5}
+            dv = await mode.read_data_value()
+            assert dv.Value.VariantType == ua.VariantType.Int32 and dv.Value.Value == 1
+            assert await lvl.read_value() == 5
+            await mode.write_value(ua.Variant(ua.Mode.Auto.value, ua.VariantType.Int32))
+            assert fake.get("mode") == 2
+            for bad in (3, -1):
+                with pytest.raises(ua.UaStatusCodeError) as e:
+                    await mode.write_value(ua.Variant(bad, ua.VariantType.Int32))
+                assert e.value.code == ua.StatusCodes.BadOutOfRange
+            with pytest.raises(ua.UaStatusCodeError) as e:
+                await lvl.write_value(ua.Variant(2, ua.VariantType.Int32))   # between 1 and 5
+            assert e.value.code == ua.StatusCodes.BadOutOfRange
+            with pytest.raises(ua.UaStatusCodeError) as e:
+                await mode.write_value(ua.Variant(1.0, ua.VariantType.Double))
+            assert e.value.code == ua.StatusCodes.BadTypeMismatch
+            await lvl.write_value(ua.Variant(1, ua.VariantType.Int32))
+            assert fake.get("mode") == 2 and fake.get("lvl") == 1
+        finally:
+            await c.disconnect()
+            await srv.stop()
+
+    asyncio.run(go())
+
+
+def test_namespace_found_by_uri(tmp_path, pki):
+    """The node ids' namespace is the one the server's NamespaceArray gives
+    for urn:iec2kmod:<configuration>; the README says the index a client
+    finds there."""
+    import re
+    from asyncua import Client, ua
+    from plc_manager.serve.opcua import OpcUaServer
+    m = _gen(tmp_path, AGG)
+    mo = M.Model.from_manifest(m)
+    url = f"opc.tcp://127.0.0.1:{_port()}"
+
+    async def go():
+        srv = OpcUaServer(mo, Kernel(mo, FakeClient(m)), url, writable_all=False, users={},
+                          allow_anonymous=True, security="none", cert_dir=pki)
+        await srv.start()
+        try:
+            async with Client(url) as c:
+                nsarray = await c.get_namespace_array()
+                idx = nsarray.index(f"urn:iec2kmod:{m['configuration']}")
+                assert idx == srv.ns
+                assert await c.get_node(f"ns={idx};s=r.p.n").read_value() == 0
+                return idx
+        finally:
+            await srv.stop()
+
+    idx = asyncio.run(go())
+    readme = (ROOT / "README.md").read_text()
+    part = readme[readme.index("### plc-manager serve"):readme.index("## Real I/O")]
+    said = set(re.findall(r"`ns=(\d+);", part))
+    assert said == {str(idx)}, said
+    assert "get_namespace_index" in part
+
+
 def test_swap_keeps_node_ids(tmp_path, pki):
     """A new body with the same interface (a swap): the same interface hash,
     so serve goes on, and the address space has the same node ids; a new
