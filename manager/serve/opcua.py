@@ -496,6 +496,9 @@ class OpcUaServer:
             if getattr(user, "role", None) != UserRole.Admin:
                 self.refused += 1
                 return ua.StatusCode(ua.StatusCodes.BadUserAccessDenied)
+        if self.halted:          # the kernel does not answer (a stop, a load under way)
+            self.refused += 1
+            return ua.StatusCode(ua.StatusCodes.BadServerHalted)
         v = wv.Value.Value
         elements = self.arrays.get(path) if path.lower() in self.array_nodes else None
         t = self.model.var(elements[0] if elements else path)

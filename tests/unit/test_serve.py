@@ -970,7 +970,7 @@ def test_kernel_gone_values_halted(manifests, pki):
     tasks' State says halted; values come back Good when it answers."""
     import plc_manager.serve as serve
     from asyncua import Client, ua
-    from plc_manager.serve.opcua import OpcUaServer
+    from plc_manager.serve.opcua import OpcUaServer, hash_password
     mo = _model(manifests, "two_resources")
     fake = FakeClient(manifests["two_resources"])
     kernel = Kernel(mo, fake)
@@ -981,14 +981,18 @@ def test_kernel_gone_values_halted(manifests, pki):
         raise KernelError(errno.ENOENT, "no such family")
 
     async def go():
-        srv = OpcUaServer(mo, kernel, url, writable_all=True, users={},
-                          allow_anonymous=True, security="none", cert_dir=pki)
+        srv = OpcUaServer(mo, kernel, url, writable_all=True,
+                          users={"op": ("write", hash_password("operator-pw", n=2 ** 12))},
+                          allow_anonymous=False, security="none", cert_dir=pki)
         await srv.start()
         stop = asyncio.Event()
         poll = asyncio.ensure_future(serve._poll(kernel, mo, srv, 0.02, stop,
                                                  serve.PollStats()))
         try:
-            async with Client(url) as c:
+            c = Client(url)
+            c.set_user("op")
+            c.set_password("operator-pw")
+            async with c:
                 node = c.get_node(ua.NodeId("bottles_filled", srv.ns))
                 fake.set("bottles_filled", 5)
                 assert await node.read_value() == 5
@@ -998,6 +1002,10 @@ def test_kernel_gone_values_halted(manifests, pki):
                 assert dv.StatusCode.value == ua.StatusCodes.BadServerHalted
                 state = c.get_node(ua.NodeId("cpu0.fast0/State", srv.ns))
                 assert await state.read_value() == "halted"
+                tgt = c.get_node(ua.NodeId("access:FILL_TARGET", srv.ns))
+                with pytest.raises(ua.UaStatusCodeError) as e:
+                    await tgt.write_value(ua.Variant(6, ua.VariantType.Int16))
+                assert e.value.code == ua.StatusCodes.BadServerHalted
                 # loaded again: a new module, a new netlink family, a new client
                 fresh = FakeClient(manifests["two_resources"])
                 fresh.data = dict(fake.data)
