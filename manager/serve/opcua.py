@@ -23,10 +23,12 @@ BadOutOfRange (range, subrange, enumeration, capacity), BadTypeMismatch
 
 from __future__ import annotations
 
+import collections.abc
 import hashlib
 import hmac
 import logging
 import os
+import re
 import secrets
 from pathlib import Path
 from typing import Dict, List, Optional
@@ -146,6 +148,73 @@ def ensure_shelf(directory: Path) -> Path:
     return shelf
 
 
+_DIR_LINE = re.compile(r"^'([^'\\]*)', \((\d+), (\d+)\)$")
+
+
+class _DumbShelfReader(collections.abc.Mapping):
+    """A dbm.dumb database (NAME.dat and its index NAME.dir), read-only,
+    its index parsed with a regular expression: dbm.dumb parses each line
+    of the index with ast.literal_eval, 0.45 s for the 6,174 nodes of
+    asyncua's standard address space on a PC, most of a minute under TCG
+    emulation (the Pythons without gdbm use dbm.dumb)."""
+
+    def __init__(self, base: str) -> None:
+        import ast
+        index = {}
+        with open(base + ".dir", encoding="latin-1") as f:
+            for line in f:
+                m = _DIR_LINE.match(line.rstrip("\n"))
+                if m:
+                    index[m.group(1).encode("latin-1")] = (int(m.group(2)), int(m.group(3)))
+                elif line.strip():
+                    key, place = ast.literal_eval(line)
+                    index[key.encode("latin-1")] = tuple(place)
+        self._index = index
+        self._dat = open(base + ".dat", "rb")
+
+    def __getitem__(self, key: bytes) -> bytes:
+        pos, size = self._index[key]
+        self._dat.seek(pos)
+        return self._dat.read(size)
+
+    def __contains__(self, key) -> bool:
+        return key in self._index
+
+    def __iter__(self):
+        return iter(self._index)
+
+    def __len__(self) -> int:
+        return len(self._index)
+
+    def close(self) -> None:
+        self._dat.close()
+
+
+class _FastShelve:
+    """Stands for the shelve module in asyncua's address space while it
+    opens the standard address space's shelf (read-only)."""
+
+    @staticmethod
+    def open(filename, flag="c", protocol=None, writeback=False):
+        import shelve
+        if flag == "r" and os.path.isfile(filename + ".dir") and \
+                os.path.isfile(filename + ".dat"):
+            return shelve.Shelf(_DumbShelfReader(filename), protocol=protocol)
+        return shelve.open(filename, flag, protocol, writeback)
+
+
+async def init_server(server, shelf: Path) -> None:
+    """``await server.init(shelf)``, the shelf's dbm.dumb index read fast
+    (see _DumbShelfReader)."""
+    from asyncua.server import address_space
+    saved = address_space.shelve
+    address_space.shelve = _FastShelve
+    try:
+        await server.init(shelf)
+    finally:
+        address_space.shelve = saved
+
+
 # ---------------------------------------------------------------------------
 
 class Users:
@@ -262,7 +331,10 @@ class OpcUaServer:
         self.cert_dir.mkdir(parents=True, exist_ok=True)
         shelf = self.cert_dir / f"asyncua-{getattr(asyncua, '__version__', 'x')}-aspace"
         fresh = not (shelf.is_file() or shelf.with_suffix(".db").is_file())
-        await s.init(shelf)
+        if fresh:
+            await s.init(shelf)
+        else:
+            await init_server(s, shelf)
         if fresh:
             shelf.touch()
         s.set_endpoint(self.url)
