@@ -697,6 +697,63 @@ def test_modbus_server(manifests):
     asyncio.run(go())
 
 
+def test_openplc_example_on_modbus(tmp_path):
+    """examples/openplc_modbus on OpenPLC's mapping, as its README says:
+    field inputs on discrete inputs and input registers (read-only), the
+    HMI's buttons on coils and its setpoint on a holding register (written
+    into the program's variables), the outputs on coils and registers."""
+    from pymodbus.client import AsyncModbusTcpClient
+    from plc_manager.serve import modbus
+    subprocess.run([sys.executable, "-m", "iec2kmod", "gen", str(ROOT / "examples" /
+                                                             "openplc_modbus"),
+                    "-o", str(tmp_path / "b")], check=True, capture_output=True)
+    m = json.loads((tmp_path / "b" / "manifest.json").read_text())
+    mo = M.Model.from_manifest(m)
+    mm = M.modbus_map(mo)
+    P = "Res0.instance0."
+    assert {a: c.path for a, c in mm.coils.items()} == {
+        0: P + "motor", 1: P + "warn_lamp", 2: P + "hmi_start", 3: P + "hmi_stop"}
+    assert {a: c.path for a, c in mm.discrete.items()} == {0: P + "start_pb",
+                                                            1: P + "stop_pb"}
+    assert {a: c.path for a, c in mm.inputs.items()} == {1: P + "level"}
+    assert {a: c.path for a, c in mm.holding.items()} == {
+        1: P + "speed_sp", 2: P + "drive_cmd", 1024: P + "starts"}
+    assert all(c.writable for t in (mm.coils, mm.holding) for c in t.values())
+    assert not mm.skipped
+    fake = FakeClient(m)
+    kernel = Kernel(mo, fake)
+    port = _port()
+
+    async def go():
+        srv = await modbus.start(kernel, mm, "127.0.0.1", port)
+        cl = AsyncModbusTcpClient("127.0.0.1", port=port)
+        await cl.connect()
+        try:
+            fake.set(P + "stop_pb", True)
+            fake.set(P + "level", 321)
+            fake.set(P + "motor", True)
+            fake.set(P + "drive_cmd", 13800)
+            assert (await cl.read_discrete_inputs(0, count=2)).bits[:2] == [False, True]
+            assert (await cl.read_input_registers(1, count=1)).registers == [321]
+            assert (await cl.read_coils(0, count=4)).bits[:4] == [True, False, False, False]
+            r = await cl.write_coil(2, True)
+            assert not r.isError() and fake.get(P + "hmi_start") is True
+            r = await cl.write_coils(2, [False, True])
+            assert not r.isError() and fake.get(P + "hmi_stop") is True
+            r = await cl.write_register(1, 50)
+            assert not r.isError() and fake.get(P + "speed_sp") == 50
+            assert (await cl.read_holding_registers(1, count=2)).registers == [50, 13800]
+            r = await cl.write_register(1024, 0)
+            assert not r.isError() and fake.get(P + "starts") == 0
+            r = await cl.write_register(0, 1)                  # %QW0: nothing there
+            assert r.isError() and r.exception_code == 2
+        finally:
+            cl.close()
+            await srv.shutdown()
+
+    asyncio.run(go())
+
+
 def test_modbus_value_refused(manifests):
     """A register value outside the variable's type: exception 03, not
     written (conveyor_counter without access paths, --writable)."""
