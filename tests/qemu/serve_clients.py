@@ -262,15 +262,25 @@ async def life(url: str, cert: str, key: str, port: int, build: str, fixed: str)
             await asyncio.sleep(0.2)
 
     async def ids(ns):
-        """Every node id of our namespace reachable from the configuration."""
-        seen, todo = set(), [c.get_node(ua.NodeId("Station", ns))]
+        """Every node id of our namespace reachable from the configuration
+        (browsed), with its browse name."""
+        seen, todo = {}, [c.get_node(ua.NodeId("Station", ns))]
         while todo:
             n = todo.pop()
-            seen.add(n.nodeid.to_string())
+            seen[n.nodeid.to_string()] = n
             for ch in await n.get_children():
                 if ch.nodeid.NamespaceIndex == ns and ch.nodeid.to_string() not in seen:
                     todo.append(ch)
-        return seen
+        names = await c.read_attributes(list(seen.values()), ua.AttributeIds.BrowseName)
+        return {k: dv.Value.Value.Name for k, dv in zip(seen, names)}
+
+    async def same_ids(before):
+        """The node ids browsed before are there with the same browse names
+        (one Read of them all)."""
+        nodes = [c.get_node(ua.NodeId.from_string(k)) for k in before]
+        got = await c.read_attributes(nodes, ua.AttributeIds.BrowseName)
+        return all(dv.StatusCode.is_good() and dv.Value.Value.Name == before[k]
+                   for k, dv in zip(before, got))
 
     try:
         ns = await c.get_namespace_index("urn:iec2kmod:Station")
@@ -346,7 +356,7 @@ async def life(url: str, cert: str, key: str, port: int, build: str, fixed: str)
 
         # sp is 5 (written through Modbus): the new body gives 3 * 5
         out["tripled"] = await until("tripled", lambda: doubled_is(15), 20)
-        out["same_ids_after_swap"] = await ids(ns) == before
+        out["same_ids_after_swap"] = await same_ids(before)
         # stop: every value says BadServerHalted, writes are refused
         t = time.monotonic()
         await asyncio.to_thread(ops.stop)
@@ -370,7 +380,7 @@ async def life(url: str, cert: str, key: str, port: int, build: str, fixed: str)
         await asyncio.sleep(0.5)
         out["counting_after_load"] = [a, await good_count()]
         out["divisor_after_load"] = await node["divisor"].read_value()
-        out["same_ids_after_load"] = await ids(ns) == before
+        out["same_ids_after_load"] = await same_ids(before)
         out["level_write_after_load"] = await status_of(node["level"],
                                                         ua.Variant(8, ua.VariantType.Int16))
         r = mb.read_holding_registers(8194, count=1)                        # LEVEL
@@ -419,16 +429,126 @@ def kernel_facts() -> dict:
             "last_end_ns": end, "now_ns": time.time_ns()}
 
 
+def fork_serve(argv, log):
+    """`plc-manager serve ARGV` (plc_manager.cli.main) in a child process,
+    its output to *log*; it starts when the returned go() is called (the
+    child is forked before this process opens any netlink socket)."""
+    from plc_manager import cli
+    sys.stdout.flush()
+    sys.stderr.flush()
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        rc = 1
+        try:
+            os.close(w)
+            start = os.read(r, 1)
+            fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            os.dup2(fd, 1)
+            os.dup2(fd, 2)
+            if start == b"g":
+                rc = cli.main(argv)
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(rc)
+    os.close(r)
+    state = {"w": w}
+
+    def go(really=True):
+        if state["w"] is not None:
+            if really:
+                os.write(state["w"], b"g")
+            os.close(state["w"])
+            state["w"] = None
+
+    return pid, go
+
+
+def stop_serve(pid) -> object:
+    """SIGTERM, then its exit code (or why none)."""
+    t = time.monotonic()
+    try:
+        os.kill(pid, signal.SIGTERM)
+    except ProcessLookupError:
+        pass
+    while True:
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            return os.waitstatus_to_exitcode(status)
+        if time.monotonic() - t > 60:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            return "killed: no exit within 60 s of SIGTERM"
+        time.sleep(0.1)
+
+
+def openplc(port: int) -> dict:
+    """examples/openplc_modbus driven over Modbus (OpenPLC's mapping): the
+    HMI's coils and setpoint register written by the client, the field
+    inputs (%IX, discrete inputs: read-only on Modbus) set with plc-manager
+    write as a field device would; the program's outputs seen changing."""
+    import contextlib
+    import io
+    from pymodbus.client import ModbusTcpClient
+    from plc_manager import cli
+    out = {}
+
+    def field(addr, value):
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            assert cli.main(["write", addr, value]) == 0, buf.getvalue()
+
+    c = ModbusTcpClient("127.0.0.1", port=port, timeout=10)
+    assert c.connect()
+
+    def until(what, fn, want, timeout=20.0):
+        t = time.monotonic()
+        while True:
+            got = fn()
+            if got == want or time.monotonic() - t > timeout:
+                out[what] = got
+                return got
+            time.sleep(0.05)
+
+    try:
+        motor_lamp = lambda: c.read_coils(0, count=2).bits[:2]      # noqa: E731
+        out["idle"] = motor_lamp()
+        out["write_sp"] = not c.write_register(1, 50).isError()          # %QW1 speed_sp
+        out["write_start"] = not c.write_coil(2, True).isError()         # %QX0.2 hmi_start
+        until("started", motor_lamp, [True, True])
+        until("drive", lambda: c.read_holding_registers(1, count=2).registers, [50, 13800])
+        out["starts"] = c.read_holding_registers(1024, count=1).registers[0]   # %MW0
+        out["hmi_start_cleared"] = c.read_coils(2, count=1).bits[0]
+        field("%IX0.1", "TRUE")                                          # stop_pb
+        out["di"] = c.read_discrete_inputs(0, count=2).bits[:2]
+        until("stopped_by_field", lambda: motor_lamp()[0], False)
+        out["drive_stopped"] = c.read_holding_registers(2, count=1).registers[0]
+        field("%IX0.1", "FALSE")
+        field("%IX0.0", "TRUE")                                          # start_pb
+        until("started_by_field", lambda: motor_lamp()[0], True)
+        until("starts_2", lambda: c.read_holding_registers(1024, count=1).registers[0], 2)
+        out["write_stop"] = not c.write_coil(3, True).isError()          # %QX0.3 hmi_stop
+        until("stopped_by_hmi", lambda: motor_lamp()[0], False)
+        r = c.write_register(0, 1)                                       # nothing at %QW0
+        out["nothing_there"] = getattr(r, "exception_code", None)
+    finally:
+        c.close()
+    return out
+
+
 def main() -> None:
-    """python3 serve_clients.py JSON: {"build", "fixed", "log", "serve": [argv of
-    plc-manager], "modbus": PORT, "url", "cert", "key", "timeout"}.
+    """python3 serve_clients.py JSON: {"build", "fixed", "openplc" (builds),
+    "log", "serve": [argv of plc-manager], "modbus": PORT, "url", "cert",
+    "key", "timeout"}.
 
     One process does it all, so the guest imports asyncua and pymodbus once
     (tens of seconds under TCG): it imports them, forks `plc-manager serve`
     (plc_manager.cli.main, output to "log"; forked before any netlink
     socket exists here), loads the build, lets serve start, runs the
     clients, then the PLC's life (fault, swap, stop, load), stops serve
-    with SIGTERM and unloads the configuration."""
+    with SIGTERM and unloads the configuration; then the same with
+    examples/openplc_modbus and a Modbus-only serve."""
     cfg = json.loads(sys.argv[1])
     t0 = time.monotonic()
     import asyncua  # noqa: F401
@@ -436,27 +556,9 @@ def main() -> None:
     import pymodbus.server  # noqa: F401
     import plc_manager.serve.modbus  # noqa: F401
     import plc_manager.serve.opcua  # noqa: F401
-    from plc_manager import cli, ops
+    from plc_manager import ops
     times = {"imports": round(time.monotonic() - t0, 1)}
-    sys.stdout.flush()
-    sys.stderr.flush()
-    r, w = os.pipe()
-    pid = os.fork()
-    if pid == 0:                       # plc-manager serve
-        rc = 1
-        try:
-            os.close(w)
-            go = os.read(r, 1)
-            fd = os.open(cfg["log"], os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
-            os.dup2(fd, 1)
-            os.dup2(fd, 2)
-            if go == b"g":
-                rc = cli.main(cfg["serve"])
-        finally:
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os._exit(rc)
-    os.close(r)
+    pid, go = fork_serve(cfg["serve"], cfg["log"])
     res = {}
     loaded = False
     try:
@@ -464,9 +566,7 @@ def main() -> None:
         ops.load(cfg["build"])
         loaded = True
         times["load"] = round(time.monotonic() - t, 1)
-        os.write(w, b"g")
-        os.close(w)
-        w = None
+        go()
         times["serve_start"] = round(wait_for_server(cfg["url"], cfg["timeout"]), 1)
         t = time.monotonic()
         res["modbus"] = modbus(cfg["modbus"])
@@ -480,28 +580,31 @@ def main() -> None:
                                        cfg["build"], cfg["fixed"]))
         times["life"] = round(time.monotonic() - t, 1)
     finally:
-        if w is not None:
-            os.close(w)                # serve gives up without starting
+        go(False)                      # serve gives up if it never started
         t = time.monotonic()
-        try:
-            os.kill(pid, signal.SIGTERM)
-        except ProcessLookupError:
-            pass
-        while True:
-            done, status = os.waitpid(pid, os.WNOHANG)
-            if done:
-                res["serve_exit"] = os.waitstatus_to_exitcode(status)
-                break
-            if time.monotonic() - t > 60:
-                os.kill(pid, signal.SIGKILL)
-                os.waitpid(pid, 0)
-                res["serve_exit"] = "killed: no exit within 60 s of SIGTERM"
-                break
-            time.sleep(0.1)
+        res["serve_exit"] = stop_serve(pid)
         times["serve_stop"] = round(time.monotonic() - t, 1)
         if loaded:
             ops.stop()
             res["unloaded"] = True
+    # an OpenPLC-style program driven over Modbus alone
+    t = time.monotonic()
+    port = cfg["modbus"] + 1
+    pid, go = fork_serve(["serve", "--modbus", f"127.0.0.1:{port}"], cfg["log"] + ".openplc")
+    loaded = False
+    try:
+        ops.load(cfg["openplc"])
+        loaded = True
+        go()
+        wait_for_server(f"opc.tcp://127.0.0.1:{port}", cfg["timeout"])
+        res["openplc"] = openplc(port)
+    finally:
+        go(False)
+        res["openplc_serve_exit"] = stop_serve(pid)
+        if loaded:
+            ops.stop()
+            res["openplc_unloaded"] = True
+    times["openplc"] = round(time.monotonic() - t, 1)
     times["total"] = round(time.monotonic() - t0, 1)
     res["seconds"] = times
     print(json.dumps(res))

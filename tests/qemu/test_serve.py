@@ -21,7 +21,11 @@ pymodbus and asyncua, the host's Python in the guest):
   same interface (same node ids, the new body runs), `stop`
   (BadServerHalted, State halted, writes BadServerHalted, Modbus 04),
   `load` (Good again on the same session);
-* SIGTERM stops the server cleanly (exit 0); the kernel log stays clean.
+* SIGTERM stops the server cleanly (exit 0); the kernel log stays clean;
+* examples/openplc_modbus under a Modbus-only serve: a pymodbus client
+  drives the OpenPLC-style program through its HMI coils (%QX0.2/3) and
+  setpoint register (%QW1), the field's %IX set with plc-manager write;
+  its coils and registers follow.
 
 One guest process (serve_clients.py main) imports asyncua and pymodbus
 once, forks `plc-manager serve` (plc_manager.cli.main), loads the build and
@@ -55,6 +59,8 @@ def station(guest_workdir, kdir):
     base.mkdir(exist_ok=True)
     build = base / "build"
     gen_and_build(PROJECT, build)
+    openplc = base / "openplc"
+    gen_and_build(ROOT / "examples" / "openplc_modbus", openplc)
     # the same interface, another body (lines marked SWAP): only its
     # program-type module is built, a project directory to swap in
     src = base / "src_fixed"
@@ -87,14 +93,15 @@ def station(guest_workdir, kdir):
     # scrypt at N=2**12 (the default 2**14 costs seconds per login under TCG)
     add_user(str(users), "op", "write", "operator-pw", n=2 ** 12)
     add_user(str(users), "viewer", "read", "viewer-pw", n=2 ** 12)
-    return build, fixed, pki, users, base
+    return build, fixed, openplc, pki, users, base
 
 
 def test_serve_with_real_clients(guest, station):
-    build, fixed, pki, users, base = station
+    build, fixed, openplc, pki, users, base = station
     log = base / "serve.log"
     guest.run("ip link set lo up 2>/dev/null || ifconfig lo 127.0.0.1 up", 30)
-    cfg = {"build": str(build), "fixed": str(fixed), "log": str(log), "modbus": 5020,
+    cfg = {"build": str(build), "fixed": str(fixed), "openplc": str(openplc),
+           "log": str(log), "modbus": 5020,
            "url": "opc.tcp://127.0.0.1:4841", "cert": str(pki / "client-cert.der"),
            "key": str(pki / "client-key.pem"), "timeout": 240,
            "serve": ["serve", "--modbus", "127.0.0.1:5020",
@@ -106,7 +113,8 @@ def test_serve_with_real_clients(guest, station):
                         argv=[json.dumps(cfg)], timeout=600, cwd=str(ROOT))
     finally:
         # whatever happened: no configuration left behind
-        if guest.run("ls /sys/kernel/iec2kmod/station >/dev/null 2>&1", 30).exit_code == 0:
+        if guest.run("[ -e /sys/kernel/iec2kmod/station ] || "
+                     "[ -e /sys/kernel/iec2kmod/openplcmodbus ]", 30).exit_code == 0:
             guest.pyrun(script="plc-manager", argv=["stop"], timeout=300)
     text = log.read_text() if log.exists() else ""
     assert r.exit_code == 0, r.output + "\n--- serve log:\n" + text
@@ -184,6 +192,23 @@ def test_serve_with_real_clients(guest, station):
     assert {"Good", "BadOutOfService", "BadServerHalted"} <= set(life["notified"]), life
 
     assert res["serve_exit"] == 0 and res["unloaded"], res
+
+    # examples/openplc_modbus over Modbus alone: the HMI's coil and setpoint
+    # register drive it, the field's discrete inputs (set by plc-manager
+    # write) too, its coils and registers show what it does
+    op = res["openplc"]
+    optext = Path(str(log) + ".openplc").read_text()
+    assert "modbus tcp://127.0.0.1:5021: 4 coils, 2 discrete inputs, 1 input registers, " \
+        "3 holding registers" in optext, optext
+    assert op["idle"] == [False, False] and op["write_sp"] and op["write_start"], op
+    assert op["started"] == [True, True] and op["drive"] == [50, 13800], op
+    assert op["starts"] == 1 and op["hmi_start_cleared"] is False, op
+    assert op["di"] == [False, True] and op["stopped_by_field"] is False, op
+    assert op["drive_stopped"] == 0 and op["started_by_field"] is True, op
+    assert op["starts_2"] == 2 and op["write_stop"] and op["stopped_by_hmi"] is False, op
+    assert op["nothing_there"] == 2, op
+    assert res["openplc_serve_exit"] == 0 and res["openplc_unloaded"], res
+    assert "Traceback" not in optext, optext
     assert "stopped:" in text and "Traceback" not in text, text
     assert "the kernel answers again" in text, text
     print(text.strip().splitlines()[-1])
