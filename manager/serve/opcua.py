@@ -796,6 +796,10 @@ class OpcUaServer:
             await self.server.write_attribute_value(
                 nodes["State"].nodeid, ua.DataValue(ua.Variant("halted", ua.VariantType.String),
                                                     SourceTimestamp=stamp))
+        # the tasks' variables are written again once the kernel tells them
+        # (a load under way may answer first without its tasks)
+        for key in [k for k in self.last if "/" in k]:
+            del self.last[key]
 
     async def stop(self) -> None:
         if self.server is not None and getattr(self, "started", False):

@@ -1066,10 +1066,20 @@ def test_kernel_gone_values_halted(manifests, pki):
                 # loaded again: a new module, a new netlink family, a new client
                 fresh = FakeClient(manifests["two_resources"])
                 fresh.data = dict(fake.data)
-                fresh.status, fresh.var_get, fresh.var_set = status, var_get, var_set
+                fresh.var_get, fresh.var_set = var_get, var_set
+                # a load under way: the configuration module answers before
+                # its resources are there (no tasks yet)
+                calls = [0]
+
+                def loading():
+                    calls[0] += 1
+                    st = status()
+                    return dataclasses.replace(st, resources=[]) if calls[0] <= 3 else st
+
+                fresh.status = loading
                 kernel.connect = lambda: fresh
                 await asyncio.sleep(0.3)
-                assert kernel.reconnects == 1
+                assert kernel.reconnects == 1 and calls[0] > 3
                 dv = await node.read_data_value()
                 assert dv.StatusCode.is_good() and dv.Value.Value == 5
                 assert await state.read_value() == "running"
