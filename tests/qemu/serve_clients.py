@@ -264,13 +264,17 @@ async def life(url: str, cert: str, key: str, port: int, build: str, fixed: str)
     async def ids(ns):
         """Every node id of our namespace reachable from the configuration
         (browsed), with its browse name."""
-        seen, todo = {}, [c.get_node(ua.NodeId("Station", ns))]
-        while todo:
-            n = todo.pop()
-            seen[n.nodeid.to_string()] = n
-            for ch in await n.get_children():
-                if ch.nodeid.NamespaceIndex == ns and ch.nodeid.to_string() not in seen:
-                    todo.append(ch)
+        root = c.get_node(ua.NodeId("Station", ns))
+        seen, level = {root.nodeid.to_string(): root}, [root]
+        while level:                   # one Browse request a level of the tree
+            nxt = []
+            for _, res in await c.browse_nodes(level):
+                for ref in res.References:
+                    nid = ref.NodeId
+                    if nid.NamespaceIndex == ns and nid.to_string() not in seen:
+                        seen[nid.to_string()] = c.get_node(nid)
+                        nxt.append(seen[nid.to_string()])
+            level = nxt
         names = await c.read_attributes(list(seen.values()), ua.AttributeIds.BrowseName)
         return {k: dv.Value.Value.Name for k, dv in zip(seen, names)}
 
