@@ -200,7 +200,7 @@ def ua_type(var: VarType) -> str:
     BOOL Boolean; SINT..LINT SByte..Int64; USINT..ULINT, BYTE..LWORD
     Byte..UInt64; REAL Float; LREAL Double; TIME/LTIME/TOD Duration (ms,
     a Double); DATE/DT DateTime; STRING/WSTRING String; an enumeration
-    Int32 (with EnumStrings)."""
+    Int32 (its variables' DataType is an enumeration type: opcua.py)."""
     k = var.kind
     if k == "b":
         return "Boolean"

@@ -330,6 +330,34 @@ def test_watchdog_counts_beats_and_logs_a_lost_link(tmp_path):
 
 
 # -------------------------------------------------------- conveyor_counter
+@behaviour("openplc_modbus")
+def test_openplc_modbus_latch_lamp_and_drive(tmp_path):
+    """The HMI's coils are momentary (the program clears them once seen), a
+    start lights the warning lamp for 2 s and counts in %MW0, the drive
+    command follows the setpoint while the motor runs, a high level or a
+    stop (field or HMI) stops it."""
+    P = "Res0.instance0."
+    tr = simulate(tmp_path, "openplc_modbus", "6s",
+                  [P + n for n in ("motor", "warn_lamp", "hmi_start", "drive_cmd", "starts")],
+                  [("0s", "%QW1", "50"), ("100ms", "%QX0.2", "TRUE"),
+                   ("1s", "%QW1", "120"),
+                   ("3s", "%QX0.3", "TRUE"),
+                   ("3500ms", "%IX0.0", "TRUE"), ("3600ms", "%IX0.0", "FALSE"),
+                   ("4500ms", "%IW1", "950"), ("5s", "%IW1", "10"),
+                   ("5200ms", "%IX0.0", "TRUE")])
+    assert tr.changes(P + "hmi_start") == [(0, "FALSE")]        # seen within its cycle, cleared
+    assert tr.changes(P + "motor") == [(0, "FALSE"), (100 * MS, "TRUE"), (3 * S, "FALSE"),
+                                    (3500 * MS, "TRUE"), (4500 * MS, "FALSE"),
+                                    (5200 * MS, "TRUE")]
+    assert tr.changes(P + "warn_lamp", 0, 3 * S) == [(0, "FALSE"), (100 * MS, "TRUE"),
+                                              (2100 * MS, "FALSE")]
+    assert tr.changes(P + "drive_cmd", 0, 4 * S) == [(0, "0"), (100 * MS, "13800"),
+                                            (1 * S, "27600"), (3 * S, "0"),
+                                            (3500 * MS, "27600")]
+    assert tr.changes(P + "starts") == [(0, "0"), (100 * MS, "1"), (3500 * MS, "2"),
+                                  (5200 * MS, "3")]
+
+
 @behaviour("conveyor_counter")
 def test_conveyor_counts_boxes_batches_and_jams(tmp_path):
     entries = [e for k in range(24) for e in pulse("%IX0.2", 200 + 100 * k, 40)]

@@ -2,12 +2,14 @@
 """Real clients against `plc-manager serve` (run in the guest by
 tests/qemu/test_serve.py; also usable by hand):
 
-    python3 serve_clients.py MODBUS_PORT OPCUA_URL CLIENT_CERT CLIENT_KEY
+    python3 serve_clients.py JSON      (see main)
 
 Prints one JSON object of what each client saw; the test asserts on it."""
 
 import asyncio
 import json
+import os
+import signal
 import socket
 import sys
 import time
@@ -214,12 +216,190 @@ async def opcua(url: str, cert: str, key: str) -> dict:
     return out
 
 
+async def life(url: str, cert: str, key: str, port: int, build: str, fixed: str) -> dict:
+    """The PLC's life under one OPC UA session: a task stopped on a fault
+    (its variables flagged BadOutOfService, frozen; its State and Fault say
+    why), `swap --restart` to a build with the same interface (the same node
+    ids, the task running the new body), `stop` (BadServerHalted, writes
+    refused, Modbus exception 04) and `load` (Good again on the same
+    session).  The manager's commands run in this process (ops, in a
+    thread), so the session stays open throughout."""
+    from asyncua import Client, ua
+    from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+    from pymodbus.client import ModbusTcpClient
+    from plc_manager import ops
+    out = {}
+    c = Client(url, timeout=60, watchdog_intervall=30)
+    c.session_timeout = 120000
+    await c.set_security(SecurityPolicyBasic256Sha256, cert, key,
+                         mode=ua.MessageSecurityMode.SignAndEncrypt)
+    c.set_user("op")
+    c.set_password("operator-pw")
+    await c.connect()
+    mb = ModbusTcpClient("127.0.0.1", port=port, timeout=10)
+    assert mb.connect()
+
+    def code(dv):
+        return ua.StatusCode(dv.StatusCode.value).name
+
+    async def status_of(node, variant):
+        try:
+            await node.write_value(variant)
+            return "Good"
+        except ua.UaStatusCodeError as e:
+            return type(e).__name__
+
+    async def until(what, pred, timeout=60.0):
+        """Polls *pred* (async, returns a value or None) until it answers."""
+        t = time.monotonic()
+        while True:
+            got = await pred()
+            if got is not None:
+                out["t_" + what] = round(time.monotonic() - t, 1)
+                return got
+            if time.monotonic() - t > timeout:
+                raise AssertionError(f"{what}: not within {timeout} s; so far {out}")
+            await asyncio.sleep(0.2)
+
+    async def ids(ns):
+        """Every node id of our namespace reachable from the configuration
+        (browsed), with its browse name."""
+        root = c.get_node(ua.NodeId("Station", ns))
+        seen, level = {root.nodeid.to_string(): root}, [root]
+        while level:                   # one Browse request a level of the tree
+            nxt = []
+            for _, res in await c.browse_nodes(level):
+                for ref in res.References:
+                    nid = ref.NodeId
+                    if nid.NamespaceIndex == ns and nid.to_string() not in seen:
+                        seen[nid.to_string()] = c.get_node(nid)
+                        nxt.append(seen[nid.to_string()])
+            level = nxt
+        names = await c.read_attributes(list(seen.values()), ua.AttributeIds.BrowseName)
+        return {k: dv.Value.Value.Name for k, dv in zip(seen, names)}
+
+    async def same_ids(before):
+        """The node ids browsed before are there with the same browse names
+        (one Read of them all)."""
+        nodes = [c.get_node(ua.NodeId.from_string(k)) for k in before]
+        got = await c.read_attributes(nodes, ua.AttributeIds.BrowseName)
+        return all(dv.StatusCode.is_good() and dv.Value.Value.Name == before[k]
+                   for k, dv in zip(before, got))
+
+    try:
+        ns = await c.get_namespace_index("urn:iec2kmod:Station")
+        out["ns"] = ns
+        node = {k: c.get_node(ua.NodeId(sid, ns)) for k, sid in (
+            ("count", "main.p.count"), ("doubled", "main.p.doubled"),
+            ("state", "main.cyc/State"), ("fault", "main.cyc/Fault"),
+            ("divisor", "access:DIVISOR"), ("level", "access:LEVEL"),
+            ("mode", "access:MODE"))}
+        before = await ids(ns)
+        out["n_ids"] = len(before)
+        # an enumeration: a DataType of its own, Int32 values, ordinals checked
+        dt = await node["mode"].read_data_type()
+        out["mode_type"] = [dt.to_string(), (await c.get_node(dt).read_browse_name()).Name,
+                            (await c.get_node(dt).get_parent()).nodeid.to_string()]
+        out["mode_strings"] = [x.Text for x in await c.get_node(
+            ua.NodeId("type:Mode/EnumStrings", ns)).read_value()]
+        out["mode_value"] = await node["mode"].read_value()
+        out["mode_write_bad"] = await status_of(node["mode"], ua.Variant(3, ua.VariantType.Int32))
+        out["mode_write"] = await status_of(node["mode"], ua.Variant(2, ua.VariantType.Int32))
+        out["mode_back"] = await node["mode"].read_value()
+
+        seen = []
+
+        class H:
+            def datachange_notification(self, n, val, data):
+                seen.append((code(data.monitored_item.Value), val))
+
+        sub = await c.create_subscription(50, H())
+        await sub.subscribe_data_change(node["count"])
+
+        # a fault: the task stops, its values are frozen and flagged
+        out["write_divisor"] = await status_of(node["divisor"],
+                                               ua.Variant(0, ua.VariantType.Int16))
+
+        async def state_is(want):
+            v = await node["state"].read_value()
+            return v if v == want else None
+
+        await until("fault", lambda: state_is("fault"))
+        out["fault_text"] = await node["fault"].read_value()
+        dvs = []
+        for _ in range(2):
+            dvs.append(await node["count"].read_data_value(raise_on_bad_status=False))
+            await asyncio.sleep(0.5)
+        out["faulted_reads"] = [code(dv) for dv in dvs]
+        async def notified_fault():
+            return True if any(s == "BadOutOfService" for s, _ in seen) else None
+
+        await until("notified_fault", notified_fault, 30)
+        regs = []
+        for _ in range(2):
+            regs.append(mb.read_holding_registers(10, count=1).registers[0])    # %QW10 count
+            time.sleep(0.3)
+        out["faulted_modbus"] = regs
+        # swap --restart: a build with the same interface, the task runs again
+        t = time.monotonic()
+        await asyncio.to_thread(ops.swap, fixed, restart=True)
+        out["t_swap"] = round(time.monotonic() - t, 1)
+        await until("running_after_swap", lambda: state_is("running"))
+
+        async def good_count():
+            dv = await node["count"].read_data_value(raise_on_bad_status=False)
+            return dv.Value.Value if dv.StatusCode.is_good() else None
+
+        a = await until("good_after_swap", good_count)
+        await asyncio.sleep(0.5)
+        out["counting_after_swap"] = [a, await good_count()]
+
+        async def doubled_is(want):
+            v = await node["doubled"].read_value()
+            return v if v == want else None
+
+        # sp is 5 (written through Modbus): the new body gives 3 * 5
+        out["tripled"] = await until("tripled", lambda: doubled_is(15), 20)
+        out["same_ids_after_swap"] = await same_ids(before)
+        # stop: every value says BadServerHalted, writes are refused
+        t = time.monotonic()
+        await asyncio.to_thread(ops.stop)
+        out["t_stop"] = round(time.monotonic() - t, 1)
+
+        async def halted():
+            dv = await node["count"].read_data_value(raise_on_bad_status=False)
+            return code(dv) if dv.StatusCode.value == ua.StatusCodes.BadServerHalted else None
+
+        await until("halted", halted, 30)
+        out["halted_state"] = await node["state"].read_value()
+        out["halted_write"] = await status_of(node["level"], ua.Variant(3, ua.VariantType.Int16))
+        r = mb.read_holding_registers(10, count=1)
+        out["halted_modbus"] = getattr(r, "exception_code", None)
+        # load again: the values come back on the same session, same node ids
+        t = time.monotonic()
+        await asyncio.to_thread(ops.load, build)
+        out["t_load"] = round(time.monotonic() - t, 1)
+        await until("running_after_load", lambda: state_is("running"))
+        a = await until("good_after_load", good_count)
+        await asyncio.sleep(0.5)
+        out["counting_after_load"] = [a, await good_count()]
+        out["divisor_after_load"] = await node["divisor"].read_value()
+        out["same_ids_after_load"] = await same_ids(before)
+        out["level_write_after_load"] = await status_of(node["level"],
+                                                        ua.Variant(8, ua.VariantType.Int16))
+        r = mb.read_holding_registers(8194, count=1)                        # LEVEL
+        out["level_modbus_after_load"] = None if r.isError() else r.registers[0]
+        out["notified"] = sorted({s for s, _ in seen})
+        await sub.delete()
+    finally:
+        mb.close()
+        await c.disconnect()
+    return out
+
+
 def wait_for_server(url: str, timeout: float) -> float:
-    """The clients' libraries imported while the server starts (both take
-    tens of seconds under TCG), then wait until the OPC UA port accepts a
-    connection (serve opens it last); returns the seconds waited."""
-    import asyncua  # noqa: F401
-    import pymodbus.client  # noqa: F401
+    """Waits until the OPC UA port accepts a connection (serve opens it
+    last); returns the seconds waited."""
     from urllib.parse import urlparse
     u = urlparse(url)
     t = time.monotonic()
@@ -230,18 +410,207 @@ def wait_for_server(url: str, timeout: float) -> float:
         except OSError:
             if time.monotonic() - t > timeout:
                 raise
-            time.sleep(0.3)
+            time.sleep(0.1)
+
+
+def kernel_facts() -> dict:
+    """What the kernel holds (plc-manager read) and the end of the task's
+    last cycle (IEC_A_LAST_END_NS, CLOCK_REALTIME) beside the clock."""
+    import contextlib
+    import io
+    from plc_manager import cli
+    from plc_manager.netlink import Client
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = cli.main(["read", "--json", "level", "sp", "label"])
+    assert rc == 0, buf.getvalue()
+    c = Client()
+    try:
+        end = c.status().tasks()[0].last_end_ns
+    finally:
+        c.close()
+    return {"read": {v["path"]: v["value"] for v in json.loads(buf.getvalue())},
+            "last_end_ns": end, "now_ns": time.time_ns()}
+
+
+def fork_serve(argv, log):
+    """`plc-manager serve ARGV` (plc_manager.cli.main) in a child process,
+    its output to *log*; it starts when the returned go() is called (the
+    child is forked before this process opens any netlink socket)."""
+    from plc_manager import cli
+    sys.stdout.flush()
+    sys.stderr.flush()
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        rc = 1
+        try:
+            os.close(w)
+            start = os.read(r, 1)
+            fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            os.dup2(fd, 1)
+            os.dup2(fd, 2)
+            if start == b"g":
+                rc = cli.main(argv)
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(rc)
+    os.close(r)
+    state = {"w": w}
+
+    def go(really=True):
+        if state["w"] is not None:
+            if really:
+                os.write(state["w"], b"g")
+            os.close(state["w"])
+            state["w"] = None
+
+    return pid, go
+
+
+def stop_serve(pid) -> object:
+    """SIGTERM, then its exit code (or why none)."""
+    t = time.monotonic()
+    try:
+        os.kill(pid, signal.SIGTERM)
+    except ProcessLookupError:
+        pass
+    while True:
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            return os.waitstatus_to_exitcode(status)
+        if time.monotonic() - t > 60:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            return "killed: no exit within 60 s of SIGTERM"
+        time.sleep(0.1)
+
+
+def openplc(port: int) -> dict:
+    """examples/openplc_modbus driven over Modbus (OpenPLC's mapping): the
+    HMI's coils and setpoint register written by the client, the field
+    inputs (%IX, discrete inputs: read-only on Modbus) set with plc-manager
+    write as a field device would; the program's outputs seen changing."""
+    import contextlib
+    import io
+    from pymodbus.client import ModbusTcpClient
+    from plc_manager import cli
+    out = {}
+
+    def field(addr, value):
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            assert cli.main(["write", addr, value]) == 0, buf.getvalue()
+
+    c = ModbusTcpClient("127.0.0.1", port=port, timeout=10)
+    assert c.connect()
+
+    def until(what, fn, want, timeout=20.0):
+        t = time.monotonic()
+        while True:
+            got = fn()
+            if got == want or time.monotonic() - t > timeout:
+                out[what] = got
+                return got
+            time.sleep(0.05)
+
+    try:
+        motor_lamp = lambda: c.read_coils(0, count=2).bits[:2]      # noqa: E731
+        out["idle"] = motor_lamp()
+        out["write_sp"] = not c.write_register(1, 50).isError()          # %QW1 speed_sp
+        out["write_start"] = not c.write_coil(2, True).isError()         # %QX0.2 hmi_start
+        until("started", motor_lamp, [True, True])
+        until("drive", lambda: c.read_holding_registers(1, count=2).registers, [50, 13800])
+        out["starts"] = c.read_holding_registers(1024, count=1).registers[0]   # %MW0
+        out["hmi_start_cleared"] = c.read_coils(2, count=1).bits[0]
+        field("%IX0.1", "TRUE")                                          # stop_pb
+        out["di"] = c.read_discrete_inputs(0, count=2).bits[:2]
+        until("stopped_by_field", lambda: motor_lamp()[0], False)
+        out["drive_stopped"] = c.read_holding_registers(2, count=1).registers[0]
+        field("%IX0.1", "FALSE")
+        field("%IX0.0", "TRUE")                                          # start_pb
+        until("started_by_field", lambda: motor_lamp()[0], True)
+        until("starts_2", lambda: c.read_holding_registers(1024, count=1).registers[0], 2)
+        out["write_stop"] = not c.write_coil(3, True).isError()          # %QX0.3 hmi_stop
+        until("stopped_by_hmi", lambda: motor_lamp()[0], False)
+        r = c.write_register(0, 1)                                       # nothing at %QW0
+        out["nothing_there"] = getattr(r, "exception_code", None)
+    finally:
+        c.close()
+    return out
 
 
 def main() -> None:
-    port, url, cert, key = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
-    waited = wait_for_server(url, float(sys.argv[5]) if len(sys.argv) > 5 else 0.0)
+    """python3 serve_clients.py JSON: {"build", "fixed", "openplc" (builds),
+    "log", "serve": [argv of plc-manager], "modbus": PORT, "url", "cert",
+    "key", "timeout"}.
+
+    One process does it all, so the guest imports asyncua and pymodbus once
+    (tens of seconds under TCG): it imports them, forks `plc-manager serve`
+    (plc_manager.cli.main, output to "log"; forked before any netlink
+    socket exists here), loads the build, lets serve start, runs the
+    clients, then the PLC's life (fault, swap, stop, load), stops serve
+    with SIGTERM and unloads the configuration; then the same with
+    examples/openplc_modbus and a Modbus-only serve."""
+    cfg = json.loads(sys.argv[1])
     t0 = time.monotonic()
-    res = {"modbus": modbus(port)}
-    t1 = time.monotonic()
-    res["opcua"] = asyncio.run(opcua(url, cert, key))
-    res["seconds"] = {"waited": round(waited, 1), "modbus": round(t1 - t0, 1),
-                      "opcua": round(time.monotonic() - t1, 1)}
+    import asyncua  # noqa: F401
+    import pymodbus.client  # noqa: F401
+    import pymodbus.server  # noqa: F401
+    import plc_manager.serve.modbus  # noqa: F401
+    import plc_manager.serve.opcua  # noqa: F401
+    from plc_manager import ops
+    times = {"imports": round(time.monotonic() - t0, 1)}
+    pid, go = fork_serve(cfg["serve"], cfg["log"])
+    res = {}
+    loaded = False
+    try:
+        t = time.monotonic()
+        ops.load(cfg["build"])
+        loaded = True
+        times["load"] = round(time.monotonic() - t, 1)
+        go()
+        times["serve_start"] = round(wait_for_server(cfg["url"], cfg["timeout"]), 1)
+        t = time.monotonic()
+        res["modbus"] = modbus(cfg["modbus"])
+        times["modbus"] = round(time.monotonic() - t, 1)
+        t = time.monotonic()
+        res["opcua"] = asyncio.run(opcua(cfg["url"], cfg["cert"], cfg["key"]))
+        times["opcua"] = round(time.monotonic() - t, 1)
+        res["kernel"] = kernel_facts()
+        t = time.monotonic()
+        res["life"] = asyncio.run(life(cfg["url"], cfg["cert"], cfg["key"], cfg["modbus"],
+                                       cfg["build"], cfg["fixed"]))
+        times["life"] = round(time.monotonic() - t, 1)
+    finally:
+        go(False)                      # serve gives up if it never started
+        t = time.monotonic()
+        res["serve_exit"] = stop_serve(pid)
+        times["serve_stop"] = round(time.monotonic() - t, 1)
+        if loaded:
+            ops.stop()
+            res["unloaded"] = True
+    # an OpenPLC-style program driven over Modbus alone
+    t = time.monotonic()
+    port = cfg["modbus"] + 1
+    pid, go = fork_serve(["serve", "--modbus", f"127.0.0.1:{port}"], cfg["log"] + ".openplc")
+    loaded = False
+    try:
+        ops.load(cfg["openplc"])
+        loaded = True
+        go()
+        wait_for_server(f"opc.tcp://127.0.0.1:{port}", cfg["timeout"])
+        res["openplc"] = openplc(port)
+    finally:
+        go(False)
+        res["openplc_serve_exit"] = stop_serve(pid)
+        if loaded:
+            ops.stop()
+            res["openplc_unloaded"] = True
+    times["openplc"] = round(time.monotonic() - t, 1)
+    times["total"] = round(time.monotonic() - t0, 1)
+    res["seconds"] = times
     print(json.dumps(res))
 
 
