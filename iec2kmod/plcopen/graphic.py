@@ -21,12 +21,16 @@ output pin, formalParameter).  The translation:
     jumps and returns.  IEC 61131-3 (ed.2 4.1.3): an element is evaluated
     once all its inputs are; so the statements are topologically sorted by
     data flow (a statement reading an instance's output comes after that
-    instance's call), ties broken by the editor's executionOrderId when it
-    gives one, else by position (top to bottom, then left to right).  A
-    feedback path (a cycle) is cut at the element that comes first in that
-    order, which reads the value of the previous cycle.  When the editor
-    numbered every statement (executionOrderId > 0 on all), that order is
-    followed as it is.
+    instance's call), ties broken by position (top to bottom, then left to
+    right).  A feedback path (a cycle) is cut at the element that comes
+    first in that order, which reads the value of the previous cycle.
+    Where the editor gives an execution order (executionOrderId > 0, the
+    TC6 attribute for it; 0 or absent: none), it is the order of the
+    elements it numbers, data flow or not: an element that reads one
+    numbered after it reads that one's value of the previous cycle, and a
+    numbered function is evaluated at its place into a hidden variable
+    (so it keeps that value); the elements left unnumbered follow the data
+    flow around them.
   * Coils: ``v := flow`` (negated ``NOT flow``), set ``IF flow THEN v :=
     TRUE``, reset likewise FALSE, rising/falling: ``v := R_TRIG(flow).Q``.
   * EN of a function block instance: the call under ``IF en``; its ENO is
@@ -280,7 +284,9 @@ class Network:
                      _kids(_kid(v, "connectionPointIn"), "connection")
                      for v in self.pins(blk, "inputVariables")
                      if _kid(v, "connectionPointIn") is not None)
-            if n < 2 and not (en and not direct[lid]):
+            # a function the editor numbered runs at its place in that order
+            # (its readers numbered before it read its previous value)
+            if n < 2 and not (en and not direct[lid]) and not self.order_id(blk):
                 continue
             typ = self.infer(blk, set()) or self.infer_from_readers(blk)
             if typ is None:
@@ -618,17 +624,24 @@ class Network:
                                     f"'{j.get('label')}' in the body")
             if target <= segment(j):
                 self.backward = True
-        ids = [int(e.get("executionOrderId") or 0) for e in stmts]
-        if stmts and all(i > 0 for i in ids):
-            ordered = [e for _, e in sorted(zip(ids, stmts), key=lambda p: p[0])]
-            return ordered, labels, segment
+        num = {e.get("localId"): self.order_id(e) for e in stmts}
 
         def key(e):
-            return (segment(e), int(e.get("executionOrderId") or 0), _pos(e),
-                    int(e.get("localId") or 0))
+            return (segment(e), num[e.get("localId")], _pos(e), int(e.get("localId") or 0))
         by_id = {e.get("localId"): e for e in stmts}
         deps = {e.get("localId"): {d for d in self.deps(e) if d in by_id
                                    and segment(by_id[d]) == segment(e)} for e in stmts}
+        # the editor's order (executionOrderId > 0) is the execution order of
+        # the elements it numbers: between two numbered elements it replaces
+        # the data flow (one that reads an element numbered after it reads
+        # that element's value of the previous cycle); the elements it does
+        # not number follow the data flow around them.  Labels still cut
+        # the body into segments (jumps), so only within a segment.
+        numbered = [lid for lid, n in num.items() if n > 0]
+        for lid in numbered:
+            seg = segment(by_id[lid])
+            deps[lid] = {d for d in deps[lid] if num[d] == 0 or num[d] == num[lid]} | \
+                {d for d in numbered if 0 < num[d] < num[lid] and segment(by_id[d]) == seg}
         ordered = []
         left = {e.get("localId"): e for e in stmts}
         while left:
@@ -643,6 +656,20 @@ class Network:
             ordered.append(e)
             del left[e.get("localId")]
         return ordered, labels, segment
+
+    def order_id(self, e):
+        """The executionOrderId the editor gave e (0: none)."""
+        v = e.get("executionOrderId")
+        if v is None:
+            return 0
+        try:
+            n = int(v)
+        except ValueError:
+            n = -1
+        if n < 0:
+            raise XmlRefusal(e, f"{self.label(e)} in {self.ctx}: executionOrderId '{v}' is not "
+                                f"a non-negative integer")
+        return n
 
     @staticmethod
     def on_cycle(lid, deps, left):
