@@ -91,6 +91,18 @@ def simulate(project, cycles, engine):
     return trace, [f[2] for f in res.faults]
 
 
+def same(a, b) -> bool:
+    """Equal values, a NaN equal to a NaN (a REAL both sides computed as
+    NaN is the same result)."""
+    if isinstance(a, float) and isinstance(b, float) and a != a and b != b:
+        return True
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
+    return a == b
+
+
 def run_one(path: Path, cycles: int, engines: list[str]):
     from iec2kmod.parse import frontend
     t0 = time.perf_counter()
@@ -110,9 +122,9 @@ def run_one(path: Path, cycles: int, engines: list[str]):
                 time.perf_counter() - t0
     first = next(iter(traces.values()))
     for e, tr in traces.items():
-        if tr != first:
-            bad = next(k for k in range(cycles) if tr[0][k] != first[0][k]) \
-                if tr[0] != first[0] else None
+        if not same(tr, first):
+            bad = next(k for k in range(cycles) if not same(tr[0][k], first[0][k])) \
+                if not same(tr[0], first[0]) else None
             return "engines differ", e, f"first difference after cycle {bad}", \
                 time.perf_counter() - t0
     faults = first[1]
@@ -151,6 +163,11 @@ c = PLCControler()
 err = c.OpenXMLFile(src)
 if err:
     print("open:", err)
+# the runtime library's block types (LOGGER), as ProjectController's
+# LoadLibraries gives them to the project's controller
+lib = PLCControler()
+lib.OpenXMLFile(bz + "/NativeLib.xml")
+c.AddConfNodeTypesList([{"name": "Native", "types": lib.Project}])
 text, errors, warnings = c.GenerateProgram(out)
 for e in errors:
     print("error:", e)
@@ -177,6 +194,15 @@ def compare_generator(beremiz: Path, proj: Path, cycles: int, workdir: Path) -> 
     st, why = beremiz_st(beremiz, proj, workdir / (proj.parent.name + ".st"))
     if st is None:
         return f"Beremiz's generator failed: {why}"
+    text = st.read_text(encoding="utf-8")
+    if re.search(r"\bLOGGER\b", text, re.I) and \
+            not re.search(r"FUNCTION_BLOCK\s+LOGGER\b", text, re.I):
+        # the runtime library's LOGGER is not in the generated program (the
+        # IDE compiles the library apart): the same definition as ours
+        from iec2kmod.plcopen.reader import BEREMIZ_LIBRARY
+        text = BEREMIZ_LIBRARY["LOGLEVEL"][1] + "\n" + BEREMIZ_LIBRARY["LOGGER"][1] + \
+            "\n" + text
+        st.write_text(text, encoding="utf-8")
     theirs = frontend.run([str(st)], use_cache=False)
     if not theirs.ok:
         return "Beremiz's ST refused: " + cause(theirs.diags.errors[0].message)
@@ -192,7 +218,7 @@ def compare_generator(beremiz: Path, proj: Path, cycles: int, workdir: Path) -> 
     b = interp.run(theirs.project, step * (cycles - 1), watch=common)
     for k in range(cycles):
         va, vb = a.values_at(k * step), b.values_at(k * step)
-        diff = [n for n in vb if va.get(n) != vb.get(n)]
+        diff = [n for n in vb if not same(va.get(n), vb.get(n))]
         if diff:
             n = diff[0]
             return (f"differ after cycle {k + 1}: {n} ours {va.get(n)!r}, Beremiz's "
