@@ -164,6 +164,7 @@ def translate(path: str) -> Translation:
     except XmlRefusal as exc:
         _diag(tr, exc.line, "error", exc.message)
     _beremiz_library(root, gen, tr)
+    _vendor_blocks(root, tr)
     for name, line in gen.vendor.items():
         _diag(tr, line, "note", f"ignored: vendor data '{name}' (addData), no effect on execution")
     tr.text = "\n".join(gen.lines) + "\n"
@@ -233,6 +234,65 @@ BEREMIZ_LIBRARY = {
                "    VAR\n        TRIG0 : BOOL;\n    END_VAR\nTRIG0 := TRIG;\n"
                "END_FUNCTION_BLOCK"),
 }
+
+
+# Blocks of the editors' own libraries, outside IEC 61131-3: they drive the
+# editor's runtime (Arduino boards, MQTT and TCP clients, I/O cards, the
+# HMI, Python), which a kernel module has none of.  A project using one is
+# refused by the block's name and library, not as an unknown type.  Names
+# only (the libraries' interfaces as the editors list them).
+_OPENPLC = "the OpenPLC Editor's {} library (OpenPLC runtime extension, not IEC 61131-3)"
+_BEREMIZ = "Beremiz's {} extension (Beremiz runtime, not IEC 61131-3)"
+VENDOR_BLOCKS = {n: _OPENPLC.format(lib) for lib, names in (
+    ("Arduino", "DS18B20 DS18B20_2_OUT DS18B20_3_OUT DS18B20_4_OUT DS18B20_5_OUT "
+                "CLOUD_ADD_BOOL CLOUD_ADD_DINT CLOUD_ADD_REAL CLOUD_BEGIN PWM_CONTROLLER "
+                "ARDUINOCAN_CONF ARDUINOCAN_WRITE ARDUINOCAN_WRITE_WORD ARDUINOCAN_READ"),
+    ("STM32 CAN", "STM32CAN_CONF STM32CAN_WRITE STM32CAN_READ"),
+    ("Communication", "TCP_CONNECT TCP_SEND TCP_RECEIVE TCP_CLOSE"),
+    ("MQTT", "MQTT_RECEIVE MQTT_SEND MQTT_CONNECT MQTT_CONNECT_AUTH MQTT_SUBSCRIBE "
+             "MQTT_UNSUBSCRIBE MQTT_DISCONNECT"),
+    ("P1AM", "P1AM_INIT P1_16CDR P1_08N P1_16N P1_08T P1_16TR P1_04AD"),
+    ("Jaguar", "ADC_CONFIG"), ("SL-RP4", "ROTARY_SWITCH"),
+    ("Sequent Microsystems cards", "SM_8RELAY SM_16RELAY SM_8DIN SM_16DIN SM_4REL4IN "
+                                   "SM_INDUSTRIAL SM_RTD SM_BAS SM_HOME SM_8MOSFET"),
+    ("Additional Function Blocks", "PID RAMP HYSTERESIS INTEGRAL DERIVATIVE"))
+    for n in names.split()}
+VENDOR_BLOCKS.update({n: _BEREMIZ.format(lib) for lib, names in (
+    ("Python (py_ext)", "python_eval python_poll python_gear csv_read_by_string csv_reload "
+                        "csv_read_by_int"),
+    ("SVGHMI", "HMI_NODE HMI_STRING HMI_SINT HMI_INT HMI_DINT HMI_LINT HMI_USINT HMI_UINT "
+               "HMI_UDINT HMI_ULINT HMI_BOOL HMI_REAL"))
+    for n in names.split()})
+VENDOR_BLOCKS = {k.upper(): v for k, v in VENDOR_BLOCKS.items()}
+
+
+def _vendor_blocks(root, tr):
+    """An error, by name and library, for each editor-library block the
+    project uses and does not declare itself (first use)."""
+    declared = {(e.get("name") or "").upper() for e in root.iter()
+                if isinstance(e.tag, str) and _local(e) in ("pou", "dataType")}
+    seen = set()
+    for e in root.iter():
+        if not isinstance(e.tag, str):
+            continue
+        k = _local(e)
+        name = e.get("name") if k == "derived" else e.get("typeName") if k == "block" else None
+        if not name or name.upper() not in VENDOR_BLOCKS or name.upper() in declared or \
+                name.upper() in seen:
+            continue
+        seen.add(name.upper())
+        where = ""
+        if k == "block":
+            where = f" (block localId {e.get('localId')})"
+        else:
+            var = next((a for a in e.iterancestors() if _local(a) == "variable"), None)
+            if var is not None and var.get("name"):
+                where = f" (variable '{var.get('name')}')"
+        line = e.sourceline or 1
+        text = tr.xml_lines[line - 1] if 0 < line <= len(tr.xml_lines) else ""
+        _diag(tr, line, "error",
+              f"'{name}' is a block of {VENDOR_BLOCKS[name.upper()]}: not supported{where}",
+              col=text.find(f'"{name}"') + 2 if f'"{name}"' in text else 1)
 
 
 def _beremiz_library(root, gen, tr):
