@@ -92,6 +92,38 @@ def _pos(el):
         return (0.0, 0.0)
 
 
+# the marks of the parts of a generated line that other elements wrote:
+# MARK_OPEN index MARK_SEP text MARK_CLOSE (reader's emit() takes them out)
+MARK_OPEN, MARK_SEP, MARK_CLOSE = "\x01", "\x02", "\x03"
+_MARKS = re.compile("\x01[0-9]+\x02|\x03")
+
+
+def plain(text):
+    """text without its marks."""
+    return _MARKS.sub("", text)
+
+
+def spans(text):
+    """(text without its marks, [(first column, last column, mark index)])
+    with 1-based columns of the unmarked text."""
+    out, stack, found = [], [], []
+    i, n = 0, len(text)
+    while i < n:
+        c = text[i]
+        if c == MARK_OPEN:
+            j = text.index(MARK_SEP, i)
+            stack.append((int(text[i + 1:j]), len(out)))
+            i = j + 1
+            continue
+        if c == MARK_CLOSE:
+            idx, start = stack.pop()
+            found.append((start + 1, len(out), idx))
+        else:
+            out.append(c)
+        i += 1
+    return "".join(out), found
+
+
 def _true(v):
     return v in ("true", "1")
 
@@ -156,6 +188,11 @@ class Network:
             self.pre.append((f"{name}(CLK := {expr});", e))
         return f"{name}.Q"
 
+    def mark(self, el, text, label=None):
+        """text, marked as written for el (spans(): a diagnostic whose
+        column falls in it points at el's line and names it)."""
+        return self.gen.mark(el, label or self.label(el), text)
+
     # -- values
     def point(self, cpin, e, what):
         if cpin is None:
@@ -182,6 +219,7 @@ class Network:
             if not v:
                 raise XmlRefusal(src, f"{self.label(src)} in {self.ctx} has no <expression>")
             v = f"({v})" if not v.replace("_", "").replace(".", "").isalnum() else v
+            v = self.mark(src, v)
             if src.get("edge") in ("rising", "falling"):
                 v = self.trig(src.get("edge"), v, src, ("v", ref))
             return f"NOT {v}" if _true(src.get("negated")) else v
@@ -196,7 +234,7 @@ class Network:
         if k == "contact":
             flow = self.point(_kid(src, "connectionPointIn"), src, "the left link")
             var = _text(src, "variable")
-            term = var
+            term = self.mark(src, var)
             if src.get("edge") in ("rising", "falling"):
                 term = self.trig(src.get("edge"), var, src, ("c", ref))
             if _true(src.get("negated")):
@@ -230,7 +268,7 @@ class Network:
         for v in self.pins(blk, "inputVariables"):
             if v.get("formalParameter") == "EN":
                 val = self.pin_value(blk, v)
-                return None if val == "TRUE" else val      # EN on the power rail
+                return None if plain(val) == "TRUE" else val   # EN on the power rail
         return None
 
     def block_output(self, blk, pin, conn):
@@ -250,11 +288,11 @@ class Network:
         if pin == "ENO":
             val = self.en(blk) or "TRUE"
         elif inst:
-            val = f"{inst}.{pin}"
+            val = self.mark(blk, f"{inst}.{pin}")
         elif blk.get("localId") in self.temps:
             val = self.temps[blk.get("localId")]
         else:
-            val = self.call(blk, pin)
+            val = self.mark(blk, self.call(blk, pin))
         return f"NOT {val}" if neg else val
 
     # -- functions evaluated once
@@ -460,7 +498,8 @@ class Network:
                     continue
                 raise XmlRefusal(v, f"input {p} of {self.label(blk)} in {self.ctx} is not "
                                     f"connected")
-            args.append(f"{p} := {val}" if name.upper() in self.user else val)
+            args.append(self.mark(blk, f"{p} := {val}" if name.upper() in self.user else val,
+                                  f"input {p} of {self.label(blk)}"))
         return f"{name}({', '.join(args)})"
 
     # -- statements
@@ -487,7 +526,8 @@ class Network:
                         continue
                     val = self.pin_value(e, v)
                     if val is not None:
-                        args.append(f"{p} := {val}")
+                        args.append(self.mark(e, f"{p} := {val}",
+                                              f"input {p} of {self.label(e)}"))
             en = self.en(e)
             call = f"{inst}({', '.join(args)});"
             lines = [call] if en is None else [f"IF {en} THEN", f"    {call}", "END_IF;"]
@@ -498,7 +538,7 @@ class Network:
             if val is None:
                 val = self.point(cpin, e, "the input" if k != "coil" else "the left link")
             if _true(e.get("negated")):
-                val = f"NOT ({val})" if val != "TRUE" else "FALSE"
+                val = f"NOT ({val})" if plain(val) != "TRUE" else "FALSE"
             lines = self.store(e, target, val)
             if en is not None:
                 # IEC 61131-3 ed.2 2.5.1.2: with EN FALSE the block is not

@@ -201,8 +201,23 @@ def remap(d: Diagnostic) -> Diagnostic:
     if tr is None or not tr.smap or d in tr.diags:
         return d
     i = min(max(d.line, 1), len(tr.smap)) - 1
-    xml_line, shift, ctx = tr.smap[i]
+    xml_line, shift, ctx = tr.smap[i][:3]
     col = d.col + shift if shift is not None else 1
+    # a column in the part of a graphic statement another element wrote
+    # (a variable, a function, an instance's output, a block's input):
+    # that element's line, and its name with the input it feeds and the
+    # statement it is part of
+    inner = sorted((s for s in (tr.smap[i][3] if len(tr.smap[i]) > 3 else ())
+                    if s[0] <= d.col <= s[1]), key=lambda s: s[1] - s[0])
+    if inner:
+        xml_line = inner[0][2]
+        labels = []
+        for s in inner:
+            if s[3] not in labels and len(labels) < 2:
+                labels.append(s[3])
+        if ctx and not any(ctx in lab for lab in labels):
+            labels.append(f"in {ctx}")       # the statement it is part of
+        ctx = ", ".join(labels)
     msg = d.message + (f" ({ctx})" if ctx else "")
     text = tr.xml_lines[xml_line - 1] if 0 < xml_line <= len(tr.xml_lines) else ""
     return Diagnostic(d.path, xml_line, max(col, 1), d.severity, msg, text)
@@ -344,14 +359,26 @@ class _Generator:
         self.lines: list[str] = []
         self.smap: list = []
         self.vendor: dict[str, int] = {}
+        self.marks: list = []          # (xml line, label) of graphic.mark()
         self.pou_transitions = {}
 
     # -- output
+    def mark(self, el, label, text):
+        """text marked as written for the element el (graphic bodies)."""
+        from .graphic import MARK_CLOSE, MARK_OPEN, MARK_SEP
+        self.marks.append((getattr(el, "sourceline", None) or 1, label))
+        return f"{MARK_OPEN}{len(self.marks) - 1}{MARK_SEP}{text}{MARK_CLOSE}"
+
     def emit(self, text: str, el, ctx=None):
         line = getattr(el, "sourceline", None) or (el if isinstance(el, int) else 1)
         for part in text.split("\n"):
+            found = ()
+            if "\x01" in part:
+                from .graphic import spans
+                part, found = spans(part)
+                found = tuple((c0, c1) + self.marks[i] for c0, c1, i in found)
             self.lines.append(part)
-            self.smap.append((line, None, ctx))
+            self.smap.append((line, None, ctx, found) if found else (line, None, ctx))
 
     def emit_body(self, el, ctx=None, prefix="", suffix=""):
         """The text of a formattedText element, each line mapped to its own
