@@ -143,6 +143,7 @@ class Network:
         self.implied = set()             # blocks with EN known to run (enabled_value)
         self.temps = {}                  # localId -> variable holding a function's output
         self.backward = False            # a jump to a label above it (order() tells)
+        self.unconnected = set()         # outVariables/coils with no input (warned)
         for e in _kids(body):
             k = _local(e)
             if sfc and k in SFC_KINDS:
@@ -534,6 +535,18 @@ class Network:
         elif k in ("outVariable", "inOutVariable", "coil"):
             target = _text(e, "expression" if k != "coil" else "variable")
             cpin = _kid(e, "connectionPointIn")
+            if cpin is None or not (_kids(cpin, "connection") or
+                                    (_text(cpin, "expression") if k != "coil" else "")):
+                # nothing drawn into it: it stores nothing (Beremiz's
+                # generator skips it too); said, since it is likely a
+                # drawing left unfinished
+                if e.get("localId") not in self.unconnected:
+                    self.unconnected.add(e.get("localId"))
+                    from .reader import _diag
+                    _diag(self.gen.tr, e.sourceline or 1, "warning",
+                          f"{self.label(e)} in {self.ctx} is not connected: ignored (it "
+                          f"stores nothing)")
+                return []
             en, val = self.enabled_value(cpin, e)
             if val is None:
                 val = self.point(cpin, e, "the input" if k != "coil" else "the left link")

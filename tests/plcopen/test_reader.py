@@ -286,3 +286,18 @@ def test_editor_library_blocks_are_refused_by_name(tmp_path, capsys):
            f"library (OpenPLC runtime extension, not IEC 61131-3): not supported (variable " \
            f"'conn')" in err, err
     assert "unknown type" not in err
+
+
+def test_an_unconnected_output_variable_is_ignored_with_a_warning(tmp_path, capsys):
+    """An outVariable with nothing drawn into it stores nothing (Beremiz's
+    generator skips it; OSCAT's 'Time and Date' project has one): a
+    warning at its line, not a refusal of the project."""
+    p, lines = _case_broken(tmp_path, "fbd_flow.xml",
+                            ("</FBD>", '<outVariable localId="99"><position x="300" y="700"/>'
+                                       '<connectionPointIn/><expression>count</expression>'
+                                       '</outVariable>\n          </FBD>'))
+    assert main(["check", "--no-cache", str(p)]) == 0
+    err = capsys.readouterr().err
+    n = _line_of(lines, '<outVariable localId="99">')
+    assert f"{p}:{n}:1: warning: block localId 99 'count' in pou 'Flow' is not connected: " \
+           f"ignored (it stores nothing)" in err, err
