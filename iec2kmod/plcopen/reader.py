@@ -389,6 +389,7 @@ class _Generator:
         k = raw.find("<![CDATA[")
         if k >= 0:
             first_shift = k + len("<![CDATA[")
+        self.unclosed_comment(text, line, first_shift, ctx)
         parts = text.split("\n")
         for i, part in enumerate(parts):
             pre = prefix if i == 0 else ""
@@ -396,6 +397,21 @@ class _Generator:
             shift = (first_shift if i == 0 else 0) - len(pre)
             self.lines.append(pre + part + post)
             self.smap.append((line + i, shift, ctx))
+
+    def unclosed_comment(self, text, line, first_shift, ctx):
+        """An error at a '(*' that the body does not close: each body is a
+        text of its own in the editor, so its comment would otherwise run
+        on into the next POU and fail there with a confusing message."""
+        from ..parse.lexical import SKIP_ALL
+        for m in re.finditer(SKIP_ALL + r"|(\(\*)", text, re.S):
+            if m.group(1):
+                before = text[:m.start()]
+                n = before.count("\n")
+                col = m.start() - (before.rfind("\n") + 1) + 1 + (first_shift if n == 0 else 0)
+                _diag(self.tr, line + n, "error",
+                      f"comment '(*' not closed in the body{f' ({ctx})' if ctx else ''}: "
+                      f"add '*)'", col=col)
+                return
 
     def note_vendor(self, el):
         for d in el.iter():

@@ -301,3 +301,17 @@ def test_an_unconnected_output_variable_is_ignored_with_a_warning(tmp_path, caps
     n = _line_of(lines, '<outVariable localId="99">')
     assert f"{p}:{n}:1: warning: block localId 99 'count' in pou 'Flow' is not connected: " \
            f"ignored (it stores nothing)" in err, err
+
+
+def test_an_unclosed_comment_in_an_st_body_is_named_where_it_opens(tmp_path, capsys):
+    """Each ST body is a text of its own in the editor: a '(*' it does not
+    close is an error at that '(*' (OSCAT's 'Latches' project has two), not
+    a syntax error in whatever POU follows."""
+    p, lines = _broken(tmp_path, ("cycle := cycle + 1;", "cycle := cycle + 1; (* unclosed"))
+    assert main(["check", "--no-cache", str(p)]) == 1
+    err = capsys.readouterr().err
+    n = _line_of(lines, "(* unclosed")
+    col = lines[n - 1].index("(* unclosed") + 1
+    assert f"{p}:{n}:{col}: error: comment '(*' not closed in the body (pou 'Main'): add " \
+           f"'*)'" in err, err
+    assert "1 error(s)" in err
