@@ -165,6 +165,7 @@ def translate(path: str) -> Translation:
         _diag(tr, exc.line, "error", exc.message)
     _beremiz_library(root, gen, tr)
     _vendor_blocks(root, tr)
+    _extensions(path, tr)
     for name, line in gen.vendor.items():
         _diag(tr, line, "note", f"ignored: vendor data '{name}' (addData), no effect on execution")
     tr.text = "\n".join(gen.lines) + "\n"
@@ -279,6 +280,21 @@ VENDOR_BLOCKS.update({n: _BEREMIZ.format(lib) for lib, names in (
                "HMI_UDINT HMI_ULINT HMI_BOOL HMI_REAL"))
     for n in names.split()})
 VENDOR_BLOCKS = {k.upper(): v for k, v in VENDOR_BLOCKS.items()}
+
+
+def _extensions(path, tr):
+    """A note for each editor extension beside the project (a NAME@KIND
+    directory: c_ext, py_ext, arduino_ext, svghmi, modbus, ...): its code
+    and the variables and blocks it declares are not part of plc.xml, so a
+    VAR_EXTERNAL or a block it provides is missing here."""
+    try:
+        dirs = sorted(d.name for d in Path(path).resolve().parent.iterdir()
+                      if d.is_dir() and "@" in d.name)
+    except OSError:
+        return
+    for name in dirs:
+        _diag(tr, 1, "note", f"ignored: editor extension '{name}' beside the project (its "
+                             f"code, variables and blocks are not in the XML)")
 
 
 def _vendor_blocks(root, tr):

@@ -315,3 +315,12 @@ def test_an_unclosed_comment_in_an_st_body_is_named_where_it_opens(tmp_path, cap
     assert f"{p}:{n}:{col}: error: comment '(*' not closed in the body (pou 'Main'): add " \
            f"'*)'" in err, err
     assert "1 error(s)" in err
+
+
+def test_an_editor_extension_beside_the_project_is_noted(tmp_path, capsys):
+    p, _ = _broken(tmp_path)
+    (tmp_path / "arduino_ext_0@arduino_ext").mkdir()
+    assert main(["check", "--no-cache", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert f"{p}:1:1: note: ignored: editor extension 'arduino_ext_0@arduino_ext' beside the " \
+           f"project (its code, variables and blocks are not in the XML)" in err, err
