@@ -9,8 +9,13 @@ examples and test projects (and OpenPLC Editor projects) through iec2kmod.
 PATH is a checkout the user fetched: a Beremiz repository (its
 ``exemples/*/plc.xml`` and ``tests/projects/*/plc.xml`` are taken, and its
 ``plcopen/tc6_xml_v201.xsd`` validates them), or any directory whose
-``plc.xml`` files are projects (an OpenPLC Editor workspace).  Nothing is
-fetched and no project is copied into this repository (Beremiz is GPL).
+``plc.xml`` files are projects (an OpenPLC Editor workspace, or a
+collection of OpenPLC projects: the editor's own ``editor/examples`` and
+``editor/tests`` are in the history of github.com/thiagoralves/OpenPLC_Editor
+before commit 7398ab9 moved them to a submodule; gracesrm/OpenPLC_Sample_Programs,
+kato-works/openplc_school_01, virajdesai0309/OpenPLC_Tutorials and
+wonka929/OSCAT_OpenPLC hold more), or a single file.  Nothing is fetched and
+no project is copied into this repository (Beremiz is GPL).
 
 Each project is checked (``iec2kmod check``); one that checks clean and has
 a configuration is simulated N cycles of its fastest task in every engine
@@ -20,7 +25,8 @@ extension (a ``NAME@KIND`` directory: py_ext, c_ext, svghmi, modbus, ...):
 those are the ones issue 28 asks to run; the others are reported apart
 since their refusals come from the extension's types and blocks.
 
---generator (a full Beremiz checkout): Beremiz's own XML-to-ST generator
+--generator (a full Beremiz checkout; benchmarks/plcopen_vs_beremiz.py
+does the same on any projects): Beremiz's own XML-to-ST generator
 (PLCGenerator, run headless in a subprocess with Beremiz's fake_wx and stub
 modules for the GUI's imports) writes its ST of every project that runs
 here; that ST is checked and simulated too (interpreter), and every
