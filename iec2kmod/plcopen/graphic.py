@@ -269,7 +269,8 @@ class Network:
         for v in self.pins(blk, "inputVariables"):
             if v.get("formalParameter") == "EN":
                 val = self.pin_value(blk, v)
-                return None if plain(val) == "TRUE" else val   # EN on the power rail
+                # not connected, or on the power rail: always enabled
+                return None if val is None or plain(val) == "TRUE" else val
         return None
 
     def block_output(self, blk, pin, conn):

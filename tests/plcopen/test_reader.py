@@ -324,3 +324,21 @@ def test_an_editor_extension_beside_the_project_is_noted(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"{p}:1:1: note: ignored: editor extension 'arduino_ext_0@arduino_ext' beside the " \
            f"project (its code, variables and blocks are not in the XML)" in err, err
+
+
+def test_an_unconnected_en_pin_is_always_enabled(tmp_path, capsys):
+    """An EN pin drawn with nothing connected (Beremiz's exemples/python
+    has one) leaves the block always enabled and its ENO TRUE."""
+    p, _ = _case_broken(tmp_path, "fbd_flow.xml",
+                        ('<variable formalParameter="CU">',
+                         '<variable formalParameter="EN"><connectionPointIn/></variable>\n'
+                         '                <variable formalParameter="CU">'),
+                        ("</FBD>", '<outVariable localId="98"><position x="300" y="650"/>'
+                                   '<connectionPointIn><connection refLocalId="14" '
+                                   'formalParameter="ENO"/></connectionPointIn>'
+                                   '<expression>andOut</expression></outVariable>\n'
+                                   '          </FBD>'))
+    assert main(["check", "--no-cache", str(p)]) == 0, capsys.readouterr().err
+    assert main(["export", "--st", str(p), "-o", str(tmp_path / "out.st")]) == 0
+    text = (tmp_path / "out.st").read_text()
+    assert "andOut := TRUE;" in text and "ctr(CU := Run" in text, text
