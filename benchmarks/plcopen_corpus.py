@@ -9,8 +9,13 @@ examples and test projects (and OpenPLC Editor projects) through iec2kmod.
 PATH is a checkout the user fetched: a Beremiz repository (its
 ``exemples/*/plc.xml`` and ``tests/projects/*/plc.xml`` are taken, and its
 ``plcopen/tc6_xml_v201.xsd`` validates them), or any directory whose
-``plc.xml`` files are projects (an OpenPLC Editor workspace).  Nothing is
-fetched and no project is copied into this repository (Beremiz is GPL).
+``plc.xml`` files are projects (an OpenPLC Editor workspace, or a
+collection of OpenPLC projects: the editor's own ``editor/examples`` and
+``editor/tests`` are in the history of github.com/thiagoralves/OpenPLC_Editor
+before commit 7398ab9 moved them to a submodule; gracesrm/OpenPLC_Sample_Programs,
+kato-works/openplc_school_01, virajdesai0309/OpenPLC_Tutorials and
+wonka929/OSCAT_OpenPLC hold more), or a single file.  Nothing is fetched and
+no project is copied into this repository (Beremiz is GPL).
 
 Each project is checked (``iec2kmod check``); one that checks clean and has
 a configuration is simulated N cycles of its fastest task in every engine
@@ -20,7 +25,8 @@ extension (a ``NAME@KIND`` directory: py_ext, c_ext, svghmi, modbus, ...):
 those are the ones issue 28 asks to run; the others are reported apart
 since their refusals come from the extension's types and blocks.
 
---generator (a full Beremiz checkout): Beremiz's own XML-to-ST generator
+--generator (a full Beremiz checkout; benchmarks/plcopen_vs_beremiz.py
+does the same on any projects): Beremiz's own XML-to-ST generator
 (PLCGenerator, run headless in a subprocess with Beremiz's fake_wx and stub
 modules for the GUI's imports) writes its ST of every project that runs
 here; that ST is checked and simulated too (interpreter), and every
@@ -91,6 +97,18 @@ def simulate(project, cycles, engine):
     return trace, [f[2] for f in res.faults]
 
 
+def same(a, b) -> bool:
+    """Equal values, a NaN equal to a NaN (a REAL both sides computed as
+    NaN is the same result)."""
+    if isinstance(a, float) and isinstance(b, float) and a != a and b != b:
+        return True
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
+    return a == b
+
+
 def run_one(path: Path, cycles: int, engines: list[str]):
     from iec2kmod.parse import frontend
     t0 = time.perf_counter()
@@ -110,9 +128,9 @@ def run_one(path: Path, cycles: int, engines: list[str]):
                 time.perf_counter() - t0
     first = next(iter(traces.values()))
     for e, tr in traces.items():
-        if tr != first:
-            bad = next(k for k in range(cycles) if tr[0][k] != first[0][k]) \
-                if tr[0] != first[0] else None
+        if not same(tr, first):
+            bad = next(k for k in range(cycles) if not same(tr[0][k], first[0][k])) \
+                if not same(tr[0], first[0]) else None
             return "engines differ", e, f"first difference after cycle {bad}", \
                 time.perf_counter() - t0
     faults = first[1]
@@ -151,6 +169,11 @@ c = PLCControler()
 err = c.OpenXMLFile(src)
 if err:
     print("open:", err)
+# the runtime library's block types (LOGGER), as ProjectController's
+# LoadLibraries gives them to the project's controller
+lib = PLCControler()
+lib.OpenXMLFile(bz + "/NativeLib.xml")
+c.AddConfNodeTypesList([{"name": "Native", "types": lib.Project}])
 text, errors, warnings = c.GenerateProgram(out)
 for e in errors:
     print("error:", e)
@@ -177,6 +200,15 @@ def compare_generator(beremiz: Path, proj: Path, cycles: int, workdir: Path) -> 
     st, why = beremiz_st(beremiz, proj, workdir / (proj.parent.name + ".st"))
     if st is None:
         return f"Beremiz's generator failed: {why}"
+    text = st.read_text(encoding="utf-8")
+    if re.search(r"\bLOGGER\b", text, re.I) and \
+            not re.search(r"FUNCTION_BLOCK\s+LOGGER\b", text, re.I):
+        # the runtime library's LOGGER is not in the generated program (the
+        # IDE compiles the library apart): the same definition as ours
+        from iec2kmod.plcopen.reader import BEREMIZ_LIBRARY
+        text = BEREMIZ_LIBRARY["LOGLEVEL"][1] + "\n" + BEREMIZ_LIBRARY["LOGGER"][1] + \
+            "\n" + text
+        st.write_text(text, encoding="utf-8")
     theirs = frontend.run([str(st)], use_cache=False)
     if not theirs.ok:
         return "Beremiz's ST refused: " + cause(theirs.diags.errors[0].message)
@@ -192,7 +224,7 @@ def compare_generator(beremiz: Path, proj: Path, cycles: int, workdir: Path) -> 
     b = interp.run(theirs.project, step * (cycles - 1), watch=common)
     for k in range(cycles):
         va, vb = a.values_at(k * step), b.values_at(k * step)
-        diff = [n for n in vb if va.get(n) != vb.get(n)]
+        diff = [n for n in vb if not same(va.get(n), vb.get(n))]
         if diff:
             n = diff[0]
             return (f"differ after cycle {k + 1}: {n} ours {va.get(n)!r}, Beremiz's "

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import tempfile
 import time
@@ -109,7 +110,9 @@ def main(argv=None) -> int:
         for rel, proj, project in todo:
             t1 = time.monotonic()
             wall = wall_paths(project)
-            name = str(rel).replace("/", "_").replace(".", "_")
+            # kbuild takes no blank in a module directory (M=): OpenPLC
+            # Editor v4 builds under "build/OpenPLC Runtime v4/src"
+            name = re.sub(r"[^A-Za-z0-9_-]", "_", str(rel))
             try:
                 problems, values = run_and_compare(g, proj, work / name, args.ms, wall)
             except (Exception, AssertionError) as exc:  # noqa: BLE001 - reported per project

@@ -21,12 +21,16 @@ output pin, formalParameter).  The translation:
     jumps and returns.  IEC 61131-3 (ed.2 4.1.3): an element is evaluated
     once all its inputs are; so the statements are topologically sorted by
     data flow (a statement reading an instance's output comes after that
-    instance's call), ties broken by the editor's executionOrderId when it
-    gives one, else by position (top to bottom, then left to right).  A
-    feedback path (a cycle) is cut at the element that comes first in that
-    order, which reads the value of the previous cycle.  When the editor
-    numbered every statement (executionOrderId > 0 on all), that order is
-    followed as it is.
+    instance's call), ties broken by position (top to bottom, then left to
+    right).  A feedback path (a cycle) is cut at the element that comes
+    first in that order, which reads the value of the previous cycle.
+    Where the editor gives an execution order (executionOrderId > 0, the
+    TC6 attribute for it; 0 or absent: none), it is the order of the
+    elements it numbers, data flow or not: an element that reads one
+    numbered after it reads that one's value of the previous cycle, and a
+    numbered function is evaluated at its place into a hidden variable
+    (so it keeps that value); the elements left unnumbered follow the data
+    flow around them.
   * Coils: ``v := flow`` (negated ``NOT flow``), set ``IF flow THEN v :=
     TRUE``, reset likewise FALSE, rising/falling: ``v := R_TRIG(flow).Q``.
   * EN of a function block instance: the call under ``IF en``; its ENO is
@@ -88,6 +92,38 @@ def _pos(el):
         return (0.0, 0.0)
 
 
+# the marks of the parts of a generated line that other elements wrote:
+# MARK_OPEN index MARK_SEP text MARK_CLOSE (reader's emit() takes them out)
+MARK_OPEN, MARK_SEP, MARK_CLOSE = "\x01", "\x02", "\x03"
+_MARKS = re.compile("\x01[0-9]+\x02|\x03")
+
+
+def plain(text):
+    """text without its marks."""
+    return _MARKS.sub("", text)
+
+
+def spans(text):
+    """(text without its marks, [(first column, last column, mark index)])
+    with 1-based columns of the unmarked text."""
+    out, stack, found = [], [], []
+    i, n = 0, len(text)
+    while i < n:
+        c = text[i]
+        if c == MARK_OPEN:
+            j = text.index(MARK_SEP, i)
+            stack.append((int(text[i + 1:j]), len(out)))
+            i = j + 1
+            continue
+        if c == MARK_CLOSE:
+            idx, start = stack.pop()
+            found.append((start + 1, len(out), idx))
+        else:
+            out.append(c)
+        i += 1
+    return "".join(out), found
+
+
 def _true(v):
     return v in ("true", "1")
 
@@ -107,6 +143,7 @@ class Network:
         self.implied = set()             # blocks with EN known to run (enabled_value)
         self.temps = {}                  # localId -> variable holding a function's output
         self.backward = False            # a jump to a label above it (order() tells)
+        self.unconnected = set()         # outVariables/coils with no input (warned)
         for e in _kids(body):
             k = _local(e)
             if sfc and k in SFC_KINDS:
@@ -152,6 +189,11 @@ class Network:
             self.pre.append((f"{name}(CLK := {expr});", e))
         return f"{name}.Q"
 
+    def mark(self, el, text, label=None):
+        """text, marked as written for el (spans(): a diagnostic whose
+        column falls in it points at el's line and names it)."""
+        return self.gen.mark(el, label or self.label(el), text)
+
     # -- values
     def point(self, cpin, e, what):
         if cpin is None:
@@ -178,6 +220,7 @@ class Network:
             if not v:
                 raise XmlRefusal(src, f"{self.label(src)} in {self.ctx} has no <expression>")
             v = f"({v})" if not v.replace("_", "").replace(".", "").isalnum() else v
+            v = self.mark(src, v)
             if src.get("edge") in ("rising", "falling"):
                 v = self.trig(src.get("edge"), v, src, ("v", ref))
             return f"NOT {v}" if _true(src.get("negated")) else v
@@ -192,7 +235,7 @@ class Network:
         if k == "contact":
             flow = self.point(_kid(src, "connectionPointIn"), src, "the left link")
             var = _text(src, "variable")
-            term = var
+            term = self.mark(src, var)
             if src.get("edge") in ("rising", "falling"):
                 term = self.trig(src.get("edge"), var, src, ("c", ref))
             if _true(src.get("negated")):
@@ -226,7 +269,8 @@ class Network:
         for v in self.pins(blk, "inputVariables"):
             if v.get("formalParameter") == "EN":
                 val = self.pin_value(blk, v)
-                return None if val == "TRUE" else val      # EN on the power rail
+                # not connected, or on the power rail: always enabled
+                return None if val is None or plain(val) == "TRUE" else val
         return None
 
     def block_output(self, blk, pin, conn):
@@ -246,11 +290,11 @@ class Network:
         if pin == "ENO":
             val = self.en(blk) or "TRUE"
         elif inst:
-            val = f"{inst}.{pin}"
+            val = self.mark(blk, f"{inst}.{pin}")
         elif blk.get("localId") in self.temps:
             val = self.temps[blk.get("localId")]
         else:
-            val = self.call(blk, pin)
+            val = self.mark(blk, self.call(blk, pin))
         return f"NOT {val}" if neg else val
 
     # -- functions evaluated once
@@ -280,7 +324,9 @@ class Network:
                      _kids(_kid(v, "connectionPointIn"), "connection")
                      for v in self.pins(blk, "inputVariables")
                      if _kid(v, "connectionPointIn") is not None)
-            if n < 2 and not (en and not direct[lid]):
+            # a function the editor numbered runs at its place in that order
+            # (its readers numbered before it read its previous value)
+            if n < 2 and not (en and not direct[lid]) and not self.order_id(blk):
                 continue
             typ = self.infer(blk, set()) or self.infer_from_readers(blk)
             if typ is None:
@@ -454,7 +500,8 @@ class Network:
                     continue
                 raise XmlRefusal(v, f"input {p} of {self.label(blk)} in {self.ctx} is not "
                                     f"connected")
-            args.append(f"{p} := {val}" if name.upper() in self.user else val)
+            args.append(self.mark(blk, f"{p} := {val}" if name.upper() in self.user else val,
+                                  f"input {p} of {self.label(blk)}"))
         return f"{name}({', '.join(args)})"
 
     # -- statements
@@ -481,18 +528,31 @@ class Network:
                         continue
                     val = self.pin_value(e, v)
                     if val is not None:
-                        args.append(f"{p} := {val}")
+                        args.append(self.mark(e, f"{p} := {val}",
+                                              f"input {p} of {self.label(e)}"))
             en = self.en(e)
             call = f"{inst}({', '.join(args)});"
             lines = [call] if en is None else [f"IF {en} THEN", f"    {call}", "END_IF;"]
         elif k in ("outVariable", "inOutVariable", "coil"):
             target = _text(e, "expression" if k != "coil" else "variable")
             cpin = _kid(e, "connectionPointIn")
+            if cpin is None or not (_kids(cpin, "connection") or
+                                    (_text(cpin, "expression") if k != "coil" else "")):
+                # nothing drawn into it: it stores nothing (Beremiz's
+                # generator skips it too); said, since it is likely a
+                # drawing left unfinished
+                if e.get("localId") not in self.unconnected:
+                    self.unconnected.add(e.get("localId"))
+                    from .reader import _diag
+                    _diag(self.gen.tr, e.sourceline or 1, "warning",
+                          f"{self.label(e)} in {self.ctx} is not connected: ignored (it "
+                          f"stores nothing)")
+                return []
             en, val = self.enabled_value(cpin, e)
             if val is None:
                 val = self.point(cpin, e, "the input" if k != "coil" else "the left link")
             if _true(e.get("negated")):
-                val = f"NOT ({val})" if val != "TRUE" else "FALSE"
+                val = f"NOT ({val})" if plain(val) != "TRUE" else "FALSE"
             lines = self.store(e, target, val)
             if en is not None:
                 # IEC 61131-3 ed.2 2.5.1.2: with EN FALSE the block is not
@@ -618,17 +678,24 @@ class Network:
                                     f"'{j.get('label')}' in the body")
             if target <= segment(j):
                 self.backward = True
-        ids = [int(e.get("executionOrderId") or 0) for e in stmts]
-        if stmts and all(i > 0 for i in ids):
-            ordered = [e for _, e in sorted(zip(ids, stmts), key=lambda p: p[0])]
-            return ordered, labels, segment
+        num = {e.get("localId"): self.order_id(e) for e in stmts}
 
         def key(e):
-            return (segment(e), int(e.get("executionOrderId") or 0), _pos(e),
-                    int(e.get("localId") or 0))
+            return (segment(e), num[e.get("localId")], _pos(e), int(e.get("localId") or 0))
         by_id = {e.get("localId"): e for e in stmts}
         deps = {e.get("localId"): {d for d in self.deps(e) if d in by_id
                                    and segment(by_id[d]) == segment(e)} for e in stmts}
+        # the editor's order (executionOrderId > 0) is the execution order of
+        # the elements it numbers: between two numbered elements it replaces
+        # the data flow (one that reads an element numbered after it reads
+        # that element's value of the previous cycle); the elements it does
+        # not number follow the data flow around them.  Labels still cut
+        # the body into segments (jumps), so only within a segment.
+        numbered = [lid for lid, n in num.items() if n > 0]
+        for lid in numbered:
+            seg = segment(by_id[lid])
+            deps[lid] = {d for d in deps[lid] if num[d] == 0 or num[d] == num[lid]} | \
+                {d for d in numbered if 0 < num[d] < num[lid] and segment(by_id[d]) == seg}
         ordered = []
         left = {e.get("localId"): e for e in stmts}
         while left:
@@ -643,6 +710,20 @@ class Network:
             ordered.append(e)
             del left[e.get("localId")]
         return ordered, labels, segment
+
+    def order_id(self, e):
+        """The executionOrderId the editor gave e (0: none)."""
+        v = e.get("executionOrderId")
+        if v is None:
+            return 0
+        try:
+            n = int(v)
+        except ValueError:
+            n = -1
+        if n < 0:
+            raise XmlRefusal(e, f"{self.label(e)} in {self.ctx}: executionOrderId '{v}' is not "
+                                f"a non-negative integer")
+        return n
 
     @staticmethod
     def on_cycle(lid, deps, left):

@@ -164,6 +164,8 @@ def translate(path: str) -> Translation:
     except XmlRefusal as exc:
         _diag(tr, exc.line, "error", exc.message)
     _beremiz_library(root, gen, tr)
+    _vendor_blocks(root, tr)
+    _extensions(path, tr)
     for name, line in gen.vendor.items():
         _diag(tr, line, "note", f"ignored: vendor data '{name}' (addData), no effect on execution")
     tr.text = "\n".join(gen.lines) + "\n"
@@ -200,8 +202,23 @@ def remap(d: Diagnostic) -> Diagnostic:
     if tr is None or not tr.smap or d in tr.diags:
         return d
     i = min(max(d.line, 1), len(tr.smap)) - 1
-    xml_line, shift, ctx = tr.smap[i]
+    xml_line, shift, ctx = tr.smap[i][:3]
     col = d.col + shift if shift is not None else 1
+    # a column in the part of a graphic statement another element wrote
+    # (a variable, a function, an instance's output, a block's input):
+    # that element's line, and its name with the input it feeds and the
+    # statement it is part of
+    inner = sorted((s for s in (tr.smap[i][3] if len(tr.smap[i]) > 3 else ())
+                    if s[0] <= d.col <= s[1]), key=lambda s: s[1] - s[0])
+    if inner:
+        xml_line = inner[0][2]
+        labels = []
+        for s in inner:
+            if s[3] not in labels and len(labels) < 2:
+                labels.append(s[3])
+        if ctx and not any(ctx in lab for lab in labels):
+            labels.append(f"in {ctx}")       # the statement it is part of
+        ctx = ", ".join(labels)
     msg = d.message + (f" ({ctx})" if ctx else "")
     text = tr.xml_lines[xml_line - 1] if 0 < xml_line <= len(tr.xml_lines) else ""
     return Diagnostic(d.path, xml_line, max(col, 1), d.severity, msg, text)
@@ -233,6 +250,80 @@ BEREMIZ_LIBRARY = {
                "    VAR\n        TRIG0 : BOOL;\n    END_VAR\nTRIG0 := TRIG;\n"
                "END_FUNCTION_BLOCK"),
 }
+
+
+# Blocks of the editors' own libraries, outside IEC 61131-3: they drive the
+# editor's runtime (Arduino boards, MQTT and TCP clients, I/O cards, the
+# HMI, Python), which a kernel module has none of.  A project using one is
+# refused by the block's name and library, not as an unknown type.  Names
+# only (the libraries' interfaces as the editors list them).
+_OPENPLC = "the OpenPLC Editor's {} library (OpenPLC runtime extension, not IEC 61131-3)"
+_BEREMIZ = "Beremiz's {} extension (Beremiz runtime, not IEC 61131-3)"
+VENDOR_BLOCKS = {n: _OPENPLC.format(lib) for lib, names in (
+    ("Arduino", "DS18B20 DS18B20_2_OUT DS18B20_3_OUT DS18B20_4_OUT DS18B20_5_OUT "
+                "CLOUD_ADD_BOOL CLOUD_ADD_DINT CLOUD_ADD_REAL CLOUD_BEGIN PWM_CONTROLLER "
+                "ARDUINOCAN_CONF ARDUINOCAN_WRITE ARDUINOCAN_WRITE_WORD ARDUINOCAN_READ"),
+    ("STM32 CAN", "STM32CAN_CONF STM32CAN_WRITE STM32CAN_READ"),
+    ("Communication", "TCP_CONNECT TCP_SEND TCP_RECEIVE TCP_CLOSE"),
+    ("MQTT", "MQTT_RECEIVE MQTT_SEND MQTT_CONNECT MQTT_CONNECT_AUTH MQTT_SUBSCRIBE "
+             "MQTT_UNSUBSCRIBE MQTT_DISCONNECT"),
+    ("P1AM", "P1AM_INIT P1_16CDR P1_08N P1_16N P1_08T P1_16TR P1_04AD"),
+    ("Jaguar", "ADC_CONFIG"), ("SL-RP4", "ROTARY_SWITCH"),
+    ("Sequent Microsystems cards", "SM_8RELAY SM_16RELAY SM_8DIN SM_16DIN SM_4REL4IN "
+                                   "SM_INDUSTRIAL SM_RTD SM_BAS SM_HOME SM_8MOSFET"),
+    ("Additional Function Blocks", "PID RAMP HYSTERESIS INTEGRAL DERIVATIVE"))
+    for n in names.split()}
+VENDOR_BLOCKS.update({n: _BEREMIZ.format(lib) for lib, names in (
+    ("Python (py_ext)", "python_eval python_poll python_gear csv_read_by_string csv_reload "
+                        "csv_read_by_int"),
+    ("SVGHMI", "HMI_NODE HMI_STRING HMI_SINT HMI_INT HMI_DINT HMI_LINT HMI_USINT HMI_UINT "
+               "HMI_UDINT HMI_ULINT HMI_BOOL HMI_REAL"))
+    for n in names.split()})
+VENDOR_BLOCKS = {k.upper(): v for k, v in VENDOR_BLOCKS.items()}
+
+
+def _extensions(path, tr):
+    """A note for each editor extension beside the project (a NAME@KIND
+    directory: c_ext, py_ext, arduino_ext, svghmi, modbus, ...): its code
+    and the variables and blocks it declares are not part of plc.xml, so a
+    VAR_EXTERNAL or a block it provides is missing here."""
+    try:
+        dirs = sorted(d.name for d in Path(path).resolve().parent.iterdir()
+                      if d.is_dir() and "@" in d.name)
+    except OSError:
+        return
+    for name in dirs:
+        _diag(tr, 1, "note", f"ignored: editor extension '{name}' beside the project (its "
+                             f"code, variables and blocks are not in the XML)")
+
+
+def _vendor_blocks(root, tr):
+    """An error, by name and library, for each editor-library block the
+    project uses and does not declare itself (first use)."""
+    declared = {(e.get("name") or "").upper() for e in root.iter()
+                if isinstance(e.tag, str) and _local(e) in ("pou", "dataType")}
+    seen = set()
+    for e in root.iter():
+        if not isinstance(e.tag, str):
+            continue
+        k = _local(e)
+        name = e.get("name") if k == "derived" else e.get("typeName") if k == "block" else None
+        if not name or name.upper() not in VENDOR_BLOCKS or name.upper() in declared or \
+                name.upper() in seen:
+            continue
+        seen.add(name.upper())
+        where = ""
+        if k == "block":
+            where = f" (block localId {e.get('localId')})"
+        else:
+            var = next((a for a in e.iterancestors() if _local(a) == "variable"), None)
+            if var is not None and var.get("name"):
+                where = f" (variable '{var.get('name')}')"
+        line = e.sourceline or 1
+        text = tr.xml_lines[line - 1] if 0 < line <= len(tr.xml_lines) else ""
+        _diag(tr, line, "error",
+              f"'{name}' is a block of {VENDOR_BLOCKS[name.upper()]}: not supported{where}",
+              col=text.find(f'"{name}"') + 2 if f'"{name}"' in text else 1)
 
 
 def _beremiz_library(root, gen, tr):
@@ -284,14 +375,26 @@ class _Generator:
         self.lines: list[str] = []
         self.smap: list = []
         self.vendor: dict[str, int] = {}
+        self.marks: list = []          # (xml line, label) of graphic.mark()
         self.pou_transitions = {}
 
     # -- output
+    def mark(self, el, label, text):
+        """text marked as written for the element el (graphic bodies)."""
+        from .graphic import MARK_CLOSE, MARK_OPEN, MARK_SEP
+        self.marks.append((getattr(el, "sourceline", None) or 1, label))
+        return f"{MARK_OPEN}{len(self.marks) - 1}{MARK_SEP}{text}{MARK_CLOSE}"
+
     def emit(self, text: str, el, ctx=None):
         line = getattr(el, "sourceline", None) or (el if isinstance(el, int) else 1)
         for part in text.split("\n"):
+            found = ()
+            if "\x01" in part:
+                from .graphic import spans
+                part, found = spans(part)
+                found = tuple((c0, c1) + self.marks[i] for c0, c1, i in found)
             self.lines.append(part)
-            self.smap.append((line, None, ctx))
+            self.smap.append((line, None, ctx, found) if found else (line, None, ctx))
 
     def emit_body(self, el, ctx=None, prefix="", suffix=""):
         """The text of a formattedText element, each line mapped to its own
@@ -302,6 +405,7 @@ class _Generator:
         k = raw.find("<![CDATA[")
         if k >= 0:
             first_shift = k + len("<![CDATA[")
+        self.unclosed_comment(text, line, first_shift, ctx)
         parts = text.split("\n")
         for i, part in enumerate(parts):
             pre = prefix if i == 0 else ""
@@ -309,6 +413,21 @@ class _Generator:
             shift = (first_shift if i == 0 else 0) - len(pre)
             self.lines.append(pre + part + post)
             self.smap.append((line + i, shift, ctx))
+
+    def unclosed_comment(self, text, line, first_shift, ctx):
+        """An error at a '(*' that the body does not close: each body is a
+        text of its own in the editor, so its comment would otherwise run
+        on into the next POU and fail there with a confusing message."""
+        from ..parse.lexical import SKIP_ALL
+        for m in re.finditer(SKIP_ALL + r"|(\(\*)", text, re.S):
+            if m.group(1):
+                before = text[:m.start()]
+                n = before.count("\n")
+                col = m.start() - (before.rfind("\n") + 1) + 1 + (first_shift if n == 0 else 0)
+                _diag(self.tr, line + n, "error",
+                      f"comment '(*' not closed in the body{f' ({ctx})' if ctx else ''}: "
+                      f"add '*)'", col=col)
+                return
 
     def note_vendor(self, el):
         for d in el.iter():

@@ -19,6 +19,10 @@ whose body is LD rungs or an FBD network.  What the referee encodes:
     that read it; an output read by several elements is the same value;
     elements are drawn at random positions, so drawing order is not data
     order; the outVariables are sinks (nothing in the network reads them).
+    In some networks every block and outVariable carries the editor's
+    execution order (executionOrderId, a random permutation): the referee
+    runs them in that order, each function into a variable of its own, so
+    an element read before it runs gives its value of the previous cycle.
 
 Deterministic for a seed (random.Random(seed) only).
 """
@@ -216,6 +220,7 @@ def _fbd(rng: random.Random, p: GraphicProject):
     nodes = {"b": [], "i": []}
     st_decl, st_lines = [], []
     order = []              # (xml element text) in data order, shuffled positions later
+    stmts = []              # (index in order, index in st_lines) of each statement
     for v in bools_in:
         i = body.new_id()
         order.append(f'<inVariable localId="{i}"><position x="X" y="Y"/><connectionPointOut/>'
@@ -258,6 +263,7 @@ def _fbd(rng: random.Random, p: GraphicProject):
                          f'<position x="X" y="Y"/><inputVariables>{"".join(pins)}'
                          f'</inputVariables><inOutVariables/><outputVariables>{outs_xml}'
                          f'</outputVariables></block>')
+            stmts.append((len(order) - 1, len(st_lines)))
             st_lines.append(f"{name}({', '.join(args)});")
             for o, k in outs:
                 nodes[k].append(((i, o), f"{name}.{o}"))
@@ -293,6 +299,7 @@ def _fbd(rng: random.Random, p: GraphicProject):
         tmp[0] += 1
         t = f"f{tmp[0]}"
         st_decl.append((t, "BOOL" if out == "b" else "INT"))
+        stmts.append((len(order) - 1, len(st_lines)))
         st_lines.append(f"{t} := {fn}({', '.join(args)});")
         nodes[out].append(((i, "OUT"), t))
         p.features.add(f"fbd_fn_{fn}")
@@ -306,8 +313,21 @@ def _fbd(rng: random.Random, p: GraphicProject):
             i = body.new_id()
             order.append(f'<outVariable localId="{i}"><position x="X" y="Y"/>{_conn([ref])}'
                          f'<expression>{name}</expression></outVariable>')
+            stmts.append((len(order) - 1, len(st_lines)))
             st_lines.append(f"{name} := {expr};")
     del produced
+    if rng.random() < 0.3:
+        # the editor's execution order on every block and outVariable, a
+        # random permutation: the referee runs the statements in that
+        # order (a value read before its element ran is the previous
+        # cycle's: the referee's variables keep it)
+        p.features.add("fbd_execution_order")
+        perm = list(range(len(stmts)))
+        rng.shuffle(perm)
+        lines = list(st_lines)
+        for n, (k, (oi, li)) in enumerate(sorted(zip(perm, stmts))):
+            order[oi] = order[oi].replace('localId=', f'executionOrderId="{k + 1}" localId=', 1)
+            st_lines[n] = lines[li]
     # random drawing positions: the drawing order is not the data order
     for el in order:
         y = rng.randint(0, 1000)

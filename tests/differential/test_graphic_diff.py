@@ -22,7 +22,7 @@ MUST_REACH = {"ld_contact_normal", "ld_contact_negated", "ld_contact_rising",
               "ld_contact_falling", "ld_parallel", "ld_coil_normal", "ld_coil_negated",
               "ld_coil_set", "ld_coil_reset", "ld_coil_rising", "ld_coil_falling",
               "fbd_negated_pin", "fbd_fb_CTU", "fbd_fb_TON", "fbd_fb_R_TRIG", "fbd_fb_SR",
-              "fbd_fn_SEL", "fbd_fn_ADD", "fbd_fn_GT", "fbd_fn_XOR"}
+              "fbd_fn_SEL", "fbd_fn_ADD", "fbd_fn_GT", "fbd_fn_XOR", "fbd_execution_order"}
 
 
 def _campaign(count, engine, tmp_path, first=0):
@@ -76,3 +76,13 @@ def test_drawing_order_instead_of_data_flow_is_caught(tmp_path, monkeypatch):
     monkeypatch.setattr(graphic.Network, "order", by_position)
     bad, _, kinds = _campaign(40, "interp", tmp_path)
     assert kinds["FBD"] >= 10 and len(bad) >= 3, (kinds, len(bad))
+
+
+def test_ignoring_the_editors_execution_order_is_caught(tmp_path, monkeypatch):
+    """Some FBD networks carry executionOrderId on every statement (a
+    random permutation): a translation that ignored it (data flow only)
+    must disagree with the referee."""
+    from iec2kmod.plcopen import graphic
+    monkeypatch.setattr(graphic.Network, "order_id", lambda self, e: 0)
+    bad, reached, _ = _campaign(40, "interp", tmp_path)
+    assert "fbd_execution_order" in reached and len(bad) >= 3, len(bad)

@@ -224,3 +224,121 @@ def test_backward_jump_loop_runs_under_the_loop_budget(tmp_path, capsys, engine)
     with open(out) as f:
         rows = list(csv.reader(f))[1:]
     assert rows[0][1:] == ["16960", "0"], rows
+
+
+def _case_broken(tmp_path, name, *subs):
+    text = (HERE / "cases" / name).read_text()
+    for old, new in subs:
+        assert old in text, old
+        text = text.replace(old, new, 1)          # the first: program Flow's
+    p = tmp_path / "plc.xml"
+    p.write_text(text)
+    return p, text.split("\n")
+
+
+def test_graphic_diagnostics_point_at_the_element_that_wrote_it(tmp_path, capsys):
+    """An error in a value another element supplies (a variable, a function
+    call written in place, a block's input, a contact) points at that
+    element's line and names it with the input it feeds and the statement
+    it is part of, not only at the statement that reads it."""
+    p, lines = _case_broken(tmp_path, "fbd_flow.xml",
+                            ('<block localId="5" typeName="ADD">',
+                             '<block localId="5" typeName="ADDD">'),
+                            ("<expression>100</expression>", "<expression>nosuch</expression>"))
+    assert main(["check", "--no-cache", str(p)]) == 1
+    err = capsys.readouterr().err
+    blk = _line_of(lines, '<block localId="5" typeName="ADDD">')
+    assert f"{p}:{blk}:1: error: unknown function 'ADDD' (block localId 5 'ADDD', in block " \
+           f"localId 6 'plus10')" in err, err
+    var = _line_of(lines, '<inVariable localId="13">')
+    assert f"{p}:{var}:1: error: unknown variable 'nosuch' (block localId 13 'nosuch', input PV " \
+           f"of block localId 14 'ctr')" in err, err
+    p, lines = _case_broken(tmp_path, "fbd_flow.xml",
+                            ('<variable formalParameter="R"><connectionPointIn><connection '
+                             'refLocalId="12"/>',
+                             '<variable formalParameter="R"><connectionPointIn><connection '
+                             'refLocalId="13"/>'))
+    assert main(["check", "--no-cache", str(p)]) == 1
+    err = capsys.readouterr().err
+    var = _line_of(lines, '<inVariable localId="13">')
+    assert f"{p}:{var}:1: error: 100 is out of range for BOOL (block localId 13 '100', input R " \
+           f"of block localId 14 'ctr')" in err, err
+    p, lines = _case_broken(tmp_path, "ld_rungs.xml",
+                            ("<variable>Stop</variable>", "<variable>Stopp</variable>"))
+    assert main(["check", "--no-cache", str(p)]) == 1
+    err = capsys.readouterr().err
+    contact = _line_of(lines, '<contact localId="4" negated="true">')
+    assert f"{p}:{contact}:1: error: unknown variable 'Stopp' (block localId 4 'Stopp', in " \
+           f"block localId" in err, err
+
+
+def test_editor_library_blocks_are_refused_by_name(tmp_path, capsys):
+    p, lines = _broken(tmp_path,
+                       ('<variable name="cycle"><type><INT/></type></variable>',
+                        '<variable name="cycle"><type><INT/></type></variable>\n'
+                        '            <variable name="conn"><type><derived name="MQTT_CONNECT"/>'
+                        '</type></variable>'))
+    assert main(["check", "--no-cache", str(p)]) == 1
+    err = capsys.readouterr().err
+    n = _line_of(lines, '<derived name="MQTT_CONNECT"/>')
+    col = lines[n - 1].index('"MQTT_CONNECT"') + 2
+    assert f"{p}:{n}:{col}: error: 'MQTT_CONNECT' is a block of the OpenPLC Editor's MQTT " \
+           f"library (OpenPLC runtime extension, not IEC 61131-3): not supported (variable " \
+           f"'conn')" in err, err
+    assert "unknown type" not in err
+
+
+def test_an_unconnected_output_variable_is_ignored_with_a_warning(tmp_path, capsys):
+    """An outVariable with nothing drawn into it stores nothing (Beremiz's
+    generator skips it; OSCAT's 'Time and Date' project has one): a
+    warning at its line, not a refusal of the project."""
+    p, lines = _case_broken(tmp_path, "fbd_flow.xml",
+                            ("</FBD>", '<outVariable localId="99"><position x="300" y="700"/>'
+                                       '<connectionPointIn/><expression>count</expression>'
+                                       '</outVariable>\n          </FBD>'))
+    assert main(["check", "--no-cache", str(p)]) == 0
+    err = capsys.readouterr().err
+    n = _line_of(lines, '<outVariable localId="99">')
+    assert f"{p}:{n}:1: warning: block localId 99 'count' in pou 'Flow' is not connected: " \
+           f"ignored (it stores nothing)" in err, err
+
+
+def test_an_unclosed_comment_in_an_st_body_is_named_where_it_opens(tmp_path, capsys):
+    """Each ST body is a text of its own in the editor: a '(*' it does not
+    close is an error at that '(*' (OSCAT's 'Latches' project has two), not
+    a syntax error in whatever POU follows."""
+    p, lines = _broken(tmp_path, ("cycle := cycle + 1;", "cycle := cycle + 1; (* unclosed"))
+    assert main(["check", "--no-cache", str(p)]) == 1
+    err = capsys.readouterr().err
+    n = _line_of(lines, "(* unclosed")
+    col = lines[n - 1].index("(* unclosed") + 1
+    assert f"{p}:{n}:{col}: error: comment '(*' not closed in the body (pou 'Main'): add " \
+           f"'*)'" in err, err
+    assert "1 error(s)" in err
+
+
+def test_an_editor_extension_beside_the_project_is_noted(tmp_path, capsys):
+    p, _ = _broken(tmp_path)
+    (tmp_path / "arduino_ext_0@arduino_ext").mkdir()
+    assert main(["check", "--no-cache", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert f"{p}:1:1: note: ignored: editor extension 'arduino_ext_0@arduino_ext' beside the " \
+           f"project (its code, variables and blocks are not in the XML)" in err, err
+
+
+def test_an_unconnected_en_pin_is_always_enabled(tmp_path, capsys):
+    """An EN pin drawn with nothing connected (Beremiz's exemples/python
+    has one) leaves the block always enabled and its ENO TRUE."""
+    p, _ = _case_broken(tmp_path, "fbd_flow.xml",
+                        ('<variable formalParameter="CU">',
+                         '<variable formalParameter="EN"><connectionPointIn/></variable>\n'
+                         '                <variable formalParameter="CU">'),
+                        ("</FBD>", '<outVariable localId="98"><position x="300" y="650"/>'
+                                   '<connectionPointIn><connection refLocalId="14" '
+                                   'formalParameter="ENO"/></connectionPointIn>'
+                                   '<expression>andOut</expression></outVariable>\n'
+                                   '          </FBD>'))
+    assert main(["check", "--no-cache", str(p)]) == 0, capsys.readouterr().err
+    assert main(["export", "--st", str(p), "-o", str(tmp_path / "out.st")]) == 0
+    text = (tmp_path / "out.st").read_text()
+    assert "andOut := TRUE;" in text and "ctr(CU := Run" in text, text
