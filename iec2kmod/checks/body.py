@@ -396,6 +396,17 @@ class BodyChecker(ILChecks):
                 else:
                     self.error(pos, f"'{name}' is internal to function block {t.name}")
                 return ERROR, None
+            if v.section == "VAR_IN_OUT":
+                # the instance holds a reference to the variable its last call
+                # connected (none before the first call): only its body uses
+                # it; the caller has the variable (read or write: the C of
+                # such an access did not compile, and a read before the
+                # first call would follow a null reference)
+                self.error(pos, f"'{name}' is a VAR_IN_OUT of function block {t.name}: it "
+                                "refers to the variable the caller connects and cannot be "
+                                "used through the instance; use the connected variable "
+                                "itself")
+                return ERROR, None
             return v.type, v
         self.error(pos, f"{t.name} has no members")
         return ERROR, None
