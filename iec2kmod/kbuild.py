@@ -129,6 +129,12 @@ def _make(kdir: str, moddir: str, targets: Sequence[str], extra: Sequence[str],
           timeout: float, jobs: Optional[int]) -> BuildResult:
     if not os.path.isdir(moddir):
         raise KbuildError(f"module directory {moddir} does not exist")
+    bad = next((c for c in os.path.abspath(moddir) if c.isspace() or c in ":#$"), None)
+    if bad is not None:
+        # make splits M= at white space and takes ':' '#' '$' as its own
+        raise KbuildError(f"kbuild cannot build in {os.path.abspath(moddir)!r}: its path holds "
+                          f"{bad!r}, which make does not accept in M=; build in a directory "
+                          "whose path has no white space, ':', '#' or '$'")
     make = _which("make")
     if not make:
         raise KbuildError("'make' not found: apt-get install make (or run scripts/setup.sh)")
