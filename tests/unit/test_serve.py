@@ -569,7 +569,7 @@ def test_namespace_found_by_uri(tmp_path, pki):
     for urn:iec2kmod:<configuration>; the README says the index a client
     finds there."""
     import re
-    from asyncua import Client, ua
+    from asyncua import Client
     from plc_manager.serve.opcua import OpcUaServer
     m = _gen(tmp_path, AGG)
     mo = M.Model.from_manifest(m)
