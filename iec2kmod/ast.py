@@ -19,13 +19,19 @@ class Expr:
 
 
 class BinOp(Expr):
-    __slots__ = ("op", "left", "right")
+    """``left op right``.  For an arithmetic operator (+ - * / MOD **) the
+    checker sets ``fn``, the standard function it is (a StdFunc), and
+    ``sig`` as on a Call."""
+
+    __slots__ = ("op", "left", "right", "fn", "sig")
 
     def __init__(self, pos, op, left, right):
         super().__init__(pos)
         self.op = op
         self.left = left
         self.right = right
+        self.fn = None
+        self.sig = None
 
     def __repr__(self):
         return f"({self.left!r} {self.op} {self.right!r})"
@@ -116,7 +122,13 @@ class Arg:
 
 
 class Call(Expr):
-    __slots__ = ("name", "args", "target", "bound", "ref")
+    """A call.  For a standard function the checker sets ``target`` (a
+    StdFunc) and ``sig``: (result type, [parameter types]) the call is
+    computed in once its context is known (checks/settle.py); every back end
+    reads it.  A result still a LiteralT means: computed exactly on the
+    literals' values."""
+
+    __slots__ = ("name", "args", "target", "bound", "ref", "sig")
 
     def __init__(self, pos, name, args, ref=None):
         super().__init__(pos)
@@ -128,6 +140,7 @@ class Call(Expr):
         # instances (t[i](IN := x)): a Ref with accessors; target is then
         # the array variable and ref.type the instance's FBType
         self.ref = ref
+        self.sig = None
 
     def __repr__(self):
         return f"{self.name}({', '.join(map(repr, self.args))})"
@@ -283,7 +296,9 @@ class ILInstr(Node):
     ``operand``; ``args`` are formal arguments of CAL or a function."""
 
     __slots__ = ("label", "label_pos", "op", "operand", "deferred", "nested", "fb",
-                 "fn", "args", "operands", "call", "cr_in", "cr_out")
+                 "fn", "args", "operands", "call", "cr_in", "cr_out", "std", "sig")
+    # std, sig: for an arithmetic or comparison operator (ADD, GT, ...), the
+    # standard function it is and the types it is computed in (the checker's)
 
 
 # textual SFC (IEC 61131-3 ed.2 2.6); checked by iec2kmod/checks/sfc.py

@@ -8,6 +8,7 @@ from .. import ast
 from ..diagnostics import INPUT_WRITE_RULE
 from . import stdlib
 from .il import ILChecks
+from .settle import settle
 from .symbols import POUInfo, Var
 from .types import (BOOL, ELEMENTARY, ERROR, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, assignable, cat, common,
@@ -37,6 +38,8 @@ class BodyChecker(ILChecks):
         self.src = pou.src
         self.loop_vars: list[Var] = []
         self.loop_depth = 0
+        self.depth = 0          # of expr() calls under way
+        self.roots: list = []   # expressions checked at depth 0, settled at the end
 
     def error(self, pos, msg):
         self.diags.error(self.src, pos, msg)
@@ -49,7 +52,16 @@ class BodyChecker(ILChecks):
         scope = self.decl.pou_scope(self.pou)
         with self.decl.constants_of(scope):
             self._check()
+            self.settle_roots()
         self.decl.mark_used(scope, self.pou.vars)
+
+    def settle_roots(self):
+        """The types every standard call checked so far is computed in
+        (checks/settle.py): once the statements around them are checked,
+        for check_assign gives an untyped value its target's type."""
+        for e in self.roots:
+            settle(e)
+        self.roots = []
 
     def _check(self):
         node = self.pou.node
@@ -408,7 +420,13 @@ class BodyChecker(ILChecks):
 
     # ------------------------------------------------------ expressions
     def expr(self, e):
-        t = self._expr(e)
+        if self.depth == 0:
+            self.roots.append(e)
+        self.depth += 1
+        try:
+            t = self._expr(e)
+        finally:
+            self.depth -= 1
         e.type = t
         return t
 
@@ -493,6 +511,7 @@ class BodyChecker(ILChecks):
                 self.error(e.pos, f"operator {op}: {stdlib.operand_message(exc, lt, rt)}")
                 return ERROR
             e.const = None
+            e.fn = f
             self._fold(e, f.result)
             return f.result
         if op in COMPARE:
@@ -544,6 +563,8 @@ class BodyChecker(ILChecks):
 
     # ------------------------------------------------------------ calls
     def call(self, c: ast.Call, statement: bool):
+        if statement:
+            self.roots.append(c)
         if c.ref is not None:
             return self.element_call(c)
         key = c.name.upper()

@@ -460,7 +460,9 @@ class ConfigChecker:
                 return None
         fake = POUInfo("PROGRAM", "<connection>", src=src)
         checker = BodyChecker(self.p, self.decl, self.diags, fake)
-        return checker.expr(value)
+        t = checker.expr(value)
+        checker.settle_roots()
+        return t
 
     # ------------------------------------------------------- externals
     def bind_externals(self, pou, r, cfg, inst, src):

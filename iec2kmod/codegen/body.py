@@ -10,7 +10,6 @@ from __future__ import annotations
 import re
 
 from .. import ast
-from ..checks import stdlib
 from ..checks.il import IL_ARITH, IL_COMPARE, IL_LOGIC
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ArrayT, EnumT, ErrorT, FBType,
@@ -1027,12 +1026,8 @@ class BodyEmitter:
             fam = IL_LOGIC[op]
             code = (f"((iec_bool)({l} {'&' if fam == 'AND' else '|' if fam == 'OR' else '^'} {r}))"
                     if res is BOOL else f"iec_{fam.lower()}_{N.type_tag(res)}({l}, {r})")
-        elif op in IL_ARITH:
-            fres = stdlib.resolve(IL_ARITH[op], [cr_in, operand.type])
-            code = self.expr.std_apply(f, fres, [left, operand], res)
-        else:
-            fres = stdlib.resolve(op, [cr_in, operand.type])
-            code = self.expr.std_apply(f, fres, [left, operand], BOOL)
+        else:               # arithmetic and comparisons: the checker's function
+            code = self.expr.std_apply(f, i.std, [left, operand], i.sig)
         return [f"{self.cr_var(res, depth)} = {code};"]
 
 

@@ -338,9 +338,7 @@ class ExprEmitter:
             if rtype is BOOL:
                 return f"((iec_bool)({a} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {b}))"
             return f"iec_{op.lower()}_{N.type_tag(rtype)}({a}, {b})"
-        name = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD", "**": "EXPT"}[op]
-        fres = stdlib.resolve(name, [lt, rt])
-        return self.std_apply(f, fres, [e.left, e.right], t)
+        return self.std_apply(f, e.fn, [e.left, e.right], e.sig)
 
     def unop(self, f, e, t):
         rtype = concrete(t)
@@ -378,7 +376,7 @@ class ExprEmitter:
         ENO is FALSE and the call's value is its type's default; otherwise
         ENO is TRUE after the call."""
         if isinstance(c.target, stdlib.StdFunc):
-            rt = c.type if not isinstance(c.type, LiteralT) else (t if t is not None else c.type)
+            rt = c.sig[0]
         else:
             rt = c.target.vars[c.target.key].type
         rt = concrete(rt)
@@ -421,13 +419,16 @@ class ExprEmitter:
         if isinstance(target, stdlib.StdFunc):
             args = [a.value for a in c.args if a.kind == "pos" or a.name.upper() not in
                     ("EN", "ENO")]
-            return self.std_apply(f, target, args, t)
+            return self.std_apply(f, target, args, c.sig)
         return self.body.user_function_call(f, c)
 
-    def std_apply(self, f, fres: stdlib.StdFunc, args, t):
+    def std_apply(self, f, fres: stdlib.StdFunc, args, sig):
+        """C code of standard function ``fres`` on argument expressions, in
+        the types ``sig`` (the call's, checks/settle.py); a computation on
+        untyped literals is done in C in the literal's own type."""
         fam = fres.family
         pts = fres.param_types
-        res = concrete(stdlib.call_types(fres, t)[0])
+        res = concrete(sig[0])
         tag = lambda ty: N.type_tag(ty)
         if fam in stdlib.ARITH_FAMILIES:
             vs = self.seq(f, [(a, res) for a in args])

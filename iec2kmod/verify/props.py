@@ -152,6 +152,7 @@ class PropChecker(BodyChecker):
 
     def check_expr(self, e):
         t = self.expr(e)
+        self.settle_roots()
         if isinstance(t, ErrorT):
             return False
         if t.base is not BOOL:
