@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from .. import ast
 from ..diagnostics import INPUT_WRITE_RULE
-from . import stdlib
+from . import fold, stdlib
 from .il import ILChecks
 from .settle import settle
 from .symbols import POUInfo, Var
@@ -135,7 +135,7 @@ class BodyChecker(ILChecks):
         if assignable(vt, tt):
             if isinstance(vt, LiteralT):
                 value.type = tt.base if isinstance(tt, SubrangeT) else tt
-            if isinstance(tt, SubrangeT) and isinstance(value, ast.Expr) and value.const is None:
+            if isinstance(tt, SubrangeT) and isinstance(value, ast.Expr):
                 v = _literal_value(value)
                 if v is not None and not tt.low <= v <= tt.high:
                     self.error(value.pos, f"{v} is outside the subrange {tt.low}..{tt.high} "
@@ -428,6 +428,7 @@ class BodyChecker(ILChecks):
         finally:
             self.depth -= 1
         e.type = t
+        e.const = fold.node(e)
         return t
 
     def _expr(self, e):
@@ -510,7 +511,6 @@ class BodyChecker(ILChecks):
             except stdlib.CallError as exc:
                 self.error(e.pos, f"operator {op}: {stdlib.operand_message(exc, lt, rt)}")
                 return ERROR
-            e.const = None
             e.fn = f
             self._fold(e, f.result)
             return f.result
@@ -823,17 +823,9 @@ class BodyChecker(ILChecks):
         self.check_assign(t, param.type, a.value, None, what=f"input '{param.name}'")
 
 def _literal_value(e):
-    if isinstance(e, ast.Lit) and e.kind == "int":
-        return e.value
-    if isinstance(e, ast.UnOp) and e.op in ("-", "+"):
-        v = _literal_value(e.operand)
-        return None if v is None else (-v if e.op == "-" else v)
-    if isinstance(e, ast.BinOp) and e.op in ("+", "-", "*"):
-        a, b = _literal_value(e.left), _literal_value(e.right)
-        if a is None or b is None:
-            return None
-        return a + b if e.op == "+" else a - b if e.op == "-" else a * b
-    return None
+    """The value of e when it is integer literal arithmetic (fold.int_arith),
+    folded from its operands' const (e's own is set once it is typed)."""
+    return fold.node(e) if fold.int_arith(e) else None
 
 
 def _describe(node):

@@ -786,9 +786,11 @@ def _cop(op):
 
 
 def _const_int(e):
-    if isinstance(e, ast.Lit) and e.kind == "int":
-        return e.value
-    if isinstance(e, ast.UnOp) and e.op == "-":
-        v = _const_int(e.operand)
-        return None if v is None else -v
+    """The value of an integer literal or a negated one (the checker's
+    Expr.const), else None: the C emitter treats only these as constants (an
+    index without a run-time check, a FOR loop's trip count, a divisor that
+    cannot be zero); a wider rule would change the generated C."""
+    if isinstance(e, ast.Lit) and e.kind == "int" or (
+            isinstance(e, ast.UnOp) and e.op == "-" and _const_int(e.operand) is not None):
+        return e.const
     return None

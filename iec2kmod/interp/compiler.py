@@ -387,9 +387,9 @@ class PouCompiler:
         return lambda env: wrap64(-a(env))
 
     def _literal_unop(self, e):
-        if isinstance(e.operand, ast.Lit) and e.operand.kind in ("int", "real"):
-            v = e.operand.value
-            v = -v if e.op == "-" else v
+        if isinstance(e.operand, ast.Lit) and e.operand.kind in ("int", "real") and \
+                e.const is not None:
+            v = e.const          # the checker's fold
             t = e.type
             if isinstance(t, LiteralT) or t is None:
                 return v
