@@ -237,7 +237,8 @@ class POU(Node):
     """A FUNCTION, FUNCTION_BLOCK or PROGRAM.  ``language`` is ST, IL or SFC;
     an SFC body is in ``sfc`` (``body`` is then empty)."""
 
-    __slots__ = ("kind", "name", "result", "blocks", "body", "language", "src", "end_pos", "sfc")
+    __slots__ = ("kind", "name", "result", "blocks", "body", "language", "src", "end_pos", "sfc",
+                 "pragmas")  # pragmas: the {verify}/{assume} inside it (parse/lexical.attach)
 
 
 # statements
@@ -335,7 +336,8 @@ class Action(Node):
 
 # configuration
 class Task(Node):
-    __slots__ = ("name", "props")  # props: {KEY: (expr, pos)}
+    # props: {KEY: (expr, pos)}; pragmas: the {watchdog} in front of it (lexical.attach)
+    __slots__ = ("name", "props", "pragmas")
 
 
 class Connection(Node):
@@ -355,6 +357,8 @@ class Configuration(Node):
 
 
 class SourceUnit(Node):
-    """One parsed file: its types, POUs and configurations in order."""
+    """One parsed file: its types, POUs and configurations in order;
+    ``pragmas`` every pragma of the file in order, ``outside`` the {verify}
+    and {assume} written outside any POU (parse/lexical.attach)."""
 
-    __slots__ = ("src", "types", "pous", "configurations")
+    __slots__ = ("src", "types", "pous", "configurations", "pragmas", "outside")
