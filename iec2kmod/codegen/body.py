@@ -12,6 +12,7 @@ import re
 from .. import ast
 from ..checks.il import IL_ARITH, IL_COMPARE, IL_LOGIC
 from ..checks.symbols import Var
+from ..execmodel import LOOP_BUDGET
 from ..checks.types import (BOOL, ArrayT, EnumT, ErrorT, FBType,
                             LiteralT, StringT, StructT, SubrangeT, concrete, identical)
 from . import analysis
@@ -372,8 +373,9 @@ class BodyEmitter:
         if cstart is not None and cend is not None:
             trips = max(0, (cend - cstart) // cstep + 1)
         # an innermost loop of a known number of iterations charges them to
-        # the loop budget at once (EXIT gives back the ones not run)
-        charge = safe and 0 < trips <= 1_000_000 and not analysis.has_loop(s.body) and \
+        # the loop budget at once (EXIT gives back the ones not run); one of
+        # more trips than the budget faults as it counts them
+        charge = safe and 0 < trips <= LOOP_BUDGET and not analysis.has_loop(s.body) and \
             not analysis.has_return(s.body)
         on_exit = ()
         if charge:

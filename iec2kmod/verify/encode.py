@@ -35,7 +35,7 @@ from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, S
 from ..checks.types import ELEMENTARY as _E
 from ..interp.compiler import PouCompiler, implicit
 from ..interp.errors import DIV_ZERO, ENUM, INDEX, LOOP, MUX, RANGE
-from ..interp.machine import LOOP_BUDGET
+from ..execmodel import LOOP_BUDGET
 from ..interp.model import Instance
 from ..interp.values import base_of
 
