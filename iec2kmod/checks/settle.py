@@ -22,7 +22,6 @@ from .. import ast
 from . import stdlib
 from .types import LiteralT, common, concrete
 
-ARITH = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD", "**": "EXPT"}
 COMPARE = ("=", "<>", "<", ">", "<=", ">=")
 
 
