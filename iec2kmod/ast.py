@@ -21,7 +21,8 @@ class Expr:
 class BinOp(Expr):
     """``left op right``.  For an arithmetic operator (+ - * / MOD **) the
     checker sets ``fn``, the standard function it is (a StdFunc), and
-    ``sig`` as on a Call."""
+    ``sig`` as on a Call; for a comparison ``sig`` is (BOOL, [t, t]), t the
+    type both operands are compared in."""
 
     __slots__ = ("op", "left", "right", "fn", "sig")
 

@@ -210,6 +210,7 @@ class ILChecks:
             if c is None:
                 self.error(pos, f"{op}: incompatible operands {cr.name} and {t.name}")
                 return ERROR
+            i.sig = (concrete(c), [concrete(c)] * 2)
             return concrete(c)
         if op in IL_ARITH:
             try:
@@ -228,8 +229,8 @@ class ILChecks:
             try:
                 f = stdlib.resolve(op, [cr, t])
                 i.std, i.sig = f, stdlib.call_types(f, BOOL)
-            except stdlib.CallError:
-                pass        # no elementary operands: no back end computes it as a call
+            except stdlib.CallError:     # not elementary: compared as values (interp)
+                i.sig = (BOOL, [concrete(common(cr, t))] * 2)
             return BOOL
         self.error(pos, f"{op}( ... ) is not a deferrable operation")
         return ERROR

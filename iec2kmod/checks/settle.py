@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from .. import ast
 from . import stdlib
-from .types import LiteralT, common, concrete
+from .types import BOOL, LiteralT, common, concrete
 
 COMPARE = ("=", "<>", "<", ">", "<=", ">=")
 
@@ -35,6 +35,7 @@ def settle(e, want=None) -> None:
         if e.op in COMPARE:
             c = common(e.left.type, e.right.type)
             w = concrete(c) if c is not None else None
+            e.sig = (BOOL, [w, w])      # the operands compared in their common type
         else:                           # AND OR XOR
             w = concrete(e.type) if e.type is not None else None
         settle(e.left, w)

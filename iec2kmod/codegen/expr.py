@@ -14,7 +14,7 @@ from ..checks import stdlib
 from ..checks.body import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, FBType,
-                            LiteralT, StringT, StructT, SubrangeT, common, concrete)
+                            LiteralT, StringT, StructT, SubrangeT, concrete)
 from . import cnames as N
 
 INT64_MIN = -(1 << 63)
@@ -316,9 +316,8 @@ class ExprEmitter:
     # -------------------------------------------------------- operators
     def binop(self, f, e, t):
         op = e.op
-        lt, rt = e.left.type, e.right.type
         if op in ("=", "<>", "<", ">", "<=", ">="):
-            c = concrete(common(lt, rt))
+            c = e.sig[1][0]
             if isinstance(c, StringT):
                 a, b = self.strv(f, e.left), self.strv(f, e.right)
                 if not c.wide and op in ("=", "<>"):

@@ -17,7 +17,7 @@ from ..checks import stdlib
 from ..checks.body import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
-                            StructT, SubrangeT, common, concrete)
+                            StructT, SubrangeT, concrete)
 from ..checks.types import LREAL as LREAL_T
 from . import std
 from .conv import converter, int_to_f32, int_to_f64
@@ -323,11 +323,10 @@ class PouCompiler:
 
     def binop(self, e):
         op = e.op
-        lt, rt_ = e.left.type, e.right.type
         if e.fn is not None:
             return self.apply_std(e.fn, [e.left, e.right], e.sig)
         if op in ("=", "<>", "<", ">", "<=", ">="):
-            c = concrete(common(lt, rt_))
+            c = e.sig[1][0]
             a = self.expr_as(e.left, c)
             b = self.expr_as(e.right, c)
             if op == "=":
@@ -1108,7 +1107,7 @@ class PouCompiler:
         base = op[:-1] if op in ("ANDN", "ORN", "XORN") else op
         neg = op in ("ANDN", "ORN", "XORN")
         if base in ("AND", "OR", "XOR"):
-            t = concrete(common(cr_t, op_t))
+            t = i.sig[1][0]
             ca, cb = implicit(cr_t, t), implicit(op_t, t)
             b = base_of(t)
             if b is BOOL:
@@ -1139,7 +1138,7 @@ class PouCompiler:
                 holder.vals = (x, y)
                 return f(holder)
             return arith
-        t = concrete(common(cr_t, op_t))
+        t = i.sig[1][0]
         ca, cb = implicit(cr_t, t), implicit(op_t, t)
         fn = std.COMPARE[base]
 

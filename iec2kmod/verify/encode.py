@@ -31,7 +31,7 @@ from ..checks import stdlib
 from ..checks.body import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
-                            StructT, SubrangeT, common, concrete)
+                            StructT, SubrangeT, concrete)
 from ..checks.types import ELEMENTARY as _E
 from ..interp.compiler import PouCompiler, implicit
 from ..interp.errors import DIV_ZERO, ENUM, INDEX, LOOP, MUX, RANGE
@@ -646,11 +646,10 @@ class Encoder:
 
     def binop(self, e, frame, g):
         op = e.op
-        lt, rt = e.left.type, e.right.type
         if e.fn is not None:
             return self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos)
         if op in ("=", "<>", "<", ">", "<=", ">="):
-            c = concrete(common(lt, rt))
+            c = e.sig[1][0]
             a = self.expr_as(e.left, c, frame, g)
             b = self.expr_as(e.right, c, frame, g)
             if isinstance(a, Opaque) or isinstance(b, Opaque):
@@ -1613,7 +1612,7 @@ class Encoder:
         base = op[:-1] if op in ("ANDN", "ORN", "XORN") else op
         neg = op in ("ANDN", "ORN", "XORN")
         if base in ("AND", "OR", "XOR"):
-            t = concrete(common(cr_t, op_t))
+            t = i.sig[1][0]
             x = self.conv(x, cr_t, t)
             y = self.conv(y, op_t, t)
             if neg:
@@ -1622,7 +1621,7 @@ class Encoder:
         if base in stdlib.ARITH_FAMILIES:
             return self.apply_std(i.std, [_SlotVal(x, cr_t), _SlotVal(y, op_t)], i.sig, frame,
                                   g, i.pos)
-        t = concrete(common(cr_t, op_t))
+        t = i.sig[1][0]
         x = self.conv(x, cr_t, t)
         y = self.conv(y, op_t, t)
         return compare({"GT": ">", "GE": ">=", "EQ": "=", "NE": "<>", "LE": "<=",

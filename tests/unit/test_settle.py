@@ -110,3 +110,11 @@ def test_no_back_end_works_out_a_calls_types():
                 if rule.search(line):
                     hits.append(f"{f.relative_to(ROOT)}:{n}: {line.strip()}")
     assert not hits, hits
+
+
+def test_a_comparison_carries_the_type_its_operands_are_compared_in():
+    unit = _checked("PROGRAM p\nVAR b : BOOL; i : INT; r : LREAL; END_VAR\n"
+                    "b := (1 + 2) > i;\nb := r = 1;\nb := 3 = 4;\nEND_PROGRAM\n")
+    got = [_sig(s.value) for s in unit.pous[0].body]
+    assert got == [("BOOL", ["INT", "INT"]), ("BOOL", ["LREAL", "LREAL"]),
+                   ("BOOL", ["DINT", "DINT"])]
