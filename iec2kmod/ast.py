@@ -19,13 +19,20 @@ class Expr:
 
 
 class BinOp(Expr):
-    __slots__ = ("op", "left", "right")
+    """``left op right``.  For an arithmetic operator (+ - * / MOD **) the
+    checker sets ``fn``, the standard function it is (a StdFunc), and
+    ``sig`` as on a Call; for a comparison ``sig`` is (BOOL, [t, t]), t the
+    type both operands are compared in."""
+
+    __slots__ = ("op", "left", "right", "fn", "sig")
 
     def __init__(self, pos, op, left, right):
         super().__init__(pos)
         self.op = op
         self.left = left
         self.right = right
+        self.fn = None
+        self.sig = None
 
     def __repr__(self):
         return f"({self.left!r} {self.op} {self.right!r})"
@@ -116,7 +123,13 @@ class Arg:
 
 
 class Call(Expr):
-    __slots__ = ("name", "args", "target", "bound", "ref")
+    """A call.  For a standard function the checker sets ``target`` (a
+    StdFunc) and ``sig``: (result type, [parameter types]) the call is
+    computed in once its context is known (checks/settle.py); every back end
+    reads it.  A result still a LiteralT means: computed exactly on the
+    literals' values."""
+
+    __slots__ = ("name", "args", "target", "bound", "ref", "sig")
 
     def __init__(self, pos, name, args, ref=None):
         super().__init__(pos)
@@ -128,6 +141,7 @@ class Call(Expr):
         # instances (t[i](IN := x)): a Ref with accessors; target is then
         # the array variable and ref.type the instance's FBType
         self.ref = ref
+        self.sig = None
 
     def __repr__(self):
         return f"{self.name}({', '.join(map(repr, self.args))})"
@@ -224,7 +238,8 @@ class POU(Node):
     """A FUNCTION, FUNCTION_BLOCK or PROGRAM.  ``language`` is ST, IL or SFC;
     an SFC body is in ``sfc`` (``body`` is then empty)."""
 
-    __slots__ = ("kind", "name", "result", "blocks", "body", "language", "src", "end_pos", "sfc")
+    __slots__ = ("kind", "name", "result", "blocks", "body", "language", "src", "end_pos", "sfc",
+                 "pragmas")  # pragmas: the {verify}/{assume} inside it (parse/lexical.attach)
 
 
 # statements
@@ -283,7 +298,9 @@ class ILInstr(Node):
     ``operand``; ``args`` are formal arguments of CAL or a function."""
 
     __slots__ = ("label", "label_pos", "op", "operand", "deferred", "nested", "fb",
-                 "fn", "args", "operands", "call", "cr_in", "cr_out")
+                 "fn", "args", "operands", "call", "cr_in", "cr_out", "std", "sig")
+    # std, sig: for an arithmetic or comparison operator (ADD, GT, ...), the
+    # standard function it is and the types it is computed in (the checker's)
 
 
 # textual SFC (IEC 61131-3 ed.2 2.6); checked by iec2kmod/checks/sfc.py
@@ -320,7 +337,8 @@ class Action(Node):
 
 # configuration
 class Task(Node):
-    __slots__ = ("name", "props")  # props: {KEY: (expr, pos)}
+    # props: {KEY: (expr, pos)}; pragmas: the {watchdog} in front of it (lexical.attach)
+    __slots__ = ("name", "props", "pragmas")
 
 
 class Connection(Node):
@@ -340,6 +358,8 @@ class Configuration(Node):
 
 
 class SourceUnit(Node):
-    """One parsed file: its types, POUs and configurations in order."""
+    """One parsed file: its types, POUs and configurations in order;
+    ``pragmas`` every pragma of the file in order, ``outside`` the {verify}
+    and {assume} written outside any POU (parse/lexical.attach)."""
 
-    __slots__ = ("src", "types", "pous", "configurations")
+    __slots__ = ("src", "types", "pous", "configurations", "pragmas", "outside")

@@ -1,7 +1,7 @@
 """The execution model: the facts about running a configuration that the C
 runtime (kernel and simulator), the reference interpreter and the verifier
 must agree on.  One source of truth; the C side's copies are checked
-against it by tests (tests/unit/test_execmodel.py)."""
+against it by tests (tests/unit/test_compilation.py, test_watchdog.py)."""
 
 from __future__ import annotations
 

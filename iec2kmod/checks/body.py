@@ -6,8 +6,9 @@ from __future__ import annotations
 
 from .. import ast
 from ..diagnostics import INPUT_WRITE_RULE
-from . import stdlib
+from . import fold, stdlib
 from .il import ILChecks
+from .settle import settle
 from .symbols import POUInfo, Var
 from .types import (BOOL, ELEMENTARY, ERROR, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, assignable, cat, common,
@@ -37,6 +38,8 @@ class BodyChecker(ILChecks):
         self.src = pou.src
         self.loop_vars: list[Var] = []
         self.loop_depth = 0
+        self.depth = 0          # of expr() calls under way
+        self.roots: list = []   # expressions checked at depth 0, settled at the end
 
     def error(self, pos, msg):
         self.diags.error(self.src, pos, msg)
@@ -49,7 +52,16 @@ class BodyChecker(ILChecks):
         scope = self.decl.pou_scope(self.pou)
         with self.decl.constants_of(scope):
             self._check()
+            self.settle_roots()
         self.decl.mark_used(scope, self.pou.vars)
+
+    def settle_roots(self):
+        """The types every standard call checked so far is computed in
+        (checks/settle.py): once the statements around them are checked,
+        for check_assign gives an untyped value its target's type."""
+        for e in self.roots:
+            settle(e)
+        self.roots = []
 
     def _check(self):
         node = self.pou.node
@@ -123,7 +135,7 @@ class BodyChecker(ILChecks):
         if assignable(vt, tt):
             if isinstance(vt, LiteralT):
                 value.type = tt.base if isinstance(tt, SubrangeT) else tt
-            if isinstance(tt, SubrangeT) and isinstance(value, ast.Expr) and value.const is None:
+            if isinstance(tt, SubrangeT) and isinstance(value, ast.Expr):
                 v = _literal_value(value)
                 if v is not None and not tt.low <= v <= tt.high:
                     self.error(value.pos, f"{v} is outside the subrange {tt.low}..{tt.high} "
@@ -419,8 +431,15 @@ class BodyChecker(ILChecks):
 
     # ------------------------------------------------------ expressions
     def expr(self, e):
-        t = self._expr(e)
+        if self.depth == 0:
+            self.roots.append(e)
+        self.depth += 1
+        try:
+            t = self._expr(e)
+        finally:
+            self.depth -= 1
         e.type = t
+        e.const = fold.node(e)
         return t
 
     def _expr(self, e):
@@ -503,7 +522,7 @@ class BodyChecker(ILChecks):
             except stdlib.CallError as exc:
                 self.error(e.pos, f"operator {op}: {stdlib.operand_message(exc, lt, rt)}")
                 return ERROR
-            e.const = None
+            e.fn = f
             self._fold(e, f.result)
             return f.result
         if op in COMPARE:
@@ -555,6 +574,8 @@ class BodyChecker(ILChecks):
 
     # ------------------------------------------------------------ calls
     def call(self, c: ast.Call, statement: bool):
+        if statement:
+            self.roots.append(c)
         if c.ref is not None:
             return self.element_call(c)
         key = c.name.upper()
@@ -813,17 +834,9 @@ class BodyChecker(ILChecks):
         self.check_assign(t, param.type, a.value, None, what=f"input '{param.name}'")
 
 def _literal_value(e):
-    if isinstance(e, ast.Lit) and e.kind == "int":
-        return e.value
-    if isinstance(e, ast.UnOp) and e.op in ("-", "+"):
-        v = _literal_value(e.operand)
-        return None if v is None else (-v if e.op == "-" else v)
-    if isinstance(e, ast.BinOp) and e.op in ("+", "-", "*"):
-        a, b = _literal_value(e.left), _literal_value(e.right)
-        if a is None or b is None:
-            return None
-        return a + b if e.op == "+" else a - b if e.op == "-" else a * b
-    return None
+    """The value of e when it is integer literal arithmetic (fold.int_arith),
+    folded from its operands' const (e's own is set once it is typed)."""
+    return fold.node(e) if fold.int_arith(e) else None
 
 
 def _describe(node):

@@ -8,7 +8,6 @@ import os
 import re
 
 from .. import ast
-from ..parse import lexical
 from ..parse.literals import LiteralError, parse_duration
 from .body import BodyChecker
 from .declare import ConstError, address_span, check_address_type
@@ -222,7 +221,7 @@ class ConfigChecker:
                 v.used = True
                 info.single = v
                 info.single_name = v.name
-        self.watchdog(info, src)
+        self.watchdog(info, t, src)
         if "PRIORITY" not in t.props:
             self.error(src, t.pos, f"task '{t.name}' needs a PRIORITY")
         if info.interval_ns is None and info.single is None and \
@@ -234,10 +233,11 @@ class ConfigChecker:
                                    "periodic or event-driven")
         return info
 
-    def watchdog(self, info: TaskInfo, src) -> None:
-        """The {watchdog ...} pragma right in front of the TASK, if any."""
+    def watchdog(self, info: TaskInfo, t, src) -> None:
+        """The {watchdog ...} pragma right in front of the TASK, if any (the
+        parser attached it to the Task: parse/lexical.attach)."""
         info.watchdog_ns = WATCHDOG_DEFAULT_NS
-        m = lexical.in_front_of(src.text, info.pos, "watchdog")
+        m = next((p for p in t.pragmas or () if p.kind == "watchdog"), None)
         if not m:
             return
         self.watchdogs_used.add((src.path, m.start))
@@ -277,8 +277,8 @@ class ConfigChecker:
     def unused_watchdogs(self, units) -> None:
         for unit in units:
             src = unit.src
-            for m in lexical.of_kind(src.text, "watchdog"):
-                if (src.path, m.start) not in self.watchdogs_used:
+            for m in unit.pragmas or ():
+                if m.kind == "watchdog" and (src.path, m.start) not in self.watchdogs_used:
                     self.warning(src, m.start, "watchdog pragma applies to nothing: put it "
                                                   "right in front of a TASK declaration")
 
@@ -460,7 +460,9 @@ class ConfigChecker:
                 return None
         fake = POUInfo("PROGRAM", "<connection>", src=src)
         checker = BodyChecker(self.p, self.decl, self.diags, fake)
-        return checker.expr(value)
+        t = checker.expr(value)
+        checker.settle_roots()
+        return t
 
     # ------------------------------------------------------- externals
     def bind_externals(self, pou, r, cfg, inst, src):

@@ -6,7 +6,7 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 from .. import ast
-from . import stdlib
+from . import fold, stdlib
 from .symbols import POUInfo, Project, Var
 from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, Type, assignable)
 from .types import identical as _identical
@@ -61,11 +61,20 @@ class Declarer:
 
     # ------------------------------------------------------- constants
     def const_value(self, expr, src, what="value"):
-        """Evaluates a constant expression (literals, enum values,
-        arithmetic); raises ConstError with a message."""
+        """Evaluates a constant expression (literals, enum values, named
+        constants, arithmetic) by the folder's rules (checks/fold.py) and
+        sets ``const`` on the literals and operators it folds; raises
+        ConstError with a message."""
+        v = self._const_value(expr, src, what)
+        if expr.const is None and isinstance(v, (int, float)) and (
+                isinstance(expr, (ast.UnOp, ast.BinOp)) or fold.literal(expr) is not None):
+            expr.const = v
+        return v
+
+    def _const_value(self, expr, src, what):
         if isinstance(expr, ast.Lit):
-            if expr.kind in ("int", "real", "bool", "time", "date", "tod", "dt"):
-                return expr.value
+            if expr.kind in fold.NUMERIC:
+                return fold.literal(expr)
             if expr.kind == "enum":
                 t = self.lookup_type(expr.type_name, src, expr.pos, report=False)
                 if isinstance(t, EnumT) and t.has(expr.value):
@@ -73,37 +82,15 @@ class Declarer:
                 raise ConstError(f"unknown enumeration value {expr.text}")
             return expr.value
         if isinstance(expr, ast.UnOp):
-            v = self.const_value(expr.operand, src, what)
-            if expr.op == "-":
-                return -v
-            if expr.op == "+":
-                return v
-            if isinstance(v, bool):
-                return not v
-            return ~v
+            return fold.unary(expr.op, self.const_value(expr.operand, src, what))
         if isinstance(expr, ast.BinOp):
             a = self.const_value(expr.left, src, what)
             b = self.const_value(expr.right, src, what)
-            op = expr.op
-            try:
-                if op == "+":
-                    return a + b
-                if op == "-":
-                    return a - b
-                if op == "*":
-                    return a * b
-                if op == "/":
-                    if isinstance(a, int) and isinstance(b, int):
-                        q = abs(a) // abs(b)
-                        return q if (a >= 0) == (b >= 0) else -q
-                    return a / b
-                if op == "MOD":
-                    r = abs(a) % abs(b)
-                    return r if a >= 0 else -r
-                if op == "**":
-                    return float(a) ** b
-            except ZeroDivisionError:
-                raise ConstError("division by zero in a constant expression") from None
+            if expr.op in fold.ARITH_OPS:
+                try:
+                    return fold.binary(expr.op, a, b)
+                except ZeroDivisionError:
+                    raise ConstError("division by zero in a constant expression") from None
         if isinstance(expr, ast.Ref) and not expr.accessors:
             key = expr.name.upper()
             found = self._const_scope.entries.get(key)

@@ -210,17 +210,27 @@ class ILChecks:
             if c is None:
                 self.error(pos, f"{op}: incompatible operands {cr.name} and {t.name}")
                 return ERROR
+            i.sig = (concrete(c), [concrete(c)] * 2)
             return concrete(c)
         if op in IL_ARITH:
             try:
-                return stdlib.resolve(IL_ARITH[op], [cr, t]).result
+                f = stdlib.resolve(IL_ARITH[op], [cr, t])
             except stdlib.CallError as exc:
                 self.error(pos, f"{op}: {stdlib.operand_message(exc, cr, t)}")
                 return ERROR
+            # the current result is stored in the operator's type, the
+            # literal's own where both operands are untyped (LD 38 SUB 40)
+            i.std, i.sig = f, stdlib.call_types(f, concrete(f.result))
+            return f.result
         if op in IL_COMPARE:
             if common(cr, t) is None:
                 self.error(pos, f"{op}: cannot compare {cr.name} with {t.name}")
                 return ERROR
+            try:
+                f = stdlib.resolve(op, [cr, t])
+                i.std, i.sig = f, stdlib.call_types(f, BOOL)
+            except stdlib.CallError:     # not elementary: compared as values (interp)
+                i.sig = (BOOL, [concrete(common(cr, t))] * 2)
             return BOOL
         self.error(pos, f"{op}( ... ) is not a deferrable operation")
         return ERROR
@@ -240,6 +250,7 @@ class ILChecks:
             c = ast.Call(i.pos, i.fn, args)
         i.call = c
         if key in self.p.pous or stdlib.is_std_function(key):
+            self.roots.append(c)
             return self.call(c, statement=False)
         self.error(i.pos, f"unknown IL operator or function '{i.fn}'")
         return ERROR

@@ -10,9 +10,9 @@ from __future__ import annotations
 import re
 
 from .. import ast
-from ..checks import stdlib
 from ..checks.il import IL_ARITH, IL_COMPARE, IL_LOGIC
 from ..checks.symbols import Var
+from ..execmodel import LOOP_BUDGET
 from ..checks.types import (BOOL, ArrayT, EnumT, ErrorT, FBType,
                             LiteralT, StringT, StructT, SubrangeT, concrete, identical)
 from . import analysis
@@ -373,8 +373,9 @@ class BodyEmitter:
         if cstart is not None and cend is not None:
             trips = max(0, (cend - cstart) // cstep + 1)
         # an innermost loop of a known number of iterations charges them to
-        # the loop budget at once (EXIT gives back the ones not run)
-        charge = safe and 0 < trips <= 1_000_000 and not analysis.has_loop(s.body) and \
+        # the loop budget at once (EXIT gives back the ones not run); one of
+        # more trips than the budget faults as it counts them
+        charge = safe and 0 < trips <= LOOP_BUDGET and not analysis.has_loop(s.body) and \
             not analysis.has_return(s.body)
         on_exit = ()
         if charge:
@@ -1027,12 +1028,8 @@ class BodyEmitter:
             fam = IL_LOGIC[op]
             code = (f"((iec_bool)({l} {'&' if fam == 'AND' else '|' if fam == 'OR' else '^'} {r}))"
                     if res is BOOL else f"iec_{fam.lower()}_{N.type_tag(res)}({l}, {r})")
-        elif op in IL_ARITH:
-            fres = stdlib.resolve(IL_ARITH[op], [cr_in, operand.type])
-            code = self.expr.std_apply(f, fres, [left, operand], res)
-        else:
-            fres = stdlib.resolve(op, [cr_in, operand.type])
-            code = self.expr.std_apply(f, fres, [left, operand], BOOL)
+        else:               # arithmetic and comparisons: the checker's function
+            code = self.expr.std_apply(f, i.std, [left, operand], i.sig)
         return [f"{self.cr_var(res, depth)} = {code};"]
 
 

@@ -14,7 +14,7 @@ from ..checks import stdlib
 from ..checks.body import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, FBType,
-                            LiteralT, StringT, StructT, SubrangeT, common, concrete)
+                            LiteralT, StringT, StructT, SubrangeT, concrete)
 from . import cnames as N
 
 INT64_MIN = -(1 << 63)
@@ -316,9 +316,8 @@ class ExprEmitter:
     # -------------------------------------------------------- operators
     def binop(self, f, e, t):
         op = e.op
-        lt, rt = e.left.type, e.right.type
         if op in ("=", "<>", "<", ">", "<=", ">="):
-            c = concrete(common(lt, rt))
+            c = e.sig[1][0]
             if isinstance(c, StringT):
                 a, b = self.strv(f, e.left), self.strv(f, e.right)
                 if not c.wide and op in ("=", "<>"):
@@ -338,9 +337,7 @@ class ExprEmitter:
             if rtype is BOOL:
                 return f"((iec_bool)({a} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {b}))"
             return f"iec_{op.lower()}_{N.type_tag(rtype)}({a}, {b})"
-        name = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD", "**": "EXPT"}[op]
-        fres = stdlib.resolve(name, [lt, rt])
-        return self.std_apply(f, fres, [e.left, e.right], t)
+        return self.std_apply(f, e.fn, [e.left, e.right], e.sig)
 
     def unop(self, f, e, t):
         rtype = concrete(t)
@@ -378,7 +375,7 @@ class ExprEmitter:
         ENO is FALSE and the call's value is its type's default; otherwise
         ENO is TRUE after the call."""
         if isinstance(c.target, stdlib.StdFunc):
-            rt = c.type if not isinstance(c.type, LiteralT) else (t if t is not None else c.type)
+            rt = c.sig[0]
         else:
             rt = c.target.vars[c.target.key].type
         rt = concrete(rt)
@@ -421,13 +418,16 @@ class ExprEmitter:
         if isinstance(target, stdlib.StdFunc):
             args = [a.value for a in c.args if a.kind == "pos" or a.name.upper() not in
                     ("EN", "ENO")]
-            return self.std_apply(f, target, args, t)
+            return self.std_apply(f, target, args, c.sig)
         return self.body.user_function_call(f, c)
 
-    def std_apply(self, f, fres: stdlib.StdFunc, args, t):
+    def std_apply(self, f, fres: stdlib.StdFunc, args, sig):
+        """C code of standard function ``fres`` on argument expressions, in
+        the types ``sig`` (the call's, checks/settle.py); a computation on
+        untyped literals is done in C in the literal's own type."""
         fam = fres.family
         pts = fres.param_types
-        res = concrete(stdlib.call_types(fres, t)[0])
+        res = concrete(sig[0])
         tag = lambda ty: N.type_tag(ty)
         if fam in stdlib.ARITH_FAMILIES:
             vs = self.seq(f, [(a, res) for a in args])
@@ -785,9 +785,11 @@ def _cop(op):
 
 
 def _const_int(e):
-    if isinstance(e, ast.Lit) and e.kind == "int":
-        return e.value
-    if isinstance(e, ast.UnOp) and e.op == "-":
-        v = _const_int(e.operand)
-        return None if v is None else -v
+    """The value of an integer literal or a negated one (the checker's
+    Expr.const), else None: the C emitter treats only these as constants (an
+    index without a run-time check, a FOR loop's trip count, a divisor that
+    cannot be zero); a wider rule would change the generated C."""
+    if isinstance(e, ast.Lit) and e.kind == "int" or (
+            isinstance(e, ast.UnOp) and e.op == "-" and _const_int(e.operand) is not None):
+        return e.const
     return None

@@ -282,7 +282,7 @@ class SelectivePlan:
                         targets.setdefault(cfg.src.path, []).append((pos, "inst", inst))
         for unit in self.project.units:
             src = unit.src
-            found = lexical.of_kind(src.text, "selective")
+            found = [p for p in unit.pragmas or () if p.kind == "selective"]
             if not found:
                 continue
             mine = sorted(targets.get(src.path, []), key=lambda t: t[0])

@@ -17,7 +17,7 @@ from ..checks import stdlib
 from ..checks.body import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
-                            StructT, SubrangeT, common, concrete)
+                            StructT, SubrangeT, concrete)
 from ..checks.types import LREAL as LREAL_T
 from . import std
 from .conv import converter, int_to_f32, int_to_f64
@@ -291,9 +291,8 @@ class PouCompiler:
 
     def in_context(self, e, t):
         """f(env) of untyped expression e computed in type t, or None."""
-        if isinstance(e, ast.BinOp) and (e.op in ARITH or e.op == "**"):
-            fres = stdlib.resolve(ARITH.get(e.op, "EXPT"), [e.left.type, e.right.type])
-            return self.apply_std(fres, [e.left, e.right], t)
+        if isinstance(e, ast.BinOp) and e.fn is not None:
+            return self.apply_std(e.fn, [e.left, e.right], e.sig)
         if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
                 and isinstance(e.target.result, LiteralT):
             return self.std_call(e, t)
@@ -324,13 +323,10 @@ class PouCompiler:
 
     def binop(self, e):
         op = e.op
-        lt, rt_ = e.left.type, e.right.type
-        if op in ARITH or op == "**":
-            name = ARITH.get(op, "EXPT")
-            fres = stdlib.resolve(name, [lt, rt_])
-            return self.apply_std(fres, [e.left, e.right], e.type)
+        if e.fn is not None:
+            return self.apply_std(e.fn, [e.left, e.right], e.sig)
         if op in ("=", "<>", "<", ">", "<=", ">="):
-            c = concrete(common(lt, rt_))
+            c = e.sig[1][0]
             a = self.expr_as(e.left, c)
             b = self.expr_as(e.right, c)
             if op == "=":
@@ -390,9 +386,9 @@ class PouCompiler:
         return lambda env: wrap64(-a(env))
 
     def _literal_unop(self, e):
-        if isinstance(e.operand, ast.Lit) and e.operand.kind in ("int", "real"):
-            v = e.operand.value
-            v = -v if e.op == "-" else v
+        if isinstance(e.operand, ast.Lit) and e.operand.kind in ("int", "real") and \
+                e.const is not None:
+            v = e.const          # the checker's fold
             t = e.type
             if isinstance(t, LiteralT) or t is None:
                 return v
@@ -427,7 +423,7 @@ class PouCompiler:
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
         rt = c.type if ctx_t is None else ctx_t
-        f = self.apply_std(fres, args, rt)
+        f = self.apply_std(fres, args, c.sig)
         en, eno = self.en_eno(c)
         if en is None and eno is None:
             return f
@@ -444,10 +440,11 @@ class PouCompiler:
             return v
         return guarded
 
-    def apply_std(self, fres, args, ctx_t):
-        """f(env) computing standard function ``fres`` on argument exprs."""
+    def apply_std(self, fres, args, sig):
+        """f(env) computing standard function ``fres`` on argument exprs, in
+        the types ``sig`` (the call's, checks/settle.py)."""
         fam = fres.family
-        res, ptypes = stdlib.call_types(fres, ctx_t)
+        res, ptypes = sig
         if isinstance(res, LiteralT):
             # a computation on untyped literals: exact, in Python
             return self._literal_std(fam, args, res)
@@ -998,7 +995,7 @@ class PouCompiler:
             inner_t = i.nested[-1].cr_out if i.nested else i.operand.type
             first = self.expr(i.operand) if i.operand is not None else None
             seq = self.il_seq(i.nested)
-            comb = self.il_combine(op, cr_in, inner_t)
+            comb = self.il_combine(i, op, cr_in, inner_t)
 
             def deferred(env):
                 outer = env.cr
@@ -1060,7 +1057,7 @@ class PouCompiler:
         if op in ("AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ADD", "SUB", "MUL", "DIV",
                   "MOD", "GT", "GE", "EQ", "NE", "LE", "LT"):
             f = self.expr(i.operand)
-            comb = self.il_combine(op, cr_in, i.operand.type)
+            comb = self.il_combine(i, op, cr_in, i.operand.type)
 
             def apply(env):
                 env.cr = comb(env.cr, f(env))
@@ -1105,12 +1102,12 @@ class PouCompiler:
             return lambda env: None
         raise AssertionError(f"IL operator {op}")
 
-    def il_combine(self, op, cr_t, op_t):
+    def il_combine(self, i, op, cr_t, op_t):
         """g(cr, operand) -> new current result for a binary IL operator."""
         base = op[:-1] if op in ("ANDN", "ORN", "XORN") else op
         neg = op in ("ANDN", "ORN", "XORN")
         if base in ("AND", "OR", "XOR"):
-            t = concrete(common(cr_t, op_t))
+            t = i.sig[1][0]
             ca, cb = implicit(cr_t, t), implicit(op_t, t)
             b = base_of(t)
             if b is BOOL:
@@ -1133,17 +1130,15 @@ class PouCompiler:
                 return fn(x, y)
             return logic
         if base in stdlib.ARITH_FAMILIES:
-            fres = stdlib.resolve(base, [cr_t, op_t])
             holder = _Holder()
             fargs = [_Slot(0, cr_t), _Slot(1, op_t)]
-            f = self.apply_std(fres, fargs, fres.result if not isinstance(fres.result, LiteralT)
-                               else concrete(fres.result))
+            f = self.apply_std(i.std, fargs, i.sig)
 
             def arith(x, y):
                 holder.vals = (x, y)
                 return f(holder)
             return arith
-        t = concrete(common(cr_t, op_t))
+        t = i.sig[1][0]
         ca, cb = implicit(cr_t, t), implicit(op_t, t)
         fn = std.COMPARE[base]
 

@@ -11,6 +11,7 @@ in scope -- at every depth of FB nesting) or at every call (in-outs)."""
 from __future__ import annotations
 
 from .. import ast
+from ..checks import fold
 from ..checks.types import (ArrayT, Elementary, EnumT, LiteralT, StringT, StructT,
                             SubrangeT, concrete)
 from .values import base_of, convert_implicit, f32_safe
@@ -113,40 +114,14 @@ class Initializer:
                 return f32_safe(e.value)
             return e.value
         if isinstance(e, ast.UnOp):
-            v = self._const(e.operand, t)
-            if e.op == "-":
-                return -v
-            if e.op == "+":
-                return v
-            if isinstance(v, bool):
-                return not v
-            b = base_of(t) if t is not None else None
-            return ~v & ((1 << b.bits) - 1) if isinstance(b, Elementary) else ~v
-        if isinstance(e, ast.BinOp):
-            a, b = self._const(e.left, t), self._const(e.right, t)
-            op = e.op
-            if op == "+":
-                return a + b
-            if op == "-":
-                return a - b
-            if op == "*":
-                return a * b
-            if op == "/":
-                if isinstance(a, int) and isinstance(b, int):
-                    q = abs(a) // abs(b)
-                    return q if (a >= 0) == (b >= 0) else -q
-                return a / b
-            if op == "MOD":
-                r = abs(a) % abs(b)
-                return r if a >= 0 else -r
-            if op == "**":
-                return float(a) ** b
-            if op == "AND":
-                return a & b
-            if op == "OR":
-                return a | b
-            if op == "XOR":
-                return a ^ b
+            v = fold.unary(e.op, self._const(e.operand, t))
+            if e.op == "NOT" and not isinstance(v, bool):
+                b = base_of(t) if t is not None else None
+                return v & ((1 << b.bits) - 1) if isinstance(b, Elementary) else v
+            return v
+        if isinstance(e, ast.BinOp) and (e.op in fold.ARITH_OPS or e.op in fold.LOGIC_OPS):
+            # the checker's folder's operators, on values in the variable's type
+            return fold.binary(e.op, self._const(e.left, t), self._const(e.right, t))
         if isinstance(e, ast.Ref) and not e.accessors:
             key = e.name.upper()
             ct = concrete(t) if t is not None else None

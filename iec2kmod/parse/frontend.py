@@ -218,6 +218,9 @@ def _merge(src: SourceFile, results):
             for node in getattr(part_unit, name):
                 node.src = src
                 getattr(unit, name).append(node)
+    if ok:      # the pragmas of the whole file (each part saw only its own)
+        from .lexical import attach
+        attach(unit)
     return (unit if ok else None), items
 
 

@@ -12,9 +12,10 @@ A pragma is ``{`` up to the next ``}``; its first word is its kind.  The
 kinds iec2kmod reads are listed in PRAGMAS (syntax, where it may stand,
 what it attaches to, who reads it); any other pragma, and MatIEC's ``{{ }}``
 inline C, is ignored with a warning by the parser.  ``pragmas(text)`` gives
-every pragma of a text once, in order, with its kind and offsets: the
-parser's warning, the watchdog and selective passes and the verify
-properties all read pragmas through it."""
+every pragma of a text once, in order, with its kind and offsets; the
+parser's last step, ``attach``, hangs them on the nodes they apply to (a
+{watchdog} on its Task, a {verify} or {assume} on its POU or the file),
+where the passes that read them find them."""
 
 from __future__ import annotations
 
@@ -122,3 +123,35 @@ def in_front_of(text: str, pos: int, kind: str) -> Pragma | None:
     if best is None or best.kind != kind or text[best.end:pos].strip():
         return None
     return best
+
+
+def attach(unit) -> None:
+    """Hangs the pragmas of a parsed file (ast.SourceUnit, its ``src`` the
+    whole file) on its nodes: ``unit.pragmas`` every pragma in order; a
+    {watchdog} right in front of a TASK (blanks between) on that Task's
+    ``pragmas``; a {verify} or {assume} inside a POU (from its keyword to
+    its END keyword) on that POU's ``pragmas``, else on ``unit.outside``.
+    A {selective} is matched to its declaration by codegen/selective.py
+    from ``unit.pragmas``."""
+    text = unit.src.text
+    found = pragmas(text)
+    unit.pragmas = found
+    outside = []
+    pous = [(pou.pos, pou.end_pos, pou) for pou in unit.pous]
+    for _, _, pou in pous:
+        pou.pragmas = ()
+    for cfg in unit.configurations:
+        for r in cfg.resources:
+            for t in r.tasks:
+                p = in_front_of(text, t.pos, "watchdog") if found else None
+                t.pragmas = (p,) if p is not None else ()
+    for p in found:
+        if p.kind not in ("verify", "assume"):
+            continue
+        inside = [pou for a, b, pou in pous
+                  if a is not None and b is not None and a <= p.start < b]
+        if inside:
+            inside[-1].pragmas += (p,)
+        else:
+            outside.append(p)
+    unit.outside = tuple(outside)

@@ -17,6 +17,7 @@ from textx.exceptions import TextXSyntaxError, TextXSemanticError
 
 from .. import ast
 from ..diagnostics import Diagnostics, SourceFile
+from . import lexical
 from .lexical import pragmas
 from .literals import LiteralError, classify
 
@@ -582,6 +583,13 @@ def parse_source(src: SourceFile, diags: Diagnostics, reference: bool = False):
 
 
 def _parse_source(src: SourceFile, diags: Diagnostics, reference: bool):
+    unit = _parse_unit(src, diags, reference)
+    if unit is not None:
+        lexical.attach(unit)
+    return unit
+
+
+def _parse_unit(src: SourceFile, diags: Diagnostics, reference: bool):
     _ctx.src = src
     _ctx.diags = diags
     _warn_pragmas(src, diags)

@@ -31,11 +31,11 @@ from ..checks import stdlib
 from ..checks.body import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
-                            StructT, SubrangeT, common, concrete)
+                            StructT, SubrangeT, concrete)
 from ..checks.types import ELEMENTARY as _E
-from ..interp.compiler import ARITH, PouCompiler, implicit
+from ..interp.compiler import PouCompiler, implicit
 from ..interp.errors import DIV_ZERO, ENUM, INDEX, LOOP, MUX, RANGE
-from ..interp.machine import LOOP_BUDGET
+from ..execmodel import LOOP_BUDGET
 from ..interp.model import Instance
 from ..interp.values import base_of
 
@@ -608,9 +608,8 @@ class Encoder:
         return self.conv(self.expr(e, frame, g), e.type, t, frame, e.pos)
 
     def in_context(self, e, t, frame, g):
-        if isinstance(e, ast.BinOp) and (e.op in ARITH or e.op == "**"):
-            fres = stdlib.resolve(ARITH.get(e.op, "EXPT"), [e.left.type, e.right.type])
-            return self.apply_std(fres, [e.left, e.right], t, frame, g, e.pos)
+        if isinstance(e, ast.BinOp) and e.fn is not None:
+            return self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos)
         if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
                 and isinstance(e.target.result, LiteralT):
             return self.std_call(e, frame, g, t)
@@ -647,12 +646,10 @@ class Encoder:
 
     def binop(self, e, frame, g):
         op = e.op
-        lt, rt = e.left.type, e.right.type
-        if op in ARITH or op == "**":
-            fres = stdlib.resolve(ARITH.get(op, "EXPT"), [lt, rt])
-            return self.apply_std(fres, [e.left, e.right], e.type, frame, g, e.pos)
+        if e.fn is not None:
+            return self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos)
         if op in ("=", "<>", "<", ">", "<=", ">="):
-            c = concrete(common(lt, rt))
+            c = e.sig[1][0]
             a = self.expr_as(e.left, c, frame, g)
             b = self.expr_as(e.right, c, frame, g)
             if isinstance(a, Opaque) or isinstance(b, Opaque):
@@ -700,7 +697,7 @@ class Encoder:
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
         en, eno = self.en_eno(c, frame, g)
         g2 = land(g, en) if en is not None else g
-        v = self.apply_std(fres, args, rt, frame, g2, c.pos)
+        v = self.apply_std(fres, args, c.sig, frame, g2, c.pos)
         if eno is not None:
             self.write(eno, en if en is not None else TRUE, BOOL, frame, g, c.pos)
         if en is not None:
@@ -710,10 +707,10 @@ class Encoder:
             return ite(en, self.conv(v, rt, rt), dflt)
         return v
 
-    def apply_std(self, fres, args, ctx_t, frame, g, pos):
+    def apply_std(self, fres, args, sig, frame, g, pos):
         fam = fres.family
         pou = frame.pou
-        res, ptypes = stdlib.call_types(fres, ctx_t)
+        res, ptypes = sig
         if isinstance(res, LiteralT):
             vals = [literal_int(self.expr(a, frame, g), a) for a in args]
             return self.literal_arith(fam, vals, res, frame, g, pos)
@@ -1555,7 +1552,7 @@ class Encoder:
                 self.il_instr(j, frame, g, TRUE)
             inner = self.cr_get(frame, inner_t)
             frame.inst.cr = saved
-            val = self.il_combine(op, outer, cr_in, inner, inner_t, frame, g, i.pos)
+            val = self.il_combine(i, op, outer, cr_in, inner, inner_t, frame, g)
             self.cr_set(frame, rel, val)
             return
         if op in ("LD", "LDN"):
@@ -1598,8 +1595,7 @@ class Encoder:
                   "MOD", "GT", "GE", "EQ", "NE", "LE", "LT"):
             b = self.expr(i.operand, frame, g)
             a = self.cr_get(frame, cr_in)
-            self.cr_set(frame, rel, self.il_combine(op, a, cr_in, b, i.operand.type, frame, g,
-                                                  i.pos))
+            self.cr_set(frame, rel, self.il_combine(i, op, a, cr_in, b, i.operand.type, frame, g))
             return
         if op in ("CAL", "CALC", "CALCN"):
             if op == "CAL":
@@ -1612,23 +1608,20 @@ class Encoder:
             return
         self.refuse(pou, i.pos, f"the IL operator {op}")
 
-    def il_combine(self, op, x, cr_t, y, op_t, frame, g, pos):
+    def il_combine(self, i, op, x, cr_t, y, op_t, frame, g):
         base = op[:-1] if op in ("ANDN", "ORN", "XORN") else op
         neg = op in ("ANDN", "ORN", "XORN")
         if base in ("AND", "OR", "XOR"):
-            t = concrete(common(cr_t, op_t))
+            t = i.sig[1][0]
             x = self.conv(x, cr_t, t)
             y = self.conv(y, op_t, t)
             if neg:
                 y = z3.Not(y) if z3.is_bool(y) else ~y
             return logic(base, x, y)
         if base in stdlib.ARITH_FAMILIES:
-            fres = stdlib.resolve(base, [cr_t, op_t])
-            ctx = fres.result if not isinstance(fres.result, LiteralT) else \
-                concrete(fres.result)
-            return self.apply_std(fres, [_SlotVal(x, cr_t), _SlotVal(y, op_t)], ctx, frame,
-                                  g, pos)
-        t = concrete(common(cr_t, op_t))
+            return self.apply_std(i.std, [_SlotVal(x, cr_t), _SlotVal(y, op_t)], i.sig, frame,
+                                  g, i.pos)
+        t = i.sig[1][0]
         x = self.conv(x, cr_t, t)
         y = self.conv(y, op_t, t)
         return compare({"GT": ">", "GE": ">=", "EQ": "=", "NE": "<>", "LE": "<=",

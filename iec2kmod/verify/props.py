@@ -33,10 +33,6 @@ from ..parse.parser import parse_expression
 
 # the text after {verify / {assume: an optional name, a colon, the expression
 _PROP_BODY = re.compile(r"\s*(" + lexical.NAME + r")?\s*:(.*)\Z", re.S)
-POU_SPAN = re.compile(lexical.SKIP_ALL + "|"
-                      r"\b(END_PROGRAM|END_FUNCTION_BLOCK|END_FUNCTION)\b|"
-                      r"\b(PROGRAM|FUNCTION_BLOCK|FUNCTION)\s+(" + lexical.NAME + ")",
-                      re.S | re.I)
 
 
 @dataclass
@@ -51,7 +47,9 @@ class Prop:
 
 
 def scan_pragmas(project) -> tuple[list, list]:
-    """Every {verify}/{assume} pragma of the project's source files."""
+    """Every {verify}/{assume} pragma of the project's source files, in
+    the order they are written: the parser attached each to the POU it is
+    written in, or to its file (parse/lexical.attach)."""
     props, bad = [], []
     seen = set()
     for unit in project.units:
@@ -59,11 +57,10 @@ def scan_pragmas(project) -> tuple[list, list]:
         if id(src) in seen:
             continue
         seen.add(id(src))
-        spans = _pou_spans(src.text)
-        n = 0
-        for p in lexical.pragmas(src.text):
-            if p.kind not in ("verify", "assume"):
-                continue
+        found = [(p, None) for p in unit.outside or ()]
+        for pou in unit.pous:
+            found += [(p, pou) for p in pou.pragmas or ()]
+        for p, pou in sorted(found, key=lambda x: x[0].start):
             m = _PROP_BODY.match(p.body)
             if not m:
                 continue     # no colon: not a property (as before the registry)
@@ -71,37 +68,19 @@ def scan_pragmas(project) -> tuple[list, list]:
             start = p.body_start + m.start(2)
             text = m.group(2)
             program = None
-            inside = None
-            for kw, name, a, b in spans:
-                if a <= p.start < b:
-                    inside = (kw, name)
-            if inside is not None:
-                if inside[0] == "PROGRAM":
-                    program = inside[1].upper()
+            if pou is not None:
+                if pou.kind == "PROGRAM":
+                    program = pou.name.upper()
                 else:
                     bad.append((src, p.start, f"a {{{kind}}} pragma inside a "
-                                f"{inside[0].replace('_', ' ').lower()} (write it in a "
+                                f"{pou.kind.replace('_', ' ').lower()} (write it in a "
                                 "PROGRAM or in the configuration)"))
                     continue
-            n += 1
             line, _ = src.linecol(p.start)
             name = m.group(1) or f"{src.path.rsplit('/', 1)[-1]}:{line}"
             props.append(Prop("property" if kind == "verify" else "assume", name, text, src,
                               start, program))
     return props, bad
-
-
-def _pou_spans(text):
-    out = []
-    stack = None
-    for m in POU_SPAN.finditer(text):
-        if m.group(1):
-            if stack is not None:
-                out.append((stack[0], stack[1], stack[2], m.end()))
-            stack = None
-        elif m.group(2):
-            stack = (m.group(2).upper(), m.group(3), m.start())
-    return out
 
 
 # ----------------------------------------------------------- parsing
@@ -152,6 +131,7 @@ class PropChecker(BodyChecker):
 
     def check_expr(self, e):
         t = self.expr(e)
+        self.settle_roots()
         if isinstance(t, ErrorT):
             return False
         if t.base is not BOOL:

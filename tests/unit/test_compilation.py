@@ -197,7 +197,12 @@ def test_one_loop_budget_and_table_limit():
     """Every user of the execution model's numbers has them from it."""
     from iec2kmod import interp
     from iec2kmod.interp import machine
+    from iec2kmod.codegen import body as codegen_body
+    from iec2kmod.verify import encode
     assert interp.LOOP_BUDGET is execmodel.LOOP_BUDGET
+    # the C emitter charges a constant FOR loop to the budget up to the
+    # budget; the verifier's unrolling stops at it
+    assert codegen_body.LOOP_BUDGET is encode.LOOP_BUDGET is execmodel.LOOP_BUDGET
     assert machine.kind_of is plan_mod.kind_of is execmodel.kind_of
     assert machine.MAX_TABLE_ELEMENTS is plan_mod.MAX_TABLE_ELEMENTS
     for f in (ROOT / "iec2kmod").rglob("*.py"):

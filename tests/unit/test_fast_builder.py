@@ -18,6 +18,7 @@ import pytest
 
 from iec2kmod import ast
 from iec2kmod.diagnostics import Diagnostics, SourceFile
+from iec2kmod.parse.lexical import Pragma
 from iec2kmod.parse.parser import fast_paths, metamodel, parse_source
 
 pytestmark = pytest.mark.unit
@@ -41,6 +42,8 @@ def dump(x):
         return ("dict",) + tuple((dump(k), dump(v)) for k, v in x.items())
     if isinstance(x, SourceFile):
         return ("SourceFile", x.path, x.text)
+    if isinstance(x, Pragma):
+        return ("Pragma", x.start, x.end, x.text, x.kind)
     assert x is None or isinstance(x, (str, int, float, bool)), type(x)
     return (type(x).__name__, x)
 
