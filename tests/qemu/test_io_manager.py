@@ -20,7 +20,11 @@ AO channel of the same number).
   shows the device's sample; a forced analog output is what reaches the device
   (read back through comedi_test's AI loopback, from user space and by the
   program), while the variable and the device differ after a stop (the
-  safe value)."""
+  safe value);
+- the cycle's order seen from the device: after a stop AO 0 holds the
+  kernel's last written sample of %QD0, and the last AI 0 sample (the
+  loopback of AO 0 read in copy-in, before the programs ran) is the one the
+  cycle before wrote, one model step behind while the level moves."""
 
 from __future__ import annotations
 
@@ -161,8 +165,14 @@ def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     assert loaded_modules(g) == []
 
     # an LREAL on range 1 (-5..5 V) of the same channel: the same sample,
-    # half the volts, in binary64
-    pm(g, "load", tree_l)
+    # half the volts, in binary64.  The valve's read-back forced to 0.25 V
+    # keeps the model's level moving (from 2 V toward 0.5 V, more than one
+    # sample a cycle for some 20 s), so the stop comes while AO 0 changes
+    # every cycle: the samples are not all k * 13107 (exact in binary32) and
+    # the cycle's input is seen one step behind its output
+    pm(g, "load", "--no-start", tree_l)
+    pm(g, "force", "%ID4", "0.25")
+    pm(g, "start")
     deadline = time.monotonic() + 60
     while io_status(g)["%IL0"]["last"] is None:
         assert time.monotonic() < deadline
@@ -171,11 +181,24 @@ def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     pm(g, "stop", "--keep-loaded")
     st = io_status(g)
     raw = st["%IL0"]["last"]
-    level = values(g, "%IL0")["Tank.level"]
+    v = values(g, "%IL0", "Tank.valve_fb", "Tank.level_tx")
+    level = v["Tank.level"]
+    assert v["Tank.valve_fb"] == 0.25, v
     assert level == phys_of(-5.0, 5.0, 16, raw, "LREAL"), (level, raw)
     if raw % 13107:     # (only k * 13107 give a value exact in binary32 too)
         assert level != phys_of(-5.0, 5.0, 16, raw, "REAL")     # not rounded to binary32
     assert abs(level - phys_of(-10.0, 10.0, 16, raw) / 2) < 1e-3
-    assert channels(g, "0.0") == [raw] == [st["%QD0"]["last"]]
+    # AO 0 holds the sample the last cycle wrote (SAFE HOLD), the kernel's
+    # last value of %QD0, raw_of TankModel's level_tx; that cycle's copy-in
+    # read AI 0 before its programs ran, so its input is the AO 0 of the
+    # cycle before: one step of the model behind (2 % of the level's
+    # distance to 0.5 V: tens of samples here), not the same sample
+    out = st["%QD0"]["last"]
+    assert channels(g, "0.0", "1.0") == [out, out], (out, raw, v)
+    assert out == raw_of(-10.0, 10.0, 16, v["Tank.level_tx"]), (out, v)
+    prev = phys_of(-10.0, 10.0, 16, raw)        # the model's level a cycle ago, +-1/2 sample
+    assert abs(v["Tank.level_tx"] - (prev + 0.04 * 0.25 - 0.02 * prev)) < 1e-3, (prev, v)
+    assert out != raw, (out, raw, v)
+    pm(g, "unforce", "--all")
     pm(g, "stop")
     assert loaded_modules(g) == []
