@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """QEMU tier, issue 26: plc-manager and bound I/O, on examples/tank_io (a PI
-tank level loop in volts on comedi_test, README "Real I/O").  A private
-guest loads comedi, kcomedilib and comedi_test (/dev/comedi0: 8 AI, 8 AO
+tank level loop in volts on comedi_test, README "Real I/O").  The session
+guest loads comedi, kcomedilib and comedi_test for the test (the comedi
+fixture, tests/qemu/conftest.py) (/dev/comedi0: 8 AI, 8 AO
 channels, 16 bits; an AI channel read one sample at a time gives back the
 AO channel of the same number).
 
@@ -37,7 +38,7 @@ import pytest
 
 from iec2kmod.iomap import phys_of, raw_of
 from kmod_helpers import gen_and_build, loaded_modules, pm
-from test_io_comedi import COMEDI, channels, values
+from test_io_comedi import channels, values
 
 pytestmark = pytest.mark.qemu
 HERE = Path(__file__).resolve().parent
@@ -75,14 +76,15 @@ def lreal_variant(dest: Path) -> Path:
     return dest
 
 
-def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
+def test_manager_and_real_scaling_on_comedi_test(guest, comedi, guest_workdir):
     tree = Path(guest_workdir) / "tank_io"
     manifest = gen_and_build(PROJECT, tree)
     tree_l = Path(guest_workdir) / "tank_io_lreal"
     gen_and_build(lreal_variant(Path(guest_workdir) / "src_lreal"), tree_l)
     res = next(m["name"] for m in manifest["modules"] if m["kind"] == "resource")
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
-    g = guest_factory(extra_modules=COMEDI)
+    g = guest
+    md = comedi("comedi_test")
     assert channels(g, "0.0", "0.1", "1.0", "1.1") == [32767] * 4
 
     # the device missing: the manager refuses before inserting anything
@@ -104,7 +106,7 @@ def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     for name in reversed(manifest["load_order"][:-1]):
         g.check_call(f"rmmod {name}")
     assert loaded_modules(g) == []
-    g.check_call("insmod /lib/modules/comedi_test.ko")
+    g.check_call(f"insmod {md}/drivers/comedi_test.ko")
 
     # loaded, not started: the valve (SAFE 0.0 V) is at its sample, the
     # level (SAFE HOLD) as it was; status shows what was written, no input yet
