@@ -199,8 +199,9 @@ def test_manager_and_real_scaling_on_comedi_test(guest, comedi, guest_workdir):
     assert channels(g, "0.0", "1.0") == [out, out], (out, raw, v)
     assert out == raw_of(-10.0, 10.0, 16, v["Tank.level_tx"]), (out, v)
     prev = phys_of(-10.0, 10.0, 16, raw)        # the model's level a cycle ago, +-1/2 sample
-    assert abs(v["Tank.level_tx"] - (prev + 0.04 * 0.25 - 0.02 * prev)) < 1e-3, (prev, v)
-    assert out != raw, (out, raw, v)
+    assert abs(v["Tank.level_tx"] - (prev + 0.04 * 0.25 - 0.02 * prev)) < 5e-4, (prev, v)
+    if abs(0.01 - 0.02 * prev) > 3 * 20 / 65535:    # moving (the first 17 s or so)
+        assert out != raw, (out, raw, v)
     pm(g, "unforce", "--all")
     pm(g, "stop")
     assert loaded_modules(g) == []
