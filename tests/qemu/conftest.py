@@ -17,7 +17,7 @@ COMEDI_KO = {"comedi": "comedi.ko", "kcomedilib": "kcomedilib/kcomedilib.ko",
 
 
 @pytest.fixture
-def comedi(guest):
+def comedi(guest):  # noqa: F811 (the fixture guest, imported above)
     """Loads comedi's modules into the session guest for one test:
     ``comedi("comedi_test")`` (comedi, kcomedilib, comedi_test: /dev/comedi0
     auto-configured) or ``comedi("comedi_parport", legacy_minors=1)``.  At
