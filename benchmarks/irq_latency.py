@@ -109,7 +109,12 @@ def values(g, *names) -> dict:
     return {v["path"]: v["value"] for v in json.loads(pm(g, "read", "--json", *names)[1])}
 
 
-def trace_on(g, comm_glob: str):
+def trace_on(g, comm_glob: str) -> str:
+    """Traces IRQ 7 and the switches into the woken thread; returns the
+    buffer size before (trace_off restores it)."""
+    size = g.check_call(f"cat {TRACING}/buffer_size_kb").strip()
+    m = re.search(r"expanded: (\d+)", size)
+    size = m.group(1) if m else size.split()[0]
     g.check_call(
         f"cd {TRACING} && echo 0 > tracing_on && echo x86-tsc > trace_clock && "
         "echo 16384 > buffer_size_kb && "
@@ -117,12 +122,19 @@ def trace_on(g, comm_glob: str):
         "echo 1 > events/irq/irq_handler_entry/enable && "
         f"echo 'next_comm ~ \"{comm_glob}\"' > events/sched/sched_switch/filter && "
         "echo 1 > events/sched/sched_switch/enable && echo > trace && echo 1 > tracing_on")
+    return size
 
 
-def trace_off(g) -> str:
+def trace_off(g, size: str) -> str:
+    """The trace; tracing as it was before trace_on (the guest may be
+    shared: tests/qemu/test_benchmarks_qemu_smoke.py)."""
     g.check_call(f"echo 0 > {TRACING}/tracing_on")
     out = g.check_call(f"cat {TRACING}/trace", timeout=600)
-    g.check_call(f"cd {TRACING} && echo 0 > events/enable && echo > trace")
+    g.check_call(f"cd {TRACING} && echo 0 > events/enable && echo > trace && "
+                 "echo 0 > events/irq/irq_handler_entry/filter && "
+                 "echo 0 > events/sched/sched_switch/filter && "
+                 f"echo local > trace_clock && echo {size} > buffer_size_kb && "
+                 "echo 1 > tracing_on")
     return out
 
 
@@ -182,7 +194,7 @@ def run_variant(g, tree, manifest, n, kind, irqwake_ko=None):
     if irqwake_ko:
         g.insmod(irqwake_ko)
     pm(g, "load", "--no-start", tree)
-    trace_on(g, "iec/events*" if kind == "plc" else "irqwake")
+    size = trace_on(g, "iec/events*" if kind == "plc" else "irqwake")
     pm(g, "start")
     deadline = time.monotonic() + 1800
     while values(g, "Pulse.lows")["Pulse.lows"] < n + 5:
@@ -210,7 +222,7 @@ def run_variant(g, tree, manifest, n, kind, irqwake_ko=None):
         own = (f"own: release (IRQ stamp) -> cycle start: n {cycles} min >= {lo} us, "
                f"median < {med} us, p99 < {p99} us, max {mx / 1000:.2f} us, "
                f"avg {sm / cycles / 1000:.2f} us; acks {acks} of {lows} STROBE-low writes")
-    trace = trace_off(g)
+    trace = trace_off(g, size)
     pm(g, "stop")
     if irqwake_ko:
         mark = g.log_mark()
@@ -233,10 +245,10 @@ def main(argv=None) -> int:
     ap.add_argument("--interrupts", type=int, default=1000)
     ap.add_argument("--period-us", type=int, default=1000)
     ap.add_argument("--no-icount", action="store_true", help="plain TCG (2 vCPUs)")
-    ap.add_argument("--smoke", action="store_true", help="50 interrupts (the test's size)")
+    ap.add_argument("--smoke", action="store_true", help="20 interrupts (the test's size)")
     a = ap.parse_args(argv)
     if a.smoke:
-        a.interrupts = 50
+        a.interrupts = 20
     work = Path(tempfile.mkdtemp(prefix="iec2kmod-irqlat-"))
     try:
         trees = {}
@@ -268,6 +280,8 @@ def main(argv=None) -> int:
                 trace, own = run_variant(g, tree, manifest, a.interrupts, kind,
                                          str(kt / "irqwake.ko") if kind == "kthread" else None)
                 results[kind] = (latencies(trace, 1000.0 / mhz), own)
+            # the drivers go (the guest may be shared)
+            g.check_call("rmmod comedi_parport kcomedilib comedi")
             g.check_kernel_log()
         mode = "icount (shift=0, 1 vCPU)" if not a.no_icount else "plain TCG"
         print(f"interrupt -> task start, QEMU {mode}, TSC {mhz} MHz, stimulus every "

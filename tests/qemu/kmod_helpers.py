@@ -86,3 +86,9 @@ def pm(guest, *args, check=0, timeout=300):
     assert check is None or r.exit_code == check, \
         f"plc-manager {' '.join(map(str, args))}: exit {r.exit_code}\n{r.output}"
     return r.exit_code, r.output
+
+
+def kernel_modules(guest) -> set:
+    """Every module loaded in the guest (/proc/modules)."""
+    return {ln.split()[0] for ln in guest.run("cat /proc/modules").output.splitlines()
+            if ln.strip()}

@@ -15,7 +15,9 @@ again only when a script leaves it dead), its ``close()`` gives it back
 (``plc-manager stop`` when the script left its configuration loaded; a
 guest that still has modules after that is closed, the next script gets a
 new one).  The scripts' work directories are made in
-the pool's guest work directory, which every pool guest mounts.  Running a
+the pool's guest work directory, which every pool guest mounts.  Every pool
+guest has a parallel port (its file is not the script's: guest.parallel), so
+irq_latency's icount guest is the one of jitter, scale and soak.  Running a
 script on its own (``python3 benchmarks/jitter.py --smoke``) boots its own
 guest as before."""
 
@@ -33,7 +35,7 @@ from pathlib import Path
 import pytest
 
 import iec2kmod.testing.vm as vm
-from kmod_helpers import loaded_modules
+from kmod_helpers import kernel_modules, loaded_modules
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from test_benchmarks_smoke import BENCH, NUM, QEMU_ONLY, ROOT, check_figures  # noqa: E402
@@ -96,8 +98,10 @@ def test_every_guest_benchmark_is_here():
 _REAL_GUEST = vm.Guest
 _KIND_DEFAULTS = {k: v.default for k, v in inspect.signature(_REAL_GUEST).parameters.items()
                   if v.default is not inspect.Parameter.empty}
-# what does not make two guests different for a benchmark
-_NOT_KIND = ("console_log", "boot_timeout")
+# what does not make two guests different for a benchmark: every pool guest
+# has a parallel port (LPT1, on a file of the pool's, guest.parallel), so a
+# script that asks for one (irq_latency) shares the guest of its kind
+_NOT_KIND = ("console_log", "boot_timeout", "parallel")
 
 
 class GuestPool:
@@ -107,6 +111,7 @@ class GuestPool:
     def __init__(self, workdir: Path):
         self.workdir = os.path.realpath(workdir)
         self.guests: dict = {}
+        self.modules: dict = {}       # id(guest): its kernel modules after the boot
         self.boots = 0
 
     @staticmethod
@@ -124,19 +129,23 @@ class GuestPool:
                 g.close()
             g = _REAL_GUEST(self.workdir, **{k: v for k, v in kw.items() if k not in _NOT_KIND},
                             console_log=os.path.join(self.workdir, f"console-{len(self.guests)}"
-                                                     f"-{self.boots}.log"))
+                                                     f"-{self.boots}.log"),
+                            parallel=os.path.join(self.workdir, f"lpt1-{self.boots}.bin"))
             g.start()
             self.boots += 1
             self.guests[key] = g
+            self.modules[id(g)] = kernel_modules(g)
         return g
 
     def give_back(self, g):
         """A script may end with its configuration loaded (on its own, the
         power-off ends it): stop it as plc-manager does; a guest that still
-        has modules then is closed (the next script boots a new one)."""
+        has modules of ours, or other modules than after its boot (a driver
+        the script loaded), then is closed (the next script boots a new
+        one)."""
         if loaded_modules(g):
             g.pyrun(script="plc-manager", argv=["stop"], timeout=300)
-        if loaded_modules(g):
+        if loaded_modules(g) or kernel_modules(g) != self.modules[id(g)]:
             key = next(k for k, v in self.guests.items() if v is g)
             del self.guests[key]
             g.close()

@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: MIT
 """QEMU tier, issue 26: located variables bound to a real comedi driver by
-an I/O map (iec2kmod/iomap.py, kmod_templates/kernel/iec_io*.c).  A private
-guest loads comedi, kcomedilib and comedi_test, which auto-configures
-/dev/comedi0 (8 AI, 8 AO channels, 16 bits).  comedi_test's AI channels,
+an I/O map (iec2kmod/iomap.py, kmod_templates/kernel/iec_io*.c).  The
+session guest loads comedi, kcomedilib and comedi_test for the test (the
+comedi fixture, tests/qemu/conftest.py, removes them after it);
+comedi_test auto-configures /dev/comedi0 (8 AI, 8 AO channels, 16 bits).  comedi_test's AI channels,
 read one sample at a time (INSN_READ), give back what was last written to
 the AO channel of the same number (its loopback; the waveforms come only
 through asynchronous commands), so the program's outputs come back as its
@@ -13,7 +14,7 @@ naming the device and leaves nothing loaded; the safe state at load (SAFE
 1234) and on stop (SAFE 1234, SAFE HOLD keeps the last value); the driver
 removed while the task runs faults the task ("I/O device error" naming the
 channel and the errno).  The guest's kernel log is checked for WARNING, BUG
-and Oops by the guest_factory fixture."""
+and Oops by the guest fixture."""
 
 from __future__ import annotations
 
@@ -30,7 +31,6 @@ pytestmark = pytest.mark.qemu
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 PROJECT = HERE / "projects" / "io_comedi"
-COMEDI = ("comedi", "kcomedilib", "comedi_test")
 
 # user space's view of a comedi channel: one INSN_READ through the ioctl
 READ_CHANNEL = r"""
@@ -79,7 +79,7 @@ def status_text(guest) -> str:
     return pm(guest, "status")[1]
 
 
-def test_comedi_test_channels_in_the_cycle(guest_factory, guest_workdir):
+def test_comedi_test_channels_in_the_cycle(guest, comedi, guest_workdir):
     tree = Path(guest_workdir) / "io_comedi"
     manifest = gen_and_build(PROJECT, tree)
     assert [(b["address"], b["device"], b["subdevice"], b["channel"], b["safe"])
@@ -87,7 +87,8 @@ def test_comedi_test_channels_in_the_cycle(guest_factory, guest_workdir):
         ("%IW0", "daq", 0, 0, None), ("%IW2", "daq", 0, 1, None),
         ("%QW0", "daq", 1, 0, 1234), ("%QW2", "daq", 1, 1, "HOLD")]
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
-    g = guest_factory(extra_modules=COMEDI)
+    g = guest
+    md = comedi("comedi_test")
     # comedi_test's loopback starts at half scale on every channel
     assert channels(g, "0.0", "0.1", "1.0", "1.1") == [32767] * 4
 
@@ -96,7 +97,7 @@ def test_comedi_test_channels_in_the_cycle(guest_factory, guest_workdir):
     rc, out = pm(g, "load", tree, check=1)
     assert "resource Bench: device daq (/dev/comedi0, comedi_test) is missing" in out, out
     assert loaded_modules(g) == []
-    g.check_call("insmod /lib/modules/comedi_test.ko")
+    g.check_call(f"insmod {md}/drivers/comedi_test.ko")
 
     # loaded, not started: the outputs are in their safe state
     pm(g, "load", "--no-start", tree)

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """QEMU tier, issue 26: plc-manager and bound I/O, on examples/tank_io (a PI
-tank level loop in volts on comedi_test, README "Real I/O").  A private
-guest loads comedi, kcomedilib and comedi_test (/dev/comedi0: 8 AI, 8 AO
+tank level loop in volts on comedi_test, README "Real I/O").  The session
+guest loads comedi, kcomedilib and comedi_test for the test (the comedi
+fixture, tests/qemu/conftest.py) (/dev/comedi0: 8 AI, 8 AO
 channels, 16 bits; an AI channel read one sample at a time gives back the
 AO channel of the same number).
 
@@ -20,7 +21,11 @@ AO channel of the same number).
   shows the device's sample; a forced analog output is what reaches the device
   (read back through comedi_test's AI loopback, from user space and by the
   program), while the variable and the device differ after a stop (the
-  safe value)."""
+  safe value);
+- the cycle's order seen from the device: after a stop AO 0 holds the
+  kernel's last written sample of %QD0, and the last AI 0 sample (the
+  loopback of AO 0 read in copy-in, before the programs ran) is the one the
+  cycle before wrote, one model step behind while the level moves."""
 
 from __future__ import annotations
 
@@ -33,7 +38,7 @@ import pytest
 
 from iec2kmod.iomap import phys_of, raw_of
 from kmod_helpers import gen_and_build, loaded_modules, pm
-from test_io_comedi import COMEDI, channels, values
+from test_io_comedi import channels, values
 
 pytestmark = pytest.mark.qemu
 HERE = Path(__file__).resolve().parent
@@ -71,14 +76,15 @@ def lreal_variant(dest: Path) -> Path:
     return dest
 
 
-def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
+def test_manager_and_real_scaling_on_comedi_test(guest, comedi, guest_workdir):
     tree = Path(guest_workdir) / "tank_io"
     manifest = gen_and_build(PROJECT, tree)
     tree_l = Path(guest_workdir) / "tank_io_lreal"
     gen_and_build(lreal_variant(Path(guest_workdir) / "src_lreal"), tree_l)
     res = next(m["name"] for m in manifest["modules"] if m["kind"] == "resource")
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
-    g = guest_factory(extra_modules=COMEDI)
+    g = guest
+    md = comedi("comedi_test")
     assert channels(g, "0.0", "0.1", "1.0", "1.1") == [32767] * 4
 
     # the device missing: the manager refuses before inserting anything
@@ -100,7 +106,7 @@ def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     for name in reversed(manifest["load_order"][:-1]):
         g.check_call(f"rmmod {name}")
     assert loaded_modules(g) == []
-    g.check_call("insmod /lib/modules/comedi_test.ko")
+    g.check_call(f"insmod {md}/drivers/comedi_test.ko")
 
     # loaded, not started: the valve (SAFE 0.0 V) is at its sample, the
     # level (SAFE HOLD) as it was; status shows what was written, no input yet
@@ -161,8 +167,14 @@ def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     assert loaded_modules(g) == []
 
     # an LREAL on range 1 (-5..5 V) of the same channel: the same sample,
-    # half the volts, in binary64
-    pm(g, "load", tree_l)
+    # half the volts, in binary64.  The valve's read-back forced to 0.25 V
+    # keeps the model's level moving (from 2 V toward 0.5 V, more than one
+    # sample a cycle for some 20 s), so the stop comes while AO 0 changes
+    # every cycle: the samples are not all k * 13107 (exact in binary32) and
+    # the cycle's input is seen one step behind its output
+    pm(g, "load", "--no-start", tree_l)
+    pm(g, "force", "%ID4", "0.25")
+    pm(g, "start")
     deadline = time.monotonic() + 60
     while io_status(g)["%IL0"]["last"] is None:
         assert time.monotonic() < deadline
@@ -171,11 +183,25 @@ def test_manager_and_real_scaling_on_comedi_test(guest_factory, guest_workdir):
     pm(g, "stop", "--keep-loaded")
     st = io_status(g)
     raw = st["%IL0"]["last"]
-    level = values(g, "%IL0")["Tank.level"]
+    v = values(g, "%IL0", "Tank.valve_fb", "Tank.level_tx")
+    level = v["Tank.level"]
+    assert v["Tank.valve_fb"] == 0.25, v
     assert level == phys_of(-5.0, 5.0, 16, raw, "LREAL"), (level, raw)
     if raw % 13107:     # (only k * 13107 give a value exact in binary32 too)
         assert level != phys_of(-5.0, 5.0, 16, raw, "REAL")     # not rounded to binary32
     assert abs(level - phys_of(-10.0, 10.0, 16, raw) / 2) < 1e-3
-    assert channels(g, "0.0") == [raw] == [st["%QD0"]["last"]]
+    # AO 0 holds the sample the last cycle wrote (SAFE HOLD), the kernel's
+    # last value of %QD0, raw_of TankModel's level_tx; that cycle's copy-in
+    # read AI 0 before its programs ran, so its input is the AO 0 of the
+    # cycle before: one step of the model behind (2 % of the level's
+    # distance to 0.5 V: tens of samples here), not the same sample
+    out = st["%QD0"]["last"]
+    assert channels(g, "0.0", "1.0") == [out, out], (out, raw, v)
+    assert out == raw_of(-10.0, 10.0, 16, v["Tank.level_tx"]), (out, v)
+    prev = phys_of(-10.0, 10.0, 16, raw)        # the model's level a cycle ago, +-1/2 sample
+    assert abs(v["Tank.level_tx"] - (prev + 0.04 * 0.25 - 0.02 * prev)) < 5e-4, (prev, v)
+    if abs(0.01 - 0.02 * prev) > 3 * 20 / 65535:    # moving (the first 17 s or so)
+        assert out != raw, (out, raw, v)
+    pm(g, "unforce", "--all")
     pm(g, "stop")
     assert loaded_modules(g) == []

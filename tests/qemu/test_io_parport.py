@@ -1,8 +1,10 @@
 # SPDX-License-Identifier: MIT
 """QEMU tier, issue 26: comedi_parport on QEMU's emulated parallel port.
 
-The guest has LPT1 (I/O base 0x378, IRQ 7) on a file of the host
-(Guest(parallel=...)); comedi is loaded with one legacy minor and
+The session guest has LPT1 (I/O base 0x378, IRQ 7) on a file of the host
+(Guest(parallel=...), guest.parallel); comedi is loaded for the test (the
+comedi fixture, tests/qemu/conftest.py, removes it after) with one legacy
+minor and
 comedi_parport attached to /dev/comedi0 with the COMEDI_DEVCONFIG ioctl
 (tests/qemu/comedi_legacy.py: what comedi_config does), its I/O base only.
 Project projects/io_parport: resource Lights drives a traffic light on the
@@ -54,34 +56,32 @@ def irq7(guest) -> int:
     return 0
 
 
-def parport_guest(guest_factory, lpt: Path):
-    lpt.write_bytes(b"")
-    g = guest_factory(parallel=str(lpt))
-    md = "/host" + g.kernel.moddir + "/drivers/comedi"
-    g.check_call(f"insmod {md}/comedi.ko comedi_num_legacy_minors=1 && "
-                 f"insmod {md}/kcomedilib/kcomedilib.ko && "
-                 f"insmod {md}/drivers/comedi_parport.ko")
+def parport_setup(guest, comedi):
+    """comedi_parport attached to the session guest's LPT1 at /dev/comedi0
+    (the comedi fixture removes the modules after the test)."""
+    comedi("comedi_parport", legacy_minors=1)
     legacy = LEGACY.read_text()
-    g.pyrun(code=legacy, argv=["config", "/dev/comedi0", "comedi_parport", "0x378"],
-            check=True)
+    guest.pyrun(code=legacy, argv=["config", "/dev/comedi0", "comedi_parport", "0x378"],
+                check=True)
     # INIT and SELECT (control lines 2, 3) high: QEMU's port prints then
-    r = g.pyrun(code=legacy, argv=["bits", "/dev/comedi0", "2", "0xc", "0xc"], check=True)
+    r = guest.pyrun(code=legacy, argv=["bits", "/dev/comedi0", "2", "0xc", "0xc"], check=True)
     assert r.output.split() == ["12"], r.output
-    return g
 
 
-def test_traffic_light_bytes_and_ack_interrupts(guest_factory, guest_workdir):
+def test_traffic_light_bytes_and_ack_interrupts(guest, comedi, guest_workdir):
     tree = Path(guest_workdir) / "io_parport"
     manifest = gen_and_build(PROJECT, tree)
     assert manifest["io"]["Events"]["interrupts"] == [
         {"address": "%IX9.0", "device": "lpt", "source": "ACK", "irq": 7, "tasks": ["onack"]}]
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
-    lpt = Path(guest_workdir) / "lpt1.bin"
-    g = parport_guest(guest_factory, lpt)
+    g = guest
+    lpt = Path(g.parallel)
+    start = lpt.stat().st_size        # the port's bytes so far (a test before)
+    parport_setup(g, comedi)
 
     pm(g, "load", "--no-start", tree)
     assert re.search(r"^\s*7:.*iec2kmod$", g.run("cat /proc/interrupts").output, re.M)
-    assert lpt.read_bytes() == b""
+    assert lpt.read_bytes()[start:] == b""
     n0 = irq7(g)
     pm(g, "start")
     deadline = time.monotonic() + 60
@@ -91,7 +91,7 @@ def test_traffic_light_bytes_and_ack_interrupts(guest_factory, guest_workdir):
     pm(g, "stop", "--keep-loaded", "--resource", "Lights")
     v = values(g, "Lights.bytes", "Lights.lows")
     # outside the guest: one byte per rising STROBE, the light's steps in order
-    data = lpt.read_bytes()
+    data = lpt.read_bytes()[start:]
     assert len(data) == v["Lights.bytes"], (len(data), v)
     assert list(data) == [STEPS[i % 10] for i in range(len(data))], data.hex()
     # every STROBE-low write raised one interrupt, which ran onack once

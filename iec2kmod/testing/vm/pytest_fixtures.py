@@ -33,6 +33,10 @@ Use them from a conftest.py::
   ``pytest.raises(KernelLogError): guest.check_kernel_log()`` or
   ``guest.check_kernel_log(allow=[...])``.  ``guest.baseline`` is the log
   timestamp at the start of the test (``guest.dmesg(guest.baseline)``).
+  The session guest has a parallel port (``Guest(parallel=...)``: LPT1 at
+  0x378, IRQ 7) on a host file, ``guest.parallel``, for the tests of bound
+  I/O (tests/qemu/test_io_parport.py); no driver claims it at boot, and a
+  test that writes to it reads the file from the size it had before.
 * ``guest_session``: the same guest without the per-test log check.
 * ``guest_workdir``: the read-write directory shared with the guest (same
   absolute path inside the guest); ``guest_tmp_path``: a fresh subdirectory of
@@ -149,7 +153,9 @@ def _live_guest() -> Guest:
     if g is None or not g.alive:
         if g is not None:
             g.kill()
-        g = _boot(_STATE["workdir"], _STATE["logdir"], **_env_options())
+        opts = {"parallel": os.path.join(_STATE["logdir"], f"lpt1-{_STATE['boots'] + 1}.bin"),
+                **_env_options()}
+        g = _boot(_STATE["workdir"], _STATE["logdir"], **opts)
         _STATE["guest"] = g
     return g
 
