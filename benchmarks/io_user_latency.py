@@ -94,7 +94,10 @@ def main() -> None:
     ap.add_argument("--intervals", default="20,10,5", help="task intervals in ms")
     ap.add_argument("--cycles", type=int, default=500)
     ap.add_argument("--clock", choices=("tcg", "icount"), default="tcg")
+    ap.add_argument("--smoke", action="store_true", help="one interval (20 ms), 60 cycles")
     a = ap.parse_args()
+    if a.smoke:
+        a.intervals, a.cycles = "20", 60
     from iec2kmod.testing.vm import Guest
     work = Path(tempfile.mkdtemp(prefix="io_user_latency."))
     intervals = [int(x) for x in a.intervals.split(",")]

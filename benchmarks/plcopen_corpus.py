@@ -192,12 +192,28 @@ def beremiz_st(beremiz: Path, proj: Path, out: Path):
     return out, None
 
 
-def compare_generator(beremiz: Path, proj: Path, cycles: int, workdir: Path) -> str:
-    """'same', or what differs between our translation and Beremiz's."""
+def exported_st(proj: Path, out: Path):
+    """Our own `export --st` of proj, or (None, why): what stands in for
+    Beremiz's generator in plcopen_vs_beremiz's smoke run, where no Beremiz
+    checkout exists (the comparison is then the round trip XML -> ST)."""
+    from iec2kmod.plcopen.reader import to_text
+    text, items = to_text(str(proj))
+    errors = [d for d in items if d.severity == "error"]
+    if errors:
+        return None, errors[0].message
+    out.write_text(text, encoding="utf-8")
+    return out, ""
+
+
+def compare_generator(beremiz, proj: Path, cycles: int, workdir: Path) -> str:
+    """'same', or what differs between our translation and Beremiz's
+    (beremiz: a checkout, or a function (proj, out) -> (ST path | None, why)
+    that writes the other ST)."""
     from iec2kmod import interp
     from iec2kmod.parse import frontend
     from iec2kmod.codegen.plan import build_plan
-    st, why = beremiz_st(beremiz, proj, workdir / (proj.parent.name + ".st"))
+    out = workdir / (proj.parent.name + ".st")
+    st, why = beremiz(proj, out) if callable(beremiz) else beremiz_st(beremiz, proj, out)
     if st is None:
         return f"Beremiz's generator failed: {why}"
     text = st.read_text(encoding="utf-8")

@@ -4,6 +4,12 @@ XML-to-ST generator (issue 28).
 
     python3 benchmarks/plcopen_vs_beremiz.py --beremiz CHECKOUT [PATH...]
                                              [--cycles N] [--list]
+    python3 benchmarks/plcopen_vs_beremiz.py --smoke [--beremiz CHECKOUT]
+
+``--smoke``: this repository's tests/plcopen/cases and projects, 3 cycles.
+Without a checkout (CI has none: Beremiz is not a package) our own
+``export --st`` of each project stands in for Beremiz's generator, so the
+run checks the comparison itself and the XML -> ST round trip, and says so.
 
 CHECKOUT is a full Beremiz checkout the user fetched (GPL: nothing of it is
 copied here).  Its PLCControler/PLCGenerator run headless in a subprocess
@@ -42,20 +48,34 @@ import plcopen_corpus as corpus  # noqa: E402
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("paths", nargs="*", type=Path)
-    ap.add_argument("--beremiz", type=Path, required=True,
+    ap.add_argument("--beremiz", type=Path,
                     help="a full Beremiz checkout (holds PLCGenerator.py)")
     ap.add_argument("--cycles", type=int, default=20)
     ap.add_argument("--list", action="store_true", help="print our first error when refused")
+    ap.add_argument("--smoke", action="store_true",
+                    help="tests/plcopen's cases and projects, 3 cycles; without --beremiz our "
+                         "own export --st stands in for Beremiz's generator")
     args = ap.parse_args(argv)
-    bz = args.beremiz.resolve()
-    if not (bz / "PLCGenerator.py").is_file() or not (bz / "fake_wx.py").is_file():
-        ap.error(f"{bz}: not a Beremiz checkout (no PLCGenerator.py / fake_wx.py)")
+    if args.smoke:
+        args.cycles = 3
+        here = ROOT.parent / "tests" / "plcopen"
+        args.paths = args.paths or sorted((here / "cases").glob("*.xml")) + [here / "projects"]
+    if args.beremiz is None and not args.smoke:
+        ap.error("--beremiz CHECKOUT is required (or --smoke)")
+    if args.beremiz is None:
+        bz = corpus.exported_st
+        print("smoke: no Beremiz checkout; our export --st stands in for Beremiz's generator")
+    else:
+        bz = args.beremiz.resolve()
+        if not (bz / "PLCGenerator.py").is_file() or not (bz / "fake_wx.py").is_file():
+            ap.error(f"{bz}: not a Beremiz checkout (no PLCGenerator.py / fake_wx.py)")
     from iec2kmod.parse import frontend
     counts = Counter()
     for root in args.paths or [bz]:
         for proj in corpus.projects(root):
             t0 = time.perf_counter()
-            rel = proj.relative_to(root) if proj.is_relative_to(root) else proj
+            rel = proj.relative_to(root) if proj.is_relative_to(root) and proj != root \
+                else Path(proj.name)
             res = frontend.run([str(proj)], use_cache=False)
             if res.diags.errors:
                 verdict = "ours refused: " + corpus.cause(res.diags.errors[0].message)
@@ -74,6 +94,22 @@ def main(argv=None) -> int:
             if args.list and detail:
                 print(f"    {detail}")
     print("\n" + ", ".join(f"{n} {k}" for k, n in sorted(counts.items(), key=lambda kv: -kv[1])))
+    if args.smoke and args.beremiz is None:
+        # the stand-in is our own ST: anything but agreement is a defect, and
+        # the comparison must see a planted difference (Idle := NOT Motor
+        # made Idle := Motor in ld_rungs.xml's ST)
+        def planted(proj, out):
+            st, why = corpus.exported_st(proj, out)
+            text = st.read_text(encoding="utf-8") if st else ""
+            if "Idle := NOT (Motor);" not in text:
+                return None, "the planted statement is not in the exported ST"
+            st.write_text(text.replace("Idle := NOT (Motor);", "Idle := (Motor);"))
+            return st, ""
+        case = ROOT.parent / "tests" / "plcopen" / "cases" / "ld_rungs.xml"
+        with tempfile.TemporaryDirectory() as tmp:
+            v = corpus.compare_generator(planted, case, args.cycles, Path(tmp))
+        print(f"planted difference in ld_rungs.xml: {v}")
+        return 1 if set(counts) - {"agree"} or not v.startswith("differ") else 0
     return 0
 
 

@@ -82,6 +82,9 @@ GUEST = {
                    r"+\(n=\d+\)|no sample \(n=0\))$",
                    r"^task t10: alone \d+ cycles, \d+ overruns; with the server \d+ cycles, "
                    r"\d+ overruns$"],
+    "io_user_latency": [r"^user I/O loop through the Python reference daemon, 60 cycles per "
+                        r"interval, guest clock: tcg$",
+                        r"^ +20ms +\d+/ *[\d.]+/ *\d+/ *\d+ +[\d.]+% +\d+ +[\d.]+/ *[\d.]+/"],
     "plcopen_kernel": [r"^ld_rungs\.xml +same: \d+ variables after 100 ms",
                        r"^kernel log clean$",
                        r"^1 of 1 IEC-only projects ran in the kernel as simulated "],
