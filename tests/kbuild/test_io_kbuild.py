@@ -1,7 +1,9 @@
 """kbuild tier, issue 26: a resource module with an I/O map (the comedi
 provider, kmod_templates/kernel/iec_io*.c) builds against the 6.1
 PREEMPT_RT headers with W=1 and sparse, zero warnings, and links against
-kcomedilib (the project the QEMU test tests/qemu/test_io_comedi.py runs)."""
+kcomedilib (the project the QEMU test tests/qemu/test_io_comedi.py runs);
+the user-space provider alone needs no comedi, and beside comedi in one
+resource (tests/qemu/projects/io_user) builds clean too."""
 
 from __future__ import annotations
 
@@ -67,11 +69,24 @@ def test_the_irq_benchmark_module_builds_with_zero_warnings(tmp_path):
 USER_PROJECT = ROOT / "tests" / "qemu" / "projects" / "io_user"
 
 
+def user_only(dest: Path) -> Path:
+    """projects/io_user without its comedi device (DEVICE daq and its two
+    bindings): %IW12 and %QW12 stay located, unbound."""
+    dest.mkdir(parents=True)
+    shutil.copy(USER_PROJECT / "loop.st", dest)
+    lines = (USER_PROJECT / "loop.iomap").read_text().splitlines()
+    kept = [ln for ln in lines if "daq" not in ln]
+    assert len(lines) - len(kept) == 3, lines      # DEVICE daq, %IW12, %QW12
+    (dest / "loop.iomap").write_text("\n".join(kept) + "\n")
+    return dest
+
+
 @pytest.mark.kbuild
 def test_a_user_io_resource_builds_with_zero_warnings(tmp_path):
     """The user-space provider (iec_io_user.c: misc device, mmap of
-    vmalloc_user memory, poll) under W=1 and sparse; it needs no comedi."""
-    p = _cli("gen", str(USER_PROJECT), "-o", str(tmp_path / "t"))
+    vmalloc_user memory, poll) under W=1 and sparse; alone (io_user without
+    its comedi device) it needs no comedi."""
+    p = _cli("gen", str(user_only(tmp_path / "src")), "-o", str(tmp_path / "t"))
     assert p.returncode == 0, p.stderr
     main = (tmp_path / "t" / "iec_rig_r_bench" / "main.c").read_text()
     assert '#include "iec_io_user.c"' in main and "iec_io_comedi.c" not in main
@@ -83,6 +98,25 @@ def test_a_user_io_resource_builds_with_zero_warnings(tmp_path):
     info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
                           text=True, timeout=60).stdout
     assert "kcomedilib" not in info, info
+
+
+@pytest.mark.kbuild
+def test_a_user_and_comedi_resource_builds_with_zero_warnings(tmp_path):
+    """projects/io_user as tests/qemu/test_io_user.py runs it: one task
+    bound to the user provider and to comedi, both providers in one
+    module, zero warnings with W=1 and sparse, linked against kcomedilib."""
+    p = _cli("gen", str(USER_PROJECT), "-o", str(tmp_path / "t"))
+    assert p.returncode == 0, p.stderr
+    main = (tmp_path / "t" / "iec_rig_r_bench" / "main.c").read_text()
+    assert '#include "iec_io_user.c"' in main and '#include "iec_io_comedi.c"' in main
+    p = _cli("build", str(tmp_path / "t"), "--sparse")
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "sparse: 0 warnings" in p.stdout, p.stdout
+    assert "warning:" not in p.stdout + p.stderr, (p.stdout + p.stderr)[-3000:]
+    ko = tmp_path / "t" / "iec_rig_r_bench" / "iec_rig_r_bench.ko"
+    info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
+                          text=True, timeout=60).stdout
+    assert "kcomedilib" in info.split("\n")[0].split(","), info
 
 
 @pytest.mark.kbuild

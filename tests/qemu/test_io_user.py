@@ -7,7 +7,16 @@ one and sig_out (%QW8, an INT) the echo of sig_in (%IW8) minus one; the
 daemon copies each published cycle's outputs back to the inputs.  When the
 daemon answers a cycle before the next one starts, count advances by one
 (the program counts those cycles in instep): count == instep and sig_out ==
--count exactly, whatever the daemon missed.  Also: the device at load in its
+-count exactly, whatever the daemon missed.  The same task is bound to
+comedi too (issue 26's "bound to comedi AND to the user-space provider"):
+the comedi fixture loads comedi_test, whose AI 2, read one sample at a time,
+gives back what AO 2 holds; the program writes its cycle count n to AO 2
+(%QW12) and reads AI 2 (%IW12), and sends that comedi input to the daemon
+in output slot 2 (%QD12).  Seen outside the program: every cycle's record
+in the daemon's trace carries the comedi input of that cycle, which is the
+count the cycle before wrote (cycle - 1); user space reads AO 2 and AI 2
+through /dev/comedi0 while the task runs and after the stop (AO 2 SAFE
+HOLD: the last cycle's n).  Also: the device at load in its
 safe state; safe state on stop (SAFE -7, SAFE HOLD) seen by the daemon;
 the resource cannot be removed while the daemon holds the device (rmmod
 and plc-manager stop fail, naming the holder); the daemon killed while the
@@ -25,6 +34,7 @@ from pathlib import Path
 import pytest
 
 from kmod_helpers import gen_and_build, loaded_modules, pm
+from test_io_comedi import channels
 
 pytestmark = pytest.mark.qemu
 HERE = Path(__file__).resolve().parent
@@ -84,15 +94,18 @@ def wait_for(what, check, timeout=30.0, every=0.2):
         time.sleep(every)
 
 
-def test_a_daemon_closes_the_loop(guest, guest_workdir):
+def test_a_daemon_closes_the_loop(guest, comedi, guest_workdir):
     g = guest
     tree = Path(guest_workdir) / "io_user"
     manifest = gen_and_build(PROJECT, tree)
     assert manifest["io"]["Bench"]["devices"] == [
         {"name": "fb", "provider": "user", "board": None, "minor": 0, "node": NODE,
-         "inputs": 2, "outputs": 2, "stale_ms": 400},
+         "inputs": 2, "outputs": 3, "stale_ms": 400},
         {"name": "mon", "provider": "user", "board": None, "minor": 0, "node": MON,
-         "inputs": 1, "outputs": 0, "stale_ms": 0}]
+         "inputs": 1, "outputs": 0, "stale_ms": 0},
+        {"name": "daq", "provider": "comedi", "board": "comedi_test", "minor": 0}]
+    comedi("comedi_test")
+    assert channels(g, "1.2", "0.2") == [32767, 32767]     # comedi_test at its load
     compileall.compile_dir(str(ROOT / "manager"), quiet=1)
     log = Path(guest_workdir) / "iodaemon.log"
     mon_log = Path(guest_workdir) / "iodaemon-mon.log"
@@ -101,12 +114,15 @@ def test_a_daemon_closes_the_loop(guest, guest_workdir):
     pm(g, "load", "--no-start", tree)
     r = g.pyrun(script="plc-manager", argv=["io-daemon", NODE, "--show"], timeout=60)
     assert r.exit_code == 0, r.output
-    assert "2 inputs, 2 outputs, interval 20 ms, stale 400 ms" in r.output, r.output
+    assert "2 inputs, 3 outputs, interval 20 ms, stale 400 ms" in r.output, r.output
     assert [ln.split() for ln in r.output.splitlines()[1:]] == [
         ["in", "0", "%ID0", "DINT"], ["in", "1", "%IW8", "INT"],
-        ["out", "0", "%QD0", "DINT"], ["out", "1", "%QW8", "INT"]], r.output
+        ["out", "0", "%QD0", "DINT"], ["out", "1", "%QW8", "INT"],
+        ["out", "2", "%QD12", "UDINT"]], r.output
     p = peek(g)
-    assert (p["flags"], p["status"], p["values"]) == (1, 1, {"%QD0": 0, "%QW8": -7}), p
+    assert (p["flags"], p["status"], p["values"]) == (
+        1, 1, {"%QD0": 0, "%QW8": -7, "%QD12": 0}), p
+    assert channels(g, "1.2", "0.2") == [32767, 32767]     # AO 2 SAFE HOLD: untouched
 
     # the daemon, then the task
     rules = ["--map", "%ID0=%QD0", "--map", "%IW8=%QW8"]
@@ -125,11 +141,28 @@ def test_a_daemon_closes_the_loop(guest, guest_workdir):
     r = g.pyrun(script="plc-manager", argv=["io-daemon", NODE, "--cycles", "1"], timeout=60)
     assert r.exit_code == 2 and "another daemon has it open read-write" in r.output, r.output
     pm(g, "start")
+    # comedi while the task runs: AO 2 and AI 2, read from user space, hold a
+    # count the task wrote between two reads of n
+    n0 = wait_for("30 cycles", lambda: (lambda n: n if n >= 30 else None)(
+        values(g, "Bench.n")["Bench.n"]), timeout=60)
+    ao, ai = channels(g, "1.2", "0.2")      # AI 2 read after AO 2: as new or newer
+    n1 = values(g, "Bench.n")["Bench.n"]
+    assert n0 - 1 <= ao <= ai <= n1, (n0, ao, ai, n1)
     wait_for("100 cycles", lambda: values(g, "Bench.n")["Bench.n"] >= 100, timeout=60)
     pm(g, "stop", "--keep-loaded")
     v = values(g, "Bench.n", "Bench.count", "Bench.instep", "Bench.behind", "Bench.sig_out",
                "Bench.ext")
     print("loop:", v)
+    # comedi's loopback in the program: each cycle read back on AI 2 what
+    # the cycle before wrote to AO 2 (the first, comedi_test's 32767, which
+    # aout starts with); after the stop AO 2 holds the last n (SAFE HOLD)
+    c = values(g, "Bench.n", "Bench.ain", "Bench.aout", "Bench.ain_out", "Bench.lb_ok",
+               "Bench.lb_bad")
+    print("comedi:", c)
+    assert (c["Bench.lb_ok"], c["Bench.lb_bad"]) == (c["Bench.n"], 0), c
+    assert c["Bench.aout"] == c["Bench.n"] == v["Bench.n"], (c, v)
+    assert c["Bench.ain"] == c["Bench.ain_out"] == c["Bench.n"] - 1, c
+    assert channels(g, "1.2", "0.2") == [c["Bench.n"], c["Bench.n"]], c
     assert v.pop("Bench.ext") == -1234, v           # through the input-only device
     mon_recs = [json.loads(ln) for ln in mon_log.read_text().splitlines()
                 if ln.startswith("{")]
@@ -156,10 +189,15 @@ def test_a_daemon_closes_the_loop(guest, guest_workdir):
         assert b["cycle"] > a["cycle"], (a, b)
         assert 0 <= b["values"]["%QD0"] - a["values"]["%QD0"] <= b["cycle"] - a["cycle"], (a, b)
         assert b["values"]["%QW8"] == -b["values"]["%QD0"], b
+    # the comedi input of each cycle the daemon saw: the count the cycle
+    # before wrote to AO 2 (the task's cycles are the program's n)
+    assert all(x["values"]["%QD12"] == x["cycle"] - 1 for x in run if x["cycle"] > 1), \
+        [x for x in run if x["values"]["%QD12"] != x["cycle"] - 1][:5]
+    assert run[-1]["cycle"] <= v["Bench.n"], (run[-1], v)
     # the stop's safe state: SAFE -7; SAFE HOLD keeps the last count
     last = recs[-1]
-    assert last["flags"] == 1 and last["values"] == {"%QD0": v["Bench.count"], "%QW8": -7}, \
-        (last, v)
+    assert last["flags"] == 1 and last["values"] == {
+        "%QD0": v["Bench.count"], "%QW8": -7, "%QD12": c["Bench.ain_out"]}, (last, v, c)
 
     # the daemon holds the device: the resource cannot go
     r = g.run("rmmod iec_rig_r_bench")
