@@ -94,7 +94,19 @@ def wait_for(what, check, timeout=30.0, every=0.2):
         time.sleep(every)
 
 
-def test_a_daemon_closes_the_loop(guest, comedi, guest_workdir):
+@pytest.fixture
+def daemons(guest):
+    """The pids of the test's daemons in the guest: those still listed at
+    the end (the test failed before it killed them) are killed, before the
+    comedi fixture stops the configuration they would hold."""
+    pids: list = []
+    yield pids
+    for pid in pids:
+        guest.run(f"kill -9 {pid}; for i in $(seq 50); do kill -0 {pid} 2>/dev/null "
+                  "|| break; sleep 0.1; done")
+
+
+def test_a_daemon_closes_the_loop(guest, comedi, daemons, guest_workdir):
     g = guest
     tree = Path(guest_workdir) / "io_user"
     manifest = gen_and_build(PROJECT, tree)
@@ -129,12 +141,14 @@ def test_a_daemon_closes_the_loop(guest, comedi, guest_workdir):
     r = g.pyrun(code=DAEMON, argv=[str(log), NODE, *rules, "--trace"], timeout=60)
     assert r.exit_code == 0, r.output
     daemon = r.output.strip()
+    daemons.append(daemon)
     wait_for("the daemon", lambda: log.exists() and "answering each cycle" in log.read_text(),
              timeout=60)
     r = g.pyrun(code=DAEMON, argv=[str(mon_log), MON, "--map", "%IW10=-1234", "--trace"],
                 timeout=60)
     assert r.exit_code == 0, r.output
     mon = r.output.strip()
+    daemons.append(mon)
     wait_for("the mon daemon", lambda: mon_log.exists() and
              "answering each cycle" in mon_log.read_text(), timeout=60)
     # a second read-write opener is refused: the inputs have one writer
@@ -214,6 +228,7 @@ def test_a_daemon_closes_the_loop(guest, comedi, guest_workdir):
     n0 = values(g, "Bench.n")["Bench.n"]
     wait_for("running", lambda: values(g, "Bench.n")["Bench.n"] >= n0 + 20, timeout=60)
     g.run(f"kill -9 {daemon} {mon}")
+    daemons.clear()
     text = wait_for("the stale fault", lambda: (lambda t: t if "stopped on a fault" in t
                                                 else None)(pm(g, "status")[1]), timeout=30)
     assert "bench.fast: stopped on a fault: I/O device error in io fb: inputs stale " \
