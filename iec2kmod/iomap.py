@@ -644,17 +644,8 @@ class _MapChecker:
                 raise _Error(range_tok[2], "RANGE applies to analog channels only")
             scale = "bit"
         if safe_tok is not None:
-            if is_input:
-                raise _Error(safe_tok[2], "SAFE applies to outputs: an input has no safe state")
-            if scale == "bit":
-                if safe not in ("HOLD", "TRUE", "FALSE", 0, 1):
-                    raise _Error(safe_tok[2], f"safe value {safe_tok[1]} of a BOOL output: "
-                                              "TRUE, FALSE or HOLD")
-                safe = {"TRUE": 1, "FALSE": 0}.get(safe, safe)
-            elif safe != "HOLD":
-                if isinstance(safe, str):
-                    raise _Error(safe_tok[2], f"safe value {safe_tok[1]} of an analog output: "
-                                              "a number or HOLD")
+            safe = _safe_value(safe_tok, safe, is_input, scale == "bit", "an analog output")
+            if scale != "bit" and safe != "HOLD":
                 if scale == "raw" and (not isinstance(safe, int) or
                                        not 0 <= safe <= (1 << sub.bits) - 1):
                     raise _Error(safe_tok[2], f"safe value {safe_tok[1]} does not fit: "
@@ -668,7 +659,6 @@ class _MapChecker:
         self.bound[addr] = place
         resource.bindings.append(Binding(addr, dev.name, si, ch, sub.kind, tname, scale,
                                          sub.bits, rng, lo, hi, safe, place))
-
 
     def user_binding(self, src, n, resource, dev, addr, acol, target, tcol, vtype,
                      range_tok, safe_tok, safe, place):
@@ -694,22 +684,12 @@ class _MapChecker:
         if range_tok is not None:
             raise _Error(range_tok[2], "RANGE applies to analog comedi channels only")
         if safe_tok is not None:
-            if is_input:
-                raise _Error(safe_tok[2], "SAFE applies to outputs: an input has no safe state")
-            if tname == "BOOL":
-                if safe not in ("HOLD", "TRUE", "FALSE", 0, 1):
-                    raise _Error(safe_tok[2], f"safe value {safe_tok[1]} of a BOOL output: "
-                                              "TRUE, FALSE or HOLD")
-                safe = {"TRUE": 1, "FALSE": 0}.get(safe, safe)
-            elif safe != "HOLD":
-                if isinstance(safe, str):
-                    raise _Error(safe_tok[2], f"safe value {safe_tok[1]} of a {tname} output: "
-                                              "a number or HOLD")
-                if tname != "REAL":
-                    lo, hi = USER_RANGES[tname]
-                    if not isinstance(safe, int) or not lo <= safe <= hi:
-                        raise _Error(safe_tok[2], f"safe value {safe_tok[1]} does not fit "
-                                                  f"{tname} ({lo}..{hi})")
+            safe = _safe_value(safe_tok, safe, is_input, tname == "BOOL", f"a {tname} output")
+            if tname not in ("BOOL", "REAL") and safe != "HOLD":
+                lo, hi = USER_RANGES[tname]
+                if not isinstance(safe, int) or not lo <= safe <= hi:
+                    raise _Error(safe_tok[2], f"safe value {safe_tok[1]} does not fit "
+                                              f"{tname} ({lo}..{hi})")
         elif not is_input:
             safe = 0
         if not is_input:
@@ -721,6 +701,23 @@ class _MapChecker:
         self.bound[addr] = place
         resource.bindings.append(Binding(addr, dev.name, None, slot, "USER", tname, "word",
                                          32, 0, 0.0, 0.0, safe, place))
+
+def _safe_value(safe_tok, safe, is_input: bool, is_bool: bool, what: str):
+    """What every provider's SAFE shares: an input has none; a BOOL output's
+    is TRUE, FALSE (1, 0) or HOLD; another output's a number or HOLD (what:
+    the output, for the message).  Returns the value, 1/0 for TRUE/FALSE;
+    the range of a number is the provider's to check."""
+    if is_input:
+        raise _Error(safe_tok[2], "SAFE applies to outputs: an input has no safe state")
+    if is_bool:
+        if safe not in ("HOLD", "TRUE", "FALSE", 0, 1):
+            raise _Error(safe_tok[2], f"safe value {safe_tok[1]} of a BOOL output: "
+                                      "TRUE, FALSE or HOLD")
+        return {"TRUE": 1, "FALSE": 0}.get(safe, safe)
+    if safe != "HOLD" and isinstance(safe, str):
+        raise _Error(safe_tok[2], f"safe value {safe_tok[1]} of {what}: a number or HOLD")
+    return safe
+
 
 def _real(x: float, type_name: str) -> float:
     """x as the variable holds it: a REAL is the nearest binary32."""
