@@ -21,11 +21,23 @@ HEAD = "RESOURCE Station\nDEVICE daq : comedi comedi_test MINOR 0\n" \
        "DEVICE pp : comedi comedi_parport MINOR 1\n"
 
 
-def diags_of(tmp_path, text):
+def diags_of(tmp_path, text, source=PLANT):
+    """Check *source* with *text* as its t.iomap: (result, the errors)."""
     m = tmp_path / "t.iomap"
     m.write_text(text)
-    res = frontend.run([str(PLANT), str(m)], use_cache=False)
+    res = frontend.run([str(source), str(m)], use_cache=False)
     return res, [d for d in res.diags.items if d.severity == "error"]
+
+
+def assert_one_error_at(tmp_path, res, errors, message, line, col):
+    """The map was refused with one error, holding *message*, at t.iomap
+    line:col (test_iomap_user and test_iomap_irq use it too)."""
+    assert not res.ok
+    assert len(errors) == 1, [d.format() for d in errors]
+    d = errors[0]
+    assert message in d.message, d.format()
+    assert (d.path, d.line, d.col) == (str(tmp_path / "t.iomap"), line, col), d.format()
+    return d
 
 
 def test_the_valid_map_binds_every_kind():
@@ -101,11 +113,7 @@ ERRORS = [
                          ids=[e[1][:40] for e in ERRORS])
 def test_each_error_is_located(tmp_path, text, message, line, col):
     res, errors = diags_of(tmp_path, HEAD + text)
-    assert not res.ok
-    assert len(errors) == 1, [d.format() for d in errors]
-    d = errors[0]
-    assert message in d.message, d.format()
-    assert (d.path, d.line, d.col) == (str(tmp_path / "t.iomap"), line, col), d.format()
+    d = assert_one_error_at(tmp_path, res, errors, message, line, col)
     assert d.source_line == (HEAD + text).split("\n")[line - 1]
 
 

@@ -5,7 +5,7 @@ file:line:col.  Project: tests/unit/iomap/irq.st."""
 
 import pytest
 
-from iec2kmod.parse import frontend
+from test_iomap import assert_one_error_at, diags_of
 
 pytestmark = pytest.mark.unit
 PROJECT = __import__("pathlib").Path(__file__).resolve().parent / "iomap" / "irq.st"
@@ -13,10 +13,7 @@ HEAD = "DEVICE lpt : comedi comedi_parport MINOR 0\nDEVICE daq : comedi comedi_t
 
 
 def run(tmp_path, text):
-    m = tmp_path / "t.iomap"
-    m.write_text(text)
-    res = frontend.run([str(PROJECT), str(m)], use_cache=False)
-    return res, [d for d in res.diags.items if d.severity == "error"]
+    return diags_of(tmp_path, text, PROJECT)
 
 
 def test_an_interrupt_wakes_the_tasks_of_its_single_variable(tmp_path):
@@ -64,8 +61,4 @@ ERRORS = [
 @pytest.mark.parametrize("text,message,line,col", ERRORS, ids=[e[1][:40] for e in ERRORS])
 def test_each_error_is_located(tmp_path, text, message, line, col):
     res, errors = run(tmp_path, HEAD + text)
-    assert not res.ok
-    assert len(errors) == 1, [d.format() for d in errors]
-    d = errors[0]
-    assert message in d.message, d.format()
-    assert (d.path, d.line, d.col) == (str(tmp_path / "t.iomap"), line, col), d.format()
+    assert_one_error_at(tmp_path, res, errors, message, line, col)

@@ -9,19 +9,13 @@ from pathlib import Path
 
 import pytest
 
-from iec2kmod.parse import frontend
+from test_iomap import assert_one_error_at, diags_of
 
 pytestmark = pytest.mark.unit
 ROOT = Path(__file__).resolve().parents[2]
-PLANT = ROOT / "tests" / "unit" / "iomap" / "plant.st"
 HEAD = "RESOURCE Station\nDEVICE fb : user INPUTS 4 OUTPUTS 3 STALE 250\n"
 
 
-def diags_of(tmp_path, text, source=PLANT):
-    m = tmp_path / "t.iomap"
-    m.write_text(text)
-    res = frontend.run([str(source), str(m)], use_cache=False)
-    return res, [d for d in res.diags.items if d.severity == "error"]
 
 
 def test_a_user_device_binds_32_bit_slots(tmp_path):
@@ -81,11 +75,7 @@ ERRORS = [
 @pytest.mark.parametrize("text,message,line,col", ERRORS, ids=[e[1][:40] for e in ERRORS])
 def test_each_error_is_located(tmp_path, text, message, line, col):
     res, errors = diags_of(tmp_path, HEAD + text)
-    assert not res.ok
-    assert len(errors) == 1, [d.format() for d in errors]
-    d = errors[0]
-    assert message in d.message, d.format()
-    assert (d.path, d.line, d.col) == (str(tmp_path / "t.iomap"), line, col), d.format()
+    assert_one_error_at(tmp_path, res, errors, message, line, col)
 
 
 def test_a_64_bit_variable_does_not_fit_a_slot(tmp_path):
