@@ -298,6 +298,19 @@ static const struct file_operations iec_user_fops = {
 
 /* ------------------------------------------------------------ provider -- */
 
+/* what iec_user_open() allocates; a failed open and close both free it */
+static void iec_user_free(struct iec_user_dev *u)
+{
+	vfree(u->mem);
+	kfree(u->in_vals);
+	kfree(u->in_next);
+	kfree(u->out_vals);
+	u->mem = NULL;
+	u->in_vals = NULL;
+	u->in_next = NULL;
+	u->out_vals = NULL;
+}
+
 static int iec_user_open(struct iec_io_dev *d, const char **why)
 {
 	struct iec_user_dev *u = d->handle;
@@ -363,14 +376,7 @@ static int iec_user_open(struct iec_io_dev *d, const char **why)
 	u->registered = true;
 	return 0;
 err:
-	vfree(u->mem);
-	kfree(u->in_vals);
-	kfree(u->in_next);
-	kfree(u->out_vals);
-	u->mem = NULL;
-	u->in_vals = NULL;
-	u->in_next = NULL;
-	u->out_vals = NULL;
+	iec_user_free(u);
 	return ret;
 }
 
@@ -382,14 +388,7 @@ static void iec_user_close(struct iec_io_dev *d)
 	if (u->registered)
 		misc_deregister(&u->misc);
 	u->registered = false;
-	vfree(u->mem);
-	kfree(u->in_vals);
-	kfree(u->in_next);
-	kfree(u->out_vals);
-	u->mem = NULL;
-	u->in_vals = NULL;
-	u->in_next = NULL;
-	u->out_vals = NULL;
+	iec_user_free(u);
 }
 
 static int iec_user_check(struct iec_io_dev *d, const struct iec_io_bind *b,
