@@ -26,18 +26,34 @@ def _cli(*args):
                           capture_output=True, text=True, timeout=1800)
 
 
-@pytest.mark.kbuild
-def test_an_io_resource_builds_with_zero_warnings(tmp_path):
-    p = _cli("gen", str(PROJECT), "-o", str(tmp_path / "t"))
+def _gen(project, tree: Path) -> None:
+    p = _cli("gen", str(project), "-o", str(tree))
     assert p.returncode == 0, p.stderr
-    main = (tmp_path / "t" / "iec_rig_r_bench" / "main.c").read_text()
-    assert '#include "iec_io_comedi.c"' in main
-    p = _cli("build", str(tmp_path / "t"), "--sparse")
+
+
+def _build_sparse(tree: Path):
+    """iec2kmod build --sparse (W=1 and sparse): it succeeds with 0 sparse
+    warnings; the run, for more checks."""
+    p = _cli("build", str(tree), "--sparse")
     assert p.returncode == 0, p.stderr[-3000:]
     assert "sparse: 0 warnings" in p.stdout, p.stdout
-    ko = tmp_path / "t" / "iec_rig_r_bench" / "iec_rig_r_bench.ko"
-    info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
+    return p
+
+
+def _depends(ko: Path) -> str:
+    """modinfo's depends line of a module."""
+    return subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
                           text=True, timeout=60).stdout
+
+
+@pytest.mark.kbuild
+def test_an_io_resource_builds_with_zero_warnings(tmp_path):
+    _gen(PROJECT, tmp_path / "t")
+    main = (tmp_path / "t" / "iec_rig_r_bench" / "main.c").read_text()
+    assert '#include "iec_io_comedi.c"' in main
+    _build_sparse(tmp_path / "t")
+    ko = tmp_path / "t" / "iec_rig_r_bench" / "iec_rig_r_bench.ko"
+    info = _depends(ko)
     assert "kcomedilib" in info.split("\n")[0].split(","), info
 
 
@@ -46,14 +62,11 @@ def test_an_interrupt_resource_builds_with_zero_warnings(tmp_path):
     """projects/io_parport: resource Events has only an INTERRUPT (the
     comedi provider's threaded IRQ), resource Lights only outputs."""
     project = ROOT / "tests" / "qemu" / "projects" / "io_parport"
-    p = _cli("gen", str(project), "-o", str(tmp_path / "t"))
-    assert p.returncode == 0, p.stderr
+    _gen(project, tmp_path / "t")
     main = (tmp_path / "t" / "iec_crossing_r_events" / "main.c").read_text()
     assert "static struct iec_io_irq io_irqs[]" in main
     assert 'ret = iec_io_irq_on(&io, &resource);' in main
-    p = _cli("build", str(tmp_path / "t"), "--sparse")
-    assert p.returncode == 0, p.stderr[-3000:]
-    assert "sparse: 0 warnings" in p.stdout, p.stdout
+    _build_sparse(tmp_path / "t")
 
 
 @pytest.mark.kbuild
@@ -86,17 +99,13 @@ def test_a_user_io_resource_builds_with_zero_warnings(tmp_path):
     """The user-space provider (iec_io_user.c: misc device, mmap of
     vmalloc_user memory, poll) under W=1 and sparse; alone (io_user without
     its comedi device) it needs no comedi."""
-    p = _cli("gen", str(user_only(tmp_path / "src")), "-o", str(tmp_path / "t"))
-    assert p.returncode == 0, p.stderr
+    _gen(user_only(tmp_path / "src"), tmp_path / "t")
     main = (tmp_path / "t" / "iec_rig_r_bench" / "main.c").read_text()
     assert '#include "iec_io_user.c"' in main and "iec_io_comedi.c" not in main
-    p = _cli("build", str(tmp_path / "t"), "--sparse")
-    assert p.returncode == 0, p.stderr[-3000:]
-    assert "sparse: 0 warnings" in p.stdout, p.stdout
+    p = _build_sparse(tmp_path / "t")
     assert "warning:" not in p.stdout + p.stderr, (p.stdout + p.stderr)[-3000:]
     ko = tmp_path / "t" / "iec_rig_r_bench" / "iec_rig_r_bench.ko"
-    info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
-                          text=True, timeout=60).stdout
+    info = _depends(ko)
     assert "kcomedilib" not in info, info
 
 
@@ -105,17 +114,13 @@ def test_a_user_and_comedi_resource_builds_with_zero_warnings(tmp_path):
     """projects/io_user as tests/qemu/test_io_user.py runs it: one task
     bound to the user provider and to comedi, both providers in one
     module, zero warnings with W=1 and sparse, linked against kcomedilib."""
-    p = _cli("gen", str(USER_PROJECT), "-o", str(tmp_path / "t"))
-    assert p.returncode == 0, p.stderr
+    _gen(USER_PROJECT, tmp_path / "t")
     main = (tmp_path / "t" / "iec_rig_r_bench" / "main.c").read_text()
     assert '#include "iec_io_user.c"' in main and '#include "iec_io_comedi.c"' in main
-    p = _cli("build", str(tmp_path / "t"), "--sparse")
-    assert p.returncode == 0, p.stderr[-3000:]
-    assert "sparse: 0 warnings" in p.stdout, p.stdout
+    p = _build_sparse(tmp_path / "t")
     assert "warning:" not in p.stdout + p.stderr, (p.stdout + p.stderr)[-3000:]
     ko = tmp_path / "t" / "iec_rig_r_bench" / "iec_rig_r_bench.ko"
-    info = subprocess.run(["/sbin/modinfo", "-F", "depends", str(ko)], capture_output=True,
-                          text=True, timeout=60).stdout
+    info = _depends(ko)
     assert "kcomedilib" in info.split("\n")[0].split(","), info
 
 
@@ -125,11 +130,8 @@ def test_real_scaling_uses_the_fpu_only_in_iec_io_real(tmp_path):
     and no FPU/SIMD register outside iec_io_real.c's two functions, which
     iec_io.c calls between kernel_fpu_begin() and kernel_fpu_end()."""
     from test_execution_kbuild import fpu_outside_sections
-    p = _cli("gen", str(TANK_IO), "-o", str(tmp_path / "t"))
-    assert p.returncode == 0, p.stderr
-    p = _cli("build", str(tmp_path / "t"), "--sparse")
-    assert p.returncode == 0, p.stderr[-3000:]
-    assert "sparse: 0 warnings" in p.stdout, p.stdout
+    _gen(TANK_IO, tmp_path / "t")
+    _build_sparse(tmp_path / "t")
     assert fpu_outside_sections(tmp_path / "t") == []
     dis = subprocess.run(["objdump", "-d", str(tmp_path / "t" / "iec_plant_r_tank" /
                                                "iec_plant_r_tank.ko")],
