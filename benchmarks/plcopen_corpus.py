@@ -63,6 +63,14 @@ def projects(path: Path) -> list[Path]:
     return found
 
 
+def shown(root: Path, proj: Path) -> Path:
+    """How a project found under root is named in a report: its path below
+    root, or its file name when root is the project file itself."""
+    if proj == root or not proj.is_relative_to(root):
+        return Path(proj.name) if proj == root else proj
+    return proj.relative_to(root)
+
+
 def extensions(project: Path) -> list[str]:
     return sorted({d.name.split("@", 1)[1] for d in project.parent.iterdir()
                    if d.is_dir() and "@" in d.name})
@@ -279,7 +287,7 @@ def main(argv=None) -> int:
             iec = not ext
             result, why, detail, secs = run_one(proj, args.cycles, engines)
             counts[iec][(result, why)] += 1
-            rel = proj.relative_to(root) if proj.is_relative_to(root) else proj
+            rel = shown(root, proj)
             tag = "IEC only" if iec else "ext: " + ",".join(ext)
             print(f"{str(rel):50} {tag:28} {result}{': ' + why if why else ''} ({secs:.1f} s)")
             if args.list and detail:

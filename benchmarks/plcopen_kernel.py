@@ -48,13 +48,12 @@ WALL_TYPES = {"DT", "DATE", "TOD", "LDT", "LDATE", "LTOD", "DATE_AND_TIME", "TIM
 
 
 def candidates(paths):
-    from plcopen_corpus import extensions, projects
+    from plcopen_corpus import extensions, projects, shown
     from iec2kmod.parse import frontend
     out = []
     for root in paths:
         for proj in projects(root):
-            rel = Path(proj.name) if root.is_file() else \
-                proj.relative_to(root) if proj.is_relative_to(root) else proj
+            rel = shown(root, proj)
             if extensions(proj):
                 continue
             res = frontend.run([str(proj)], use_cache=False)

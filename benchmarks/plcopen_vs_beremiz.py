@@ -74,8 +74,7 @@ def main(argv=None) -> int:
     for root in args.paths or [bz]:
         for proj in corpus.projects(root):
             t0 = time.perf_counter()
-            rel = proj.relative_to(root) if proj.is_relative_to(root) and proj != root \
-                else Path(proj.name)
+            rel = corpus.shown(root, proj)
             res = frontend.run([str(proj)], use_cache=False)
             if res.diags.errors:
                 verdict = "ours refused: " + corpus.cause(res.diags.errors[0].message)
