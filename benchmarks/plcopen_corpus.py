@@ -89,18 +89,19 @@ def cause(message: str) -> str:
 
 def simulate(project, cycles, engine):
     from iec2kmod import interp, sim
-    from iec2kmod.codegen.plan import build_plan
+    from iec2kmod.compilation import Compilation
     periods = [t.interval_ns for c in project.configurations for r in c.resources
                for t in r.tasks.values() if t.interval_ns]
     if not periods:
         raise sim.SimError("no periodic task")
     step = min(periods)
     end = step * (cycles - 1)
-    watch = [e.path for e in build_plan(project).table]
+    comp = Compilation(project)
+    watch = [e.path for e in comp.plan.table]
     if engine == "interp":
         res = interp.run(project, end, watch=watch)
     else:
-        res = sim.run(project, end, watch=watch)
+        res = sim.run(comp, end, watch=watch)
     trace = [res.values_at(k * step) for k in range(cycles)]
     return trace, [f[2] for f in res.faults]
 
@@ -219,7 +220,7 @@ def compare_generator(beremiz, proj: Path, cycles: int, workdir: Path) -> str:
     that writes the other ST)."""
     from iec2kmod import interp
     from iec2kmod.parse import frontend
-    from iec2kmod.codegen.plan import build_plan
+    from iec2kmod.compilation import Compilation
     out = workdir / (proj.parent.name + ".st")
     st, why = beremiz(proj, out) if callable(beremiz) else beremiz_st(beremiz, proj, out)
     if st is None:
@@ -237,8 +238,8 @@ def compare_generator(beremiz, proj: Path, cycles: int, workdir: Path) -> str:
     if not theirs.ok:
         return "Beremiz's ST refused: " + cause(theirs.diags.errors[0].message)
     ours = frontend.run([str(proj)], use_cache=False)
-    names_ours = {e.path.upper(): e.path for e in build_plan(ours.project).table}
-    common = [e.path for e in build_plan(theirs.project).table
+    names_ours = {e.path.upper(): e.path for e in Compilation(ours.project).plan.table}
+    common = [e.path for e in Compilation(theirs.project).plan.table
               if e.path.upper() in names_ours and
               not any(part.startswith("_") for part in e.path.split("."))]
     periods = [t.interval_ns for c in ours.project.configurations for r in c.resources

@@ -69,11 +69,11 @@ def candidates(paths):
 
 def wall_paths(project) -> set[str]:
     from iec2kmod.checks.types import concrete
-    from iec2kmod.codegen.plan import build_plan
+    from iec2kmod.compilation import Compilation
     from iec2kmod.verify.clockfb import clock_user
     if clock_user(project) is None:
         return set()
-    return {e.path.upper() for e in build_plan(project).table
+    return {e.path.upper() for e in Compilation(project).plan.table
             if getattr(concrete(e.type), "name", "").upper() in WALL_TYPES}
 
 

@@ -1,9 +1,15 @@
-"""Expression nodes built by the parser's object processors.
+"""The syntax tree every later pass reads: expressions, statements,
+declarations, POUs and the configuration.
 
-Statements, declarations and POUs stay textX model objects (their classes are
-generated from the grammar); expressions are rebuilt into these small nodes so
-that the flat operand/operator sequences of the grammar become precedence
-trees.  Every node keeps the character offset it starts at (``pos``).
+The parser (parse/parser.py) turns textX's model into these nodes in one
+conversion after the parse, and parse/stfast.py builds the same nodes
+directly for the statements it parses by hand; no textX object survives
+past parse/.  Expressions are rebuilt from the grammar's flat
+operand/operator sequences into precedence trees.  Every node keeps the
+character offset it starts at (``pos``); the checker (checks/) fills an
+expression's ``type``, ``const`` (checks/fold.py) and, for a standard call or
+operator, ``sig``/``fn`` (checks/settle.py); parse/lexical.attach attaches
+each pragma to the node it applies to.
 """
 
 from __future__ import annotations

@@ -63,7 +63,7 @@ enum iec_fault_code {
 /*
  * Default iteration budget per cycle when the task sets none: the one every
  * generated task sets (iec2kmod/execmodel.py LOOP_BUDGET, checked by
- * tests/unit/test_execmodel.py).
+ * tests/unit/test_compilation.py).
  */
 #define IEC_LOOP_BUDGET_DEFAULT	1000000U
 

@@ -49,7 +49,7 @@ import progen  # noqa: E402
 
 from iec2kmod import sim  # noqa: E402
 from iec2kmod.parse import frontend  # noqa: E402
-from iec2kmod.codegen.plan import build_plan  # noqa: E402
+from iec2kmod.compilation import Compilation  # noqa: E402
 
 ULP_TOLERANCE = 4
 # A sink (progen: fz<n>, never read) may hold a chain of transcendental
@@ -313,7 +313,7 @@ def run_units(units, engines, workdir, split_on_failure=True):
             return results
         m = re.search(r"u(\d+)_prog\.st", err or "")
         return _split(units, engines, workdir, f"pou_u{m.group(1)}_" if m else "")
-    plan = build_plan(project)
+    plan = Compilation(project).plan
     trace = workdir / "trace.csv"
     events = sorted((ev for u in units for ev in u.trace), key=lambda e: e[0])
     write_trace(events, plan.table, trace, project.configurations[0].addresses)
@@ -399,7 +399,7 @@ def run_text(text, events, engines, cycles, workdir):
         project, err = None, "error: no configuration"
     if project is None:
         return None, err
-    plan = build_plan(project)
+    plan = Compilation(project).plan
     trace = workdir / "trace.csv"
     write_trace(events, plan.table, trace, project.configurations[0].addresses)
     end = end_ns(cycles)

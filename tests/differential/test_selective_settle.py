@@ -23,7 +23,7 @@ import pytest
 
 from iec2kmod import sim
 from iec2kmod.parse import frontend
-from iec2kmod.codegen.plan import build_plan
+from iec2kmod.compilation import Compilation
 from iec2kmod.compilation import selective_plan
 
 pytestmark = pytest.mark.execution
@@ -153,7 +153,7 @@ def test_settle_rule_on_random_loop_free_blocks(tmp_path):
                 kinds["full"] += 1
         trace = tmp_path / f"s{i}.csv"
         trace.write_text(rows)
-        watch = [e.path for e in build_plan(project).table]
+        watch = [e.path for e in Compilation(project).plan.table]
         end = CYCLES * 10 * MS
         a = sim.run(project, end, watch=watch, inputs=str(trace))
         b = sim.run(project, end, watch=watch, inputs=str(trace), selective="all")
@@ -284,7 +284,7 @@ def test_selective_when_targets_change_under_unchanged_pointers(tmp_path):
         project = res.project
         trace = tmp_path / f"w{i}.csv"
         trace.write_text(rows)
-        watch = [e.path for e in build_plan(project).table]
+        watch = [e.path for e in Compilation(project).plan.table]
         end = CYCLES * 10 * MS
         a = sim.run(project, end, watch=watch, inputs=str(trace))
         b = sim.run(project, end, watch=watch, inputs=str(trace), selective="all")

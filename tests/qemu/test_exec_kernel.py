@@ -41,7 +41,7 @@ sys.path.insert(0, str(ROOT / "tests" / "execution"))
 import runner  # noqa: E402
 import test_execution_kbuild as kb  # noqa: E402
 from iec2kmod import sim  # noqa: E402
-from iec2kmod.codegen.plan import build_plan  # noqa: E402
+from iec2kmod.compilation import Compilation  # noqa: E402
 
 pytestmark = pytest.mark.qemu
 
@@ -159,7 +159,7 @@ def same(kind, kernel, simulated, size) -> bool:
 def compare_group(name, project, ms, tasks, values) -> list[str]:
     """The kernel's tasks and variables against the simulation of the same
     sources up to the last release before ``ms``."""
-    plan = build_plan(project)
+    plan = Compilation(project).plan
     cfg = project.configurations[0]
     implicit = cfg.resources[0].node.name is None
     periods = {}
@@ -227,7 +227,7 @@ def test_every_execution_case_in_the_kernel_equals_the_simulation(guest_factory,
             shutil.copy(ko, dest / ko.parent.name)
         project = runner.check_project(kb.group_sources(name, cases, tmp_path))
         ms = run_ms(cases, project)
-        tasks, values = run_in_kernel(g, dest, ms, [e.path for e in build_plan(project).table])
+        tasks, values = run_in_kernel(g, dest, ms, [e.path for e in Compilation(project).plan.table])
         problems += compare_group(name, project, ms, tasks, values)
         timings[name] = round(time.monotonic() - t1, 1)
     g.check_kernel_log(since=mark)

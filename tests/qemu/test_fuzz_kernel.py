@@ -44,7 +44,7 @@ import progen  # noqa: E402
 import runner  # noqa: E402
 import test_exec_kernel as ek  # noqa: E402
 import test_execution_kbuild as kb  # noqa: E402
-from iec2kmod.codegen.plan import build_plan  # noqa: E402
+from iec2kmod.compilation import Compilation  # noqa: E402
 
 pytestmark = pytest.mark.qemu
 
@@ -128,7 +128,7 @@ def test_generated_projects_in_the_kernel_equal_the_simulation(guest_factory, gu
         project = runner.check_project(files)
         ms = (CYCLES - 1) * units[0].interval_ns // 1_000_000 + 1
         tasks, values = ek.run_in_kernel(g, dest, ms,
-                                         [e.path for e in build_plan(project).table])
+                                         [e.path for e in Compilation(project).plan.table])
         found = ek.compare_group(f"batch {n}", project, ms, tasks, values)
         if found:
             problems.append(f"batch {n}, seeds {batches[n]}:")

@@ -84,11 +84,11 @@ def run_and_compare(guest, source: Path, tree: Path, ms: int = RUN_MS, wall=froz
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from test_exec_kernel import compare_group, run_in_kernel  # noqa: E402
 
-    from iec2kmod.codegen.plan import build_plan
+    from iec2kmod.compilation import Compilation
     gen_and_build(source, tree)
     result = frontend.run([str(source)], use_cache=False)
     assert result.ok, source
-    paths = [e.path for e in build_plan(result.project).table]
+    paths = [e.path for e in Compilation(result.project).plan.table]
     tasks, values = run_in_kernel(guest, tree, ms, paths)
     problems = compare_group(source.stem, result.project, ms, tasks, values)
     problems = [p for p in problems
