@@ -30,6 +30,19 @@ SIM_ITERATION_NS = 100
 MAX_TABLE_ELEMENTS = 256
 
 
+def element_path(path: str, dims, n: int) -> str:
+    """The variable table's path of element *n* (row-major, the last index
+    fastest, as in C) of array *path* with dimensions *dims* [(lo, hi)]:
+    ``a[1,0]``.  Both engines' tables name elements this way."""
+    parts = []
+    for lo, hi in reversed(dims):
+        size = hi - lo + 1
+        parts.append(lo + n % size)
+        n //= size
+    parts.reverse()
+    return f"{path}[{','.join(map(str, parts))}]"
+
+
 def kind_of(t) -> str | None:
     """The value kind of a variable table entry of type *t*: b (BOOL),
     i (signed), u (unsigned, bit strings), f (real), t (time-like),

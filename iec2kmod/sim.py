@@ -26,9 +26,9 @@ from .codegen.pou import frame_max, frame_need
 from .compilation import Compilation, CompileError
 from .execmodel import LOOP_BUDGET
 from . import traces
-from .traces import TraceError, format_value, read_trace, write_csv, write_vcd
+from .traces import TraceError, format_value, read_trace, watch_indexes, write_csv, write_vcd
 from .traces import Trace as SimResult
-from .located import addresses_of, name_index
+from .located import addresses_of
 
 # the trace functions are traces.py's; sim.<name> stays for its callers
 __all__ = ["run", "build", "render_sim", "SimError", "InternalError", "SimResult",
@@ -235,17 +235,10 @@ def run(what, end_ns: int, watch=None, inputs=None, build_dir=None, sanitize=Fal
         raise SimError(str(exc)) from None
     # a located variable may be named by its address (iec2kmod/located.py)
     addresses = addresses_of(getattr(what, "project", what))
-    index = name_index(plan.table, addresses)
-    if watch:
-        idx = []
-        for w in watch:
-            i = index.get(w.strip().upper())
-            if i is None:
-                raise SimError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
-            if i not in idx:         # an address and its name are one variable
-                idx.append(i)
-    else:
-        idx = [i for i, e in enumerate(plan.table) if e.owner == "global" or e.owner == "direct"]
+    try:
+        idx = watch_indexes(plan.table, addresses, watch)
+    except TraceError as exc:
+        raise SimError(str(exc)) from None
     try:
         events = read_trace(inputs, plan.table, addresses) if inputs else []
     except TraceError as exc:

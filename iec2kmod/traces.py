@@ -2,6 +2,7 @@
 (the generated C and the reference interpreter) and the verifier's
 counterexamples.
 
+    watch_indexes   the table indexes of ``--watch`` names (default: the globals)
     read_trace      an ``--inputs`` CSV (time,variable,value) into events
     write_inputs    such a CSV (a counterexample's inputs)
     Trace           a run: the watched values' changes, faults, cycles
@@ -111,6 +112,24 @@ def _int_range(t):
     if isinstance(t, SubrangeT):
         return t.low, t.high
     return t.range if isinstance(t, Elementary) else None
+
+
+def watch_indexes(table, addresses, watch) -> list[int]:
+    """Indexes into *table* of the names in *watch* (paths or, for a located
+    variable, its address; *addresses* as for read_trace), each once and in
+    the order given; every global and directly represented variable when
+    *watch* is empty.  An unknown name raises TraceError."""
+    if not watch:
+        return [i for i, e in enumerate(table) if e.owner in ("global", "direct")]
+    index = name_index(table, addresses)
+    idx = []
+    for w in watch:
+        i = index.get(w.strip().upper())
+        if i is None:
+            raise TraceError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
+        if i not in idx:         # an address and its name are one variable
+            idx.append(i)
+    return idx
 
 
 def read_trace(path: str, table, addresses=None):

@@ -11,7 +11,7 @@ from .. import ast
 from ..checks.symbols import Each, POUInfo, Var
 from ..checks.types import (ArrayT, EnumT, FBType, StringT, StructT, SubrangeT,
                             concrete)
-from ..execmodel import MAX_TABLE_ELEMENTS, kind_of
+from ..execmodel import MAX_TABLE_ELEMENTS, element_path, kind_of
 from . import cnames as N
 from .body import BodyEmitter, copy_value
 from .expr import BindingError, Frame, Raw
@@ -284,15 +284,8 @@ def _expand(path, lvalue, t, writable, owner, out, budget):
             dims += cur.dims
             cur = cur.elem
         for n in range(min(count, MAX_TABLE_ELEMENTS)):
-            rem = n
-            parts = []
-            for lo, hi in reversed(dims):
-                size = hi - lo + 1
-                parts.append(lo + rem % size)
-                rem //= size
-            parts.reverse()
-            _expand(f"{path}[{','.join(map(str, parts))}]", f"{lvalue}[{n}]", elem, writable,
-                    owner, out, budget)
+            _expand(element_path(path, dims, n), f"{lvalue}[{n}]", elem, writable, owner, out,
+                    budget)
         return
     if isinstance(t, StructT):
         for fname, ft, _ in t.fields.values():

@@ -27,10 +27,11 @@ from dataclasses import dataclass, field
 
 from .. import ast
 from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, concrete
-from ..located import addresses_of, name_index
+from ..located import addresses_of
 from .compiler import PouCompiler
-from ..execmodel import LOOP_BUDGET, MAX_TABLE_ELEMENTS, SIM_ITERATION_NS, kind_of
-from ..traces import Trace, TraceError, read_trace
+from ..execmodel import (LOOP_BUDGET, MAX_TABLE_ELEMENTS, SIM_ITERATION_NS, element_path,
+                         kind_of)
+from ..traces import Trace, TraceError, read_trace, watch_indexes
 from .errors import LOOP, OVERRUN, WATCHDOG, Fault, InterpError
 from .fbs import body_of
 from .model import Initializer, Instance, copier, copy_of
@@ -316,13 +317,6 @@ class Machine:
             for lo, hi in dims:
                 count *= hi - lo + 1
             for n in range(min(count, MAX_TABLE_ELEMENTS)):
-                rem = n
-                parts = []
-                for lo, hi in reversed(dims):
-                    size = hi - lo + 1
-                    parts.append(lo + rem % size)
-                    rem //= size
-                parts.reverse()
                 # the element's keys through nested lists: one flat index per level
                 ekeys = []
                 rest = n
@@ -333,7 +327,7 @@ class Machine:
                         below *= c
                     ekeys.append(rest // below)
                     rest %= below
-                self._expand(f"{path}[{','.join(map(str, parts))}]", cur, writable, owner, root,
+                self._expand(element_path(path, dims, n), cur, writable, owner, root,
                              keys + tuple(ekeys), out, budget)
             return
         if isinstance(t, StructT):
@@ -539,17 +533,10 @@ def run(project, end_ns: int, watch=None, inputs=None, machine=None) -> InterpRe
     m = machine if machine is not None else Machine(project)
     table = m.table()
     addresses = addresses_of(project)
-    index = name_index(table, addresses)
-    if watch:
-        idx = []
-        for w in watch:
-            i = index.get(w.strip().upper())
-            if i is None:
-                raise InterpError(f"unknown variable '{w}' (see `iec2kmod sim --list`)")
-            if i not in idx:         # an address and its name are one variable
-                idx.append(i)
-    else:
-        idx = [i for i, e in enumerate(table) if e.owner in ("global", "direct")]
+    try:
+        idx = watch_indexes(table, addresses, watch)
+    except TraceError as exc:
+        raise InterpError(str(exc)) from None
     try:
         events = read_trace(inputs, table, addresses) if inputs else []
     except TraceError as exc:
