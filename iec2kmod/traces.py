@@ -5,6 +5,7 @@ counterexamples.
     watch_indexes   the table indexes of ``--watch`` names (default: the globals)
     read_trace      an ``--inputs`` CSV (time,variable,value) into events
     write_inputs    such a CSV (a counterexample's inputs)
+    input_literal   a value as such a CSV writes it
     Trace           a run: the watched values' changes, faults, cycles
     write_csv       a Trace as CSV (one row per instant with a change)
     write_vcd       a Trace as VCD (GTKWave)
@@ -176,6 +177,30 @@ def write_inputs(path, rows) -> int:
         w.writerow(("time", "variable", "value"))
         w.writerows(rows)
     return len(rows)
+
+
+def input_literal(t, v) -> str:
+    """Value *v* of a variable of type *t* as an ``--inputs`` CSV reads it
+    back (a counterexample's inputs, both verify engines): an enumeration's
+    ``T#NAME``, ``TRUE``/``FALSE``, a REAL with its exponent as ``1.0E-05``."""
+    t = concrete(t)
+    if isinstance(t, EnumT):
+        for name, val in t.values.values():
+            if val == v:
+                return f"{t.name}#{name}"
+        return str(v)
+    if isinstance(v, bool) or (isinstance(t, Elementary) and t.cat == "bool"):
+        return "TRUE" if v else "FALSE"
+    if isinstance(v, float) or (isinstance(t, Elementary) and t.cat == "real"):
+        v = float(v)
+        r = repr(v)
+        if "e" in r:
+            mant, exp = r.split("e")
+            if "." not in mant:
+                mant += ".0"
+            r = f"{mant}E{exp}"
+        return r
+    return str(v)
 
 
 def format_value(entry_type, v):

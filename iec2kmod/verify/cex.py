@@ -15,10 +15,9 @@ import math
 
 import z3
 
-from ..checks.types import EnumT, concrete
 from ..interp.model import Instance
-from ..traces import write_inputs
-from .encode import const_of, kind, py_value
+from ..traces import input_literal, write_inputs
+from .encode import const_of, py_value
 
 
 def input_values(out, result):
@@ -49,27 +48,6 @@ def input_values(out, result):
     return rows
 
 
-def format_value(leaf, v):
-    t = concrete(leaf.type)
-    if isinstance(t, EnumT):
-        for name, val in t.values.values():
-            if val == v:
-                return f"{t.name}#{name}"
-        return str(v)
-    k = kind(t)
-    if k == "bool":
-        return "TRUE" if v else "FALSE"
-    if k == "fp":
-        r = repr(float(v))
-        if "e" in r:
-            mant, exp = r.split("e")
-            if "." not in mant:
-                mant += ".0"
-            r = f"{mant}E{exp}"
-        return r
-    return str(v)
-
-
 def write_trace(out, result, path):
     period = out.sym.period
     leaves = {leaf.name: leaf for leaf, _, _ in out.system.inputs if leaf is not None}
@@ -82,7 +60,7 @@ def write_trace(out, result, path):
             if name in last and _same(last[name], v) and not leaves[name].outside:
                 continue    # written from outside: again, over what the cycle wrote
             last[name] = v
-            rows.append((f"{t}ns", name, format_value(leaves[name], v)))
+            rows.append((f"{t}ns", name, input_literal(leaves[name].type, v)))
     return write_inputs(path, rows)
 
 

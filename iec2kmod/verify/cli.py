@@ -19,6 +19,13 @@ EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE, EXIT_VIOLATED, EXIT_BOUNDED, EXIT_VACUOUS,
     EXIT_INTERNAL = 0, 1, 2, 3, 4, 5, 70
 
 
+def cex_paths(cex_dir, name):
+    """The CSV and VCD files of property *name*'s counterexample in
+    *cex_dir* (both engines name them so)."""
+    stem = "cex_" + re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_")
+    return cex_dir / f"{stem}.csv", cex_dir / f"{stem}.vcd"
+
+
 def _fmt_time(ns):
     if ns % 1_000_000_000 == 0:
         return f"{ns // 1_000_000_000} s"
@@ -123,8 +130,7 @@ def run_verify(args) -> int:
             except OSError as exc:
                 st["error"] = (f"iec2kmod: error: {cex_dir}: {exc.strerror}", EXIT_USAGE)
                 raise _Stop() from None
-            stem = "cex_" + re.sub(r"[^A-Za-z0-9_]+", "_", r.name).strip("_")
-            csv_path, vcd_path = cex_dir / f"{stem}.csv", cex_dir / f"{stem}.vcd"
+            csv_path, vcd_path = cex_paths(cex_dir, r.name)
             write_trace(out, r, csv_path)
             ok, why = replay(out, r, str(csv_path), str(vcd_path))
             if not ok and r.havoc:

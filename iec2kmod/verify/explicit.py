@@ -64,12 +64,12 @@ from ..diagnostics import Diagnostics
 from ..interp.compiler import PouCompiler
 from .cli import EXIT_BOUNDED as EXIT_UNDECIDED  # the exit statuses are the command's
 from .cli import (EXIT_INTERNAL, EXIT_PROVED, EXIT_SOURCE, EXIT_USAGE, EXIT_VACUOUS,
-                  EXIT_VIOLATED, _fmt_time)
+                  EXIT_VIOLATED, _fmt_time, cex_paths)
 from ..interp.errors import Fault
 from ..interp.machine import Machine
 from ..interp.model import Instance
 from ..interp.values import base_of, int_range
-from ..traces import write_inputs
+from ..traces import input_literal, write_inputs
 from .clockfb import clock_user
 
 DEFAULT_MAX_STATES = 200_000
@@ -628,18 +628,6 @@ def explore(project, cli_props=(), cli_assumes=(), instance=None, diags=None,
 
 
 # ------------------------------------------------------ counterexamples
-def format_value(e, v):
-    t = concrete(e.type)
-    if isinstance(t, EnumT):
-        for name, val in t.values.values():
-            if val == v:
-                return f"{t.name}#{name}"
-        return str(v)
-    if isinstance(v, bool):
-        return "TRUE" if v else "FALSE"
-    return str(v)
-
-
 def write_trace(out, result, path):
     """The input trace of a violation as `sim --inputs` CSV: step k's values
     at (k-1)*step, a value written when it changes (always, for a READ_WRITE
@@ -656,7 +644,7 @@ def write_trace(out, result, path):
             if name in last and last[name] == v and not outside:
                 continue
             last[name] = v
-            rows.append((f"{t}ns", name, format_value(e, v)))
+            rows.append((f"{t}ns", name, input_literal(e.type, v)))
     return write_inputs(path, rows)
 
 
@@ -701,7 +689,6 @@ def run_cli(args) -> int:
     proved, 1 source errors or a construct not explored, 2 usage or I/O, 3 a
     property violated, 5 vacuous (no violation), 4 too large (no violation,
     none vacuous), 70 internal error -- the z3 engine's order."""
-    import re
     import shlex
     import sys
     from pathlib import Path
@@ -766,8 +753,7 @@ def run_cli(args) -> int:
             except OSError as exc:
                 print(f"iec2kmod: error: {cex_dir}: {exc.strerror}", file=sys.stderr)
                 return EXIT_USAGE
-            stem = "cex_" + re.sub(r"[^A-Za-z0-9_]+", "_", r.name).strip("_")
-            csv_path, vcd_path = cex_dir / f"{stem}.csv", cex_dir / f"{stem}.vcd"
+            csv_path, vcd_path = cex_paths(cex_dir, r.name)
             write_trace(out, r, csv_path)
             ok, why = replay(out, r, str(csv_path), str(vcd_path), args.property,
                              args.instance)
