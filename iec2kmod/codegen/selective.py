@@ -14,8 +14,15 @@ Pragmas (IEC 61131-3 ``{...}``), each in front of what it applies to:
     VAR {selective off} v1 : Valve; END_VAR       this instance is always evaluated
     {selective off} PROGRAM line1 WITH fast : Main;   this program instance too
 
-A pragma that precedes nothing of that kind is a warning; without
-``--selective`` the pragmas change nothing (the output is the plain one).
+The parser places them (parse/lexical.attach, by the positions of the
+nodes): a pragma in front of a POU is in ``ast.POU.pragmas``, in front of
+a variable declaration (or of the VAR keyword of its block) in
+``ast.VarDecl.pragmas`` (every name of the declaration shares it), in
+front of a program instance in ``ast.ProgramConfig.pragmas``; this pass
+reads those (``_read_pragmas``) and scans no text.  A pragma that precedes
+nothing of that kind is in ``ast.SourceUnit.unattached`` and is a warning
+at its file:line:col; without ``--selective`` the pragmas change nothing
+(the output is the plain one).
 
 Rules (``BlockInfo.reason`` says which one keeps a POU type out):
 

@@ -70,20 +70,24 @@ class PragmaKind:
 PRAGMAS = {k.name: k for k in (
     PragmaKind("watchdog", "{watchdog TIME} | {watchdog TIME, N} | {watchdog off, N}",
                "right in front of a TASK declaration (blanks between)",
-               "that task", "iec2kmod/checks/config.py"),
+               "that task: Task.pragmas", "iec2kmod/checks/config.py"),
     PragmaKind("selective", "{selective} | {selective on} | {selective off}",
-               "right in front of a POU, a variable declaration or a program "
-               "instance (blanks between)",
-               "that POU, the function block instances of that declaration, "
-               "or that program instance", "iec2kmod/codegen/selective.py"),
+               "right in front of a POU, a variable declaration of a POU or a "
+               "program instance (blanks between; in front of a VAR block's "
+               "first declaration, the block's keyword and qualifiers too)",
+               "that POU, the function block instances of that declaration "
+               "(every name of it), or that program instance: POU.pragmas, "
+               "VarDecl.pragmas, ProgramConfig.pragmas; in front of none of "
+               "them, SourceUnit.unattached (a warning)",
+               "iec2kmod/codegen/selective.py"),
     PragmaKind("verify", "{verify NAME: EXPR} | {verify: EXPR}",
                "inside a PROGRAM or outside any POU",
-               "the program (its instances) or the configuration",
-               "iec2kmod/verify/props.py"),
+               "the program (its instances) or the configuration: "
+               "POU.pragmas or SourceUnit.outside", "iec2kmod/verify/props.py"),
     PragmaKind("assume", "{assume: EXPR}",
                "inside a PROGRAM or outside any POU",
-               "the program (its instances) or the configuration",
-               "iec2kmod/verify/props.py"),
+               "the program (its instances) or the configuration: "
+               "POU.pragmas or SourceUnit.outside", "iec2kmod/verify/props.py"),
 )}
 
 
@@ -175,6 +179,8 @@ def attach(unit) -> None:
                 t.pragmas = (p,) if p is not None else ()
             for pc in r.programs:
                 pc.pragmas = ()
+    # in front of a POU first: its pragmas in the order they are written
+    unit.unattached = _place_selective(unit, [p for p in found if p.kind == "selective"])
     for p in found:
         if p.kind not in ("verify", "assume"):
             continue
@@ -185,7 +191,6 @@ def attach(unit) -> None:
         else:
             outside.append(p)
     unit.outside = tuple(outside)
-    unit.unattached = _place_selective(unit, [p for p in found if p.kind == "selective"])
 
 
 def _place_selective(unit, found) -> tuple:
