@@ -225,7 +225,9 @@ class TypeDef(Node):
 
 
 class VarDecl(Node):
-    __slots__ = ("names", "location", "edge", "spec", "init")  # names: [(name, pos)]
+    # names: [(name, pos)]; pragmas: the {selective} in front of it, for
+    # every name (parse/lexical.attach; None outside a POU's VAR blocks)
+    __slots__ = ("names", "location", "edge", "spec", "init", "pragmas")
 
 
 class AccessDecl(Node):
@@ -244,8 +246,10 @@ class POU(Node):
     """A FUNCTION, FUNCTION_BLOCK or PROGRAM.  ``language`` is ST, IL or SFC;
     an SFC body is in ``sfc`` (``body`` is then empty)."""
 
+    # pragmas: the {verify}/{assume} inside it and the {selective} in front
+    # of it, in order (parse/lexical.attach); readers pick theirs by kind
     __slots__ = ("kind", "name", "result", "blocks", "body", "language", "src", "end_pos", "sfc",
-                 "pragmas")  # pragmas: the {verify}/{assume} inside it (parse/lexical.attach)
+                 "pragmas")
 
 
 # statements
@@ -352,7 +356,9 @@ class Connection(Node):
 
 
 class ProgramConfig(Node):
-    __slots__ = ("name", "retain", "task", "task_pos", "type", "type_pos", "connections")
+    # pragmas: the {selective} in front of it (parse/lexical.attach)
+    __slots__ = ("name", "retain", "task", "task_pos", "type", "type_pos", "connections",
+                 "pragmas")
 
 
 class Resource(Node):
@@ -366,6 +372,8 @@ class Configuration(Node):
 class SourceUnit(Node):
     """One parsed file: its types, POUs and configurations in order;
     ``pragmas`` every pragma of the file in order, ``outside`` the {verify}
-    and {assume} written outside any POU (parse/lexical.attach)."""
+    and {assume} written outside any POU, ``unattached`` the {selective}
+    in front of nothing they can apply to (parse/lexical.attach; the
+    selective pass warns at each)."""
 
-    __slots__ = ("src", "types", "pous", "configurations", "pragmas", "outside")
+    __slots__ = ("src", "types", "pous", "configurations", "pragmas", "outside", "unattached")

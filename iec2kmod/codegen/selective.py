@@ -14,8 +14,15 @@ Pragmas (IEC 61131-3 ``{...}``), each in front of what it applies to:
     VAR {selective off} v1 : Valve; END_VAR       this instance is always evaluated
     {selective off} PROGRAM line1 WITH fast : Main;   this program instance too
 
-A pragma that precedes nothing of that kind is a warning; without
-``--selective`` the pragmas change nothing (the output is the plain one).
+The parser places them (parse/lexical.attach, by the positions of the
+nodes): a pragma in front of a POU is in ``ast.POU.pragmas``, in front of
+a variable declaration (or of the VAR keyword of its block) in
+``ast.VarDecl.pragmas`` (every name of the declaration shares it), in
+front of a program instance in ``ast.ProgramConfig.pragmas``; this pass
+reads those (``_read_pragmas``) and scans no text.  A pragma that precedes
+nothing of that kind is in ``ast.SourceUnit.unattached`` and is a warning
+at its file:line:col; without ``--selective`` the pragmas change nothing
+(the output is the plain one).
 
 Rules (``BlockInfo.reason`` says which one keeps a POU type out):
 
@@ -165,13 +172,11 @@ task."""
 from __future__ import annotations
 
 import hashlib
-import re
 from dataclasses import dataclass, field
 
 from .. import ast
 from ..checks.symbols import Var
 from ..checks.types import ArrayT, FBType, StructT, concrete
-from ..parse import lexical
 from . import analysis
 from . import cnames as N
 
@@ -264,58 +269,65 @@ class SelectivePlan:
 
     # ------------------------------------------------------------ pragmas
     def _read_pragmas(self):
-        """Each ``{selective on|off}`` applies to the POU, FB instance
-        declaration or program instance that follows it in its file."""
-        targets = {}                      # path -> [(offset, kind, obj)]
-        for pou in self.project.pous.values():
-            if pou.node is None or pou.src is None:
-                continue
-            targets.setdefault(pou.src.path, []).append((pou.node.pos, "pou", pou))
-            for v in pou.vars.values():
-                if v.pos is not None and v.src is not None:
-                    targets.setdefault(v.src.path, []).append((v.pos, "var", v))
-        for cfg in self.project.configurations:
-            for r in cfg.resources:
-                for inst in r.programs:
-                    pos = getattr(inst.node, "pos", None)
-                    if pos is not None:
-                        targets.setdefault(cfg.src.path, []).append((pos, "inst", inst))
-        for unit in self.project.units:
-            src = unit.src
-            found = [p for p in unit.pragmas or () if p.kind == "selective"]
-            if not found:
-                continue
-            mine = sorted(targets.get(src.path, []), key=lambda t: t[0])
-            for m in found:
-                word = m.body.strip().lower()
-                if word in ("", "on"):
-                    on = True
-                elif word == "off":
-                    on = False
-                else:
-                    self.warnings.append((src, m.start, "unknown selective pragma: write "
-                                          "{selective on} or {selective off}"))
+        """Each ``{selective on|off}`` applies to the node the parser
+        attached it to (parse/lexical.attach): a POU, the variables of a
+        declaration, a program instance; one attached to nothing
+        (``SourceUnit.unattached``) is a warning.  Warnings in the order
+        the pragmas are written."""
+        infos = {id(p.node): p for p in self.project.pous.values() if p.node is not None}
+        insts = {id(inst.node): inst for cfg in self.project.configurations
+                 for r in cfg.resources for inst in r.programs if inst.node is not None}
+        found = []                        # (unit index, pragma, kind, target)
+        for n, unit in enumerate(self.project.units):
+            found += [(n, m, None, None) for m in unit.unattached or ()]
+            for node in unit.pous:
+                info = infos.get(id(node))
+                if info is None:
                     continue
-                after = [t for t in mine if t[0] >= m.end]
-                if not after or not _only_space_between(src.text, m.end, after[0][0]):
-                    self.warnings.append((src, m.start, "selective pragma applies to "
-                                          "nothing: put it in front of a POU, a function "
-                                          "block instance or a program instance"))
-                    continue
-                _, kind, obj = after[0]
+                found += [(n, m, "pou", info) for m in node.pragmas or ()
+                          if m.kind == "selective"]
+                for b in node.blocks:
+                    for d in b.decls:
+                        found += [(n, m, "var", (info, d))
+                                  for m in getattr(d, "pragmas", None) or ()]
+            for cfg in unit.configurations:
+                for r in cfg.resources:
+                    for pc in r.programs:
+                        inst = insts.get(id(pc))
+                        if inst is not None:
+                            found += [(n, m, "inst", inst) for m in pc.pragmas or ()]
+        units = self.project.units
+        for n, m, kind, obj in sorted(found, key=lambda f: (f[0], f[1].start)):
+            src = units[n].src
+            word = m.body.strip().lower()
+            if word in ("", "on"):
+                on = True
+            elif word == "off":
+                on = False
+            else:
+                self.warnings.append((src, m.start, "unknown selective pragma: write "
+                                      "{selective on} or {selective off}"))
+                continue
+            if kind is None:
+                self.warnings.append((src, m.start, "selective pragma applies to "
+                                      "nothing: put it in front of a POU, a function "
+                                      "block instance or a program instance"))
+            elif kind == "pou":
+                self.pou_mark[obj.key] = on
+            elif kind == "var":
+                info, decl = obj
                 # several names in one declaration share the pragma
-                same = [t for t in after if t[0] == after[0][0]]
-                if kind == "pou":
-                    self.pou_mark[obj.key] = on
-                elif kind == "var":
-                    for _, _, v in same:
-                        if not isinstance(v.type, FBType) or v.type.pou.standard:
-                            self.warnings.append((src, m.start, f"selective pragma on "
-                                                  f"'{v.name}', which is not an instance of a "
-                                                  "user function block"))
-                        self.var_mark[id(v)] = on
-                else:
-                    self.inst_mark[id(obj)] = on
+                for name, pos in decl.names:
+                    v = info.vars.get(name.upper())
+                    if v is None or v.pos != pos:
+                        continue          # not declared ('already declared')
+                    if not isinstance(v.type, FBType) or v.type.pou.standard:
+                        self.warnings.append((src, m.start, f"selective pragma on "
+                                              f"'{v.name}', which is not an instance of a "
+                                              "user function block"))
+                    self.var_mark[id(v)] = on
+            else:
+                self.inst_mark[id(obj)] = on
 
     def _type_wanted(self, pou):
         mark = self.pou_mark.get(pou.key)
@@ -1005,16 +1017,6 @@ def _pointer_decl(v, name):
         elem, _ = N.array_flat(v.type)
         return f"{N.ctype(elem)} *{name}"
     return f"{N.ctype(v.type)} *{name}"
-
-
-def _only_space_between(text, a, b):
-    between = text[a:b]
-    # the declaration may start with its keyword (FUNCTION_BLOCK, PROGRAM) or
-    # sit on the next line; comments and other pragmas may come between
-    between = re.sub(lexical.COMMENT + "|" + lexical.INLINE_C + "|" + lexical.PRAGMA, " ", between,
-                     flags=re.S)
-    return re.fullmatch(r"\s*(?:(?:FUNCTION_BLOCK|PROGRAM|FUNCTION|VAR\w*|RETAIN|"
-                        r"NON_RETAIN|CONSTANT)\s+)*", between, re.I) is not None
 
 
 def _fb_types(t, depth=0):

@@ -13,15 +13,29 @@ kinds iec2kmod reads are listed in PRAGMAS (syntax, where it may stand,
 what it attaches to, who reads it); any other pragma, and MatIEC's ``{{ }}``
 inline C, is ignored with a warning by the parser.  ``pragmas(text)`` gives
 every pragma of a text once, in order, with its kind and offsets; the
-parser's last step, ``attach``, hangs them on the nodes they apply to (a
-{watchdog} on its Task, a {verify} or {assume} on its POU or the file),
-where the passes that read them find them."""
+parser's last step, ``attach``, hangs them on the nodes they apply to,
+where the passes that read them find them (no pass scans text for a pragma):
+
+    {watchdog}          Task.pragmas (the TASK right after it)
+    {verify} {assume}   POU.pragmas (the POU it is written in), else
+                        SourceUnit.outside
+    {selective}         POU.pragmas, VarDecl.pragmas or ProgramConfig.pragmas
+                        (the POU, variable declaration or program instance
+                        right after it), else SourceUnit.unattached
+
+"Right after" is by the positions of the nodes: only blanks (whitespace,
+comments, other pragmas, inline C) between, and for the first declaration
+of a VAR block its keyword and qualifiers (``{selective off} VAR RETAIN
+v : Valve;``); see ``attach``."""
 
 from __future__ import annotations
 
 import re
+from bisect import bisect_left
 from dataclasses import dataclass
 from functools import lru_cache
+
+from .. import ast
 
 # -- tokens skipped whole
 STRING = r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"$\n]|\$.)*\""     # 'single' and "double" strings
@@ -36,6 +50,9 @@ SKIP = STRING + "|" + COMMENT
 # ... and pragmas and inline C skipped as well (the grammar's blanks).
 SKIP_ALL = SKIP + "|" + INLINE_C + "|" + PRAGMA
 
+# what the grammar skips as blanks: whitespace, comments, pragmas, inline C
+# (one character or one whole token per step: no backtracking blow-up)
+_BLANKS = re.compile(r"(?:\s|" + COMMENT + "|" + INLINE_C + "|" + PRAGMA + ")*", re.S)
 # every pragma (group 1), strings and comments skipped
 _SCAN = re.compile(SKIP + "|(" + INLINE_C + "|" + PRAGMA + ")", re.S)
 _KIND = re.compile(r"\{\s*(" + NAME + r")\b", re.I)
@@ -53,20 +70,24 @@ class PragmaKind:
 PRAGMAS = {k.name: k for k in (
     PragmaKind("watchdog", "{watchdog TIME} | {watchdog TIME, N} | {watchdog off, N}",
                "right in front of a TASK declaration (blanks between)",
-               "that task", "iec2kmod/checks/config.py"),
+               "that task: Task.pragmas", "iec2kmod/checks/config.py"),
     PragmaKind("selective", "{selective} | {selective on} | {selective off}",
-               "right in front of a POU, a variable declaration or a program "
-               "instance (blanks between)",
-               "that POU, the function block instances of that declaration, "
-               "or that program instance", "iec2kmod/codegen/selective.py"),
+               "right in front of a POU, a variable declaration of a POU or a "
+               "program instance (blanks between; in front of a VAR block's "
+               "first declaration, the block's keyword and qualifiers too)",
+               "that POU, the function block instances of that declaration "
+               "(every name of it), or that program instance: POU.pragmas, "
+               "VarDecl.pragmas, ProgramConfig.pragmas; in front of none of "
+               "them, SourceUnit.unattached (a warning)",
+               "iec2kmod/codegen/selective.py"),
     PragmaKind("verify", "{verify NAME: EXPR} | {verify: EXPR}",
                "inside a PROGRAM or outside any POU",
-               "the program (its instances) or the configuration",
-               "iec2kmod/verify/props.py"),
+               "the program (its instances) or the configuration: "
+               "POU.pragmas or SourceUnit.outside", "iec2kmod/verify/props.py"),
     PragmaKind("assume", "{assume: EXPR}",
                "inside a PROGRAM or outside any POU",
-               "the program (its instances) or the configuration",
-               "iec2kmod/verify/props.py"),
+               "the program (its instances) or the configuration: "
+               "POU.pragmas or SourceUnit.outside", "iec2kmod/verify/props.py"),
 )}
 
 
@@ -125,14 +146,21 @@ def in_front_of(text: str, pos: int, kind: str) -> Pragma | None:
     return best
 
 
+def blank(text: str, a: int, b: int) -> bool:
+    """Only what the grammar skips as blanks (whitespace, comments,
+    pragmas, inline C) in text[a:b]."""
+    return _BLANKS.fullmatch(text, a, b) is not None
+
+
 def attach(unit) -> None:
     """Hangs the pragmas of a parsed file (ast.SourceUnit, its ``src`` the
     whole file) on its nodes: ``unit.pragmas`` every pragma in order; a
     {watchdog} right in front of a TASK (blanks between) on that Task's
     ``pragmas``; a {verify} or {assume} inside a POU (from its keyword to
-    its END keyword) on that POU's ``pragmas``, else on ``unit.outside``.
-    A {selective} is matched to its declaration by codegen/selective.py
-    from ``unit.pragmas``."""
+    its END keyword) on that POU's ``pragmas``, else on ``unit.outside``;
+    a {selective} on what it stands in front of (``_place_selective``):
+    the ``pragmas`` of a POU, of a VarDecl of a POU (every name of the
+    declaration) or of a ProgramConfig, else on ``unit.unattached``."""
     text = unit.src.text
     found = pragmas(text)
     unit.pragmas = found
@@ -140,11 +168,19 @@ def attach(unit) -> None:
     pous = [(pou.pos, pou.end_pos, pou) for pou in unit.pous]
     for _, _, pou in pous:
         pou.pragmas = ()
+        for b in pou.blocks:
+            for d in b.decls:
+                if isinstance(d, ast.VarDecl):
+                    d.pragmas = ()
     for cfg in unit.configurations:
         for r in cfg.resources:
             for t in r.tasks:
                 p = in_front_of(text, t.pos, "watchdog") if found else None
                 t.pragmas = (p,) if p is not None else ()
+            for pc in r.programs:
+                pc.pragmas = ()
+    # in front of a POU first: its pragmas in the order they are written
+    unit.unattached = _place_selective(unit, [p for p in found if p.kind == "selective"])
     for p in found:
         if p.kind not in ("verify", "assume"):
             continue
@@ -155,3 +191,49 @@ def attach(unit) -> None:
         else:
             outside.append(p)
     unit.outside = tuple(outside)
+
+
+def _place_selective(unit, found) -> tuple:
+    """Adds each {selective} pragma of found to the ``pragmas`` of the node
+    it stands in front of; returns those in front of none.
+
+    The nodes it may apply to, by their positions: a POU (its keyword), a
+    variable declaration of a POU (its first name; the names of one
+    declaration share it) and a program instance of a resource (its
+    PROGRAM keyword).  A pragma applies to the first of them that starts
+    at or after its end when only blanks (``blank``) lie between; in front
+    of the first declaration of a VAR block, the block's keyword and
+    qualifiers may lie between as well (from the keyword on the pragma may
+    stand anywhere up to the name).  Whatever else lies between (END_VAR,
+    a statement, a type, a POU's name, the rest of a declaration) leaves
+    it unattached: the selective pass warns at it."""
+    if not found:
+        return ()
+    text = unit.src.text
+    # (position, where the blanks in front of it must start, node)
+    targets = []
+    for pou in unit.pous:
+        if pou.pos is None:
+            continue
+        targets.append((pou.pos, pou.pos, pou))
+        for b in pou.blocks:
+            for i, d in enumerate(b.decls):
+                if isinstance(d, ast.VarDecl) and d.pos is not None:
+                    targets.append((d.pos, b.pos if i == 0 else d.pos, d))
+    for cfg in unit.configurations:
+        for r in cfg.resources:
+            for pc in r.programs:
+                if pc.pos is not None:
+                    targets.append((pc.pos, pc.pos, pc))
+    targets.sort(key=lambda t: t[0])
+    starts = [t[0] for t in targets]
+    unattached = []
+    for p in found:
+        k = bisect_left(starts, p.end)
+        if k < len(targets):
+            pos, anchor, node = targets[k]
+            if p.start > anchor or blank(text, p.end, anchor):
+                node.pragmas += (p,)
+                continue
+        unattached.append(p)
+    return tuple(unattached)

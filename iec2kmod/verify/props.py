@@ -59,7 +59,7 @@ def scan_pragmas(project) -> tuple[list, list]:
         seen.add(id(src))
         found = [(p, None) for p in unit.outside or ()]
         for pou in unit.pous:
-            found += [(p, pou) for p in pou.pragmas or ()]
+            found += [(p, pou) for p in pou.pragmas or () if p.kind in ("verify", "assume")]
         for p, pou in sorted(found, key=lambda x: x[0].start):
             m = _PROP_BODY.match(p.body)
             if not m:
