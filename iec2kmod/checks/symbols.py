@@ -151,3 +151,12 @@ class Project:
     pous: dict = field(default_factory=dict)         # upper name -> POUInfo (user)
     configurations: list = field(default_factory=list)
     units: list = field(default_factory=list)
+
+
+class EnumValue:
+    """What an unqualified or qualified enumeration value resolves to."""
+
+    def __init__(self, enum, name):
+        self.enum = enum
+        self.name = name
+        self.value = enum.values[name.upper()][1]
