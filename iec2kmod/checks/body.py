@@ -1,6 +1,20 @@
-"""Pass 'resolve': name resolution and strong typing of every POU body, ST
-and IL.  Every expression gets ``.type``; every variable access gets
-``.symbol``; every call gets ``.target``."""
+"""Pass 'resolve': name resolution and strong typing of every POU body, ST,
+IL and SFC.  Every expression gets ``.type``; every variable access gets
+``.symbol``; every call gets ``.target``.
+
+This file holds the pass itself, ``BodyChecker``: its entry (which body
+language), the ST statements (IF, CASE and its labels, FOR, WHILE, REPEAT,
+EXIT, CONTINUE) and the settling of the standard calls at the end.  The rest
+of the checker is mixed in, each part in its file, all of them on the state
+``BodyChecker`` sets up (``p``, ``decl``, ``pou``, ``src``, ``error``,
+``warning``, ``roots``, ``depth``, ``loop_vars``):
+
+- checks/expr.py ``ExprChecks``: names, accessors, literals, operators, and
+  whether a typed value may be assigned to a target (``check_assign``);
+- checks/calls.py ``CallChecks``: calls and the binding of their arguments;
+- checks/il.py ``ILChecks``: Instruction List bodies;
+- an SFC body is checked by checks/sfc.py's ``SFCChecker`` through this
+  checker."""
 
 from __future__ import annotations
 
@@ -9,6 +23,7 @@ from .calls import CallChecks
 from .expr import ExprChecks
 from .il import ILChecks
 from .settle import settle
+from .sfc import SFCChecker
 from .symbols import EnumValue, POUInfo, Var
 from .types import ERROR, Elementary, EnumT, ErrorT, SubrangeT, is_bool, is_int
 
@@ -30,6 +45,7 @@ class BodyChecker(ExprChecks, CallChecks, ILChecks):
 
     def warning(self, pos, msg):
         self.diags.warning(self.src, pos, msg)
+
     # ------------------------------------------------------------ entry
     def check(self):
         scope = self.decl.pou_scope(self.pou)
@@ -49,7 +65,6 @@ class BodyChecker(ExprChecks, CallChecks, ILChecks):
     def _check(self):
         node = self.pou.node
         if node.language == "SFC":
-            from .sfc import SFCChecker
             if node.sfc is not None and self.pou.kind != "FUNCTION":
                 SFCChecker(self).check()
         elif node.language == "IL":

@@ -1,4 +1,12 @@
-"""Pass 'resolve': calls."""
+"""Pass 'resolve', calls: what a call names and how its arguments bind.
+
+``CallChecks`` is mixed into checks.body.BodyChecker, whose state it uses
+(``p``, ``pou``, ``error``, ``roots``) and whose expression checks it calls
+(``expr``, ``lvalue``, ``ref``, ``check_assign``: checks/expr.py).  A call
+is of a function block instance (also an element of an array of them), a
+user function or a standard function (checks/stdlib.py resolves its
+overload); its arguments are bound by position or name (EN and ENO on every
+call), each checked against its parameter."""
 
 from __future__ import annotations
 
@@ -8,7 +16,6 @@ from .types import BOOL, ERROR, ArrayT, ErrorT, FBType, LiteralT, StructT, cat, 
 
 
 class CallChecks:
-    # ------------------------------------------------------------ calls
     def call(self, c: ast.Call, statement: bool):
         if statement:
             self.roots.append(c)

@@ -7,6 +7,7 @@ from contextlib import contextmanager
 
 from .. import ast
 from . import fold, stdlib
+from .sfc import declare_steps
 from .symbols import POUInfo, Project, Var
 from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, Type, assignable)
 from .types import identical as _identical
@@ -613,7 +614,6 @@ class Declarer:
             self.program_access(pou, block)
         self.declare_eno(pou)
         if node.sfc is not None:
-            from .sfc import declare_steps
             declare_steps(self, pou)
         for v in pou.vars.values():
             if v.section == "VAR_INPUT":

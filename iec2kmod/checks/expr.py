@@ -1,4 +1,17 @@
-"""Pass 'resolve': expressions."""
+"""Pass 'resolve', expressions: the type of every expression of a body and
+whether a typed value may go where it is written.
+
+``ExprChecks`` is mixed into checks.body.BodyChecker, whose state it uses
+(``p``, ``decl``, ``pou``, ``src``, ``error``, ``warning``, ``roots``,
+``depth``, ``loop_vars``) and whose calls it reaches through ``call``
+(checks/calls.py).  It holds:
+
+- assignment compatibility, ``check_assign``: a value's type against its
+  target's (statements, FOR bounds, call arguments and IL share it);
+- names: a variable or an enumeration value (``lookup``, ``ref``), its
+  accessors (index, member, bit), whether it may be written;
+- expressions: literals, binary and unary operators, each typed and folded
+  (``Expr.const``, checks/fold.py)."""
 
 from __future__ import annotations
 
@@ -16,6 +29,7 @@ LOGIC = {"AND", "OR", "XOR"}
 
 
 class ExprChecks:
+    # ------------------------------------------------------- assignment
     def check_assign(self, vt, tt, value, target_node, what=None):
         if isinstance(vt, ErrorT) or isinstance(tt, ErrorT) or tt is None or vt is None:
             return

@@ -1,5 +1,6 @@
-"""Symbols: variables, POU interfaces, resources and the checked project that
-the code generator consumes."""
+"""Symbols: variables, enumeration values (what a name in a body resolves
+to), POU interfaces, resources and the checked project that the code
+generator consumes."""
 
 from __future__ import annotations
 
