@@ -10,7 +10,8 @@ import re
 from .. import ast
 from ..parse.literals import LiteralError, parse_duration
 from .body import BodyChecker
-from .declare import ConstError, address_span, check_address_type
+from .consts import ConstError
+from .declare import address_span, check_address_type
 from .symbols import (Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo,
                       TaskInfo, Var)
 from .types import BOOL, ERROR, ArrayT, ErrorT, FBType, StructT, assignable, identical
