@@ -3,9 +3,10 @@ order, collecting every diagnostic, and returns the checked Project
 (checks/symbols.py).
 
 1. 'declare' (declare.py): user types (types.py) and POU interfaces into
-   the project's symbol tables, constant expressions evaluated (fold.py),
-   the steps of SFC bodies declared (sfc.py); before it, the direct
-   variables of each PROGRAM named (direct.py).
+   the project's symbol tables, their constant expressions and initial
+   values evaluated and checked (consts.py, by fold.py's rules), the steps
+   of SFC bodies declared (sfc.py); before it, the direct variables of each
+   PROGRAM named (direct.py).
 2. 'resolve' (body.py, ``BodyChecker``): every POU body typed and its names
    resolved.  body.py holds the statements; expr.py names, expressions and
    assignment compatibility; calls.py calls and argument binding; il.py

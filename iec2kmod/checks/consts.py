@@ -1,4 +1,17 @@
-"""Pass 'declare': constants."""
+"""Pass 'declare', constants: the value of a constant expression and the
+check of an initial value against its type.
+
+A constant expression (literals, enumeration values, named constants,
+arithmetic, folded by checks/fold.py's rules) sizes arrays and strings,
+bounds subranges, numbers enumerations and gives CASE labels and FOR steps
+their value; a named constant is looked up in the scope of the POU or the
+configuration being checked (``ConstScope``).  An initial value is such an
+expression (folded to a literal when it names a constant) or an array or
+structure initializer, checked against the declared type.
+
+``Constants`` is mixed into checks.declare.Declarer, whose ``error``,
+``warning``, ``lookup_type`` and ``enum_values`` it uses; its own state is
+the scope of the constants in view."""
 
 from __future__ import annotations
 
@@ -6,7 +19,8 @@ from contextlib import contextmanager
 
 from .. import ast
 from . import fold
-from .types import (ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, assignable)
+from .types import (ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT,
+                    SubrangeT, assignable)
 
 
 class ConstError(Exception):
@@ -14,7 +28,7 @@ class ConstError(Exception):
 
 
 class ConstScope:
-    """Names visible to a constant expression (Declarer.scope_of) and the
+    """Names visible to a constant expression (Constants.scope_of) and the
     constants it used (so they count as used)."""
 
     __slots__ = ("entries", "outer", "used")
@@ -25,8 +39,15 @@ class ConstScope:
         self.used: set = set()
 
 
-
 class Constants:
+    def __init__(self):
+        # named constants: the scope a constant expression is evaluated in
+        self._const_scope = ConstScope({}, None)
+        self._config_scope = ConstScope({}, None)
+        self._pou_scopes: dict[str, ConstScope] = {}
+        self._const_busy: set = set()
+        self._resource_constants: set = set()
+
     # ------------------------------------------------------- constants
     def const_value(self, expr, src, what="value"):
         """Evaluates a constant expression (literals, enum values, named

@@ -1,11 +1,19 @@
 """Pass 'declare': user types and POU interfaces into the project's symbol
-tables, constant expressions evaluated, duplicates reported."""
+tables, duplicates reported.
+
+``Declarer`` holds the types (a type spec to its Type, in dependency order)
+and the POUs (their interfaces: VAR blocks, access paths, ENO, located
+variables and the type of their address).  The constant expressions its
+declarations hold (array bounds, string lengths, subrange limits,
+enumeration values) and their initial values are evaluated and checked by
+the mixin ``Constants`` (checks/consts.py), which the later passes use
+through the Declarer too (``const_value``, ``constants_of``)."""
 
 from __future__ import annotations
 
 from .. import ast
 from . import stdlib
-from .consts import ConstScope, Constants
+from .consts import Constants
 from .sfc import declare_steps
 from .symbols import POUInfo, Project, Var
 from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, Type)
@@ -29,12 +37,7 @@ class Declarer(Constants):
         self.enum_values: dict[str, list] = {}  # upper value name -> [EnumT]
         self._pending_types: dict[str, ast.TypeDef] = {}
         self._resolving: set = set()
-        # named constants: the scope a constant expression is evaluated in
-        self._const_scope = ConstScope({}, None)
-        self._config_scope = ConstScope({}, None)
-        self._pou_scopes: dict[str, ConstScope] = {}
-        self._const_busy: set = set()
-        self._resource_constants: set = set()
+        super().__init__()
 
     # ------------------------------------------------------------ errors
     def error(self, src, pos, msg):
