@@ -14,6 +14,7 @@ from __future__ import annotations
 from .. import ast
 from . import stdlib
 from .consts import Constants
+from .located import check_address_type
 from .sfc import declare_steps
 from .symbols import POUInfo, Project, Var
 from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, Type)
@@ -513,49 +514,6 @@ class Declarer(Constants):
                                       "(completed by VAR_CONFIG)")
             return
         check_address_type(self, src, decl.pos, addr, t)
-
-
-SIZE_PREFIX_BITS = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
-
-
-def address_span(addr: str):
-    """(area, first bit, bit count) of a direct address, or None when it has
-    more than the two levels byte.bit."""
-    area = addr[1]
-    rest = addr[2:]
-    size = "X"
-    if rest and rest[0] in SIZE_PREFIX_BITS:
-        size, rest = rest[0], rest[1:]
-    parts = rest.split(".")
-    if size == "X":
-        if len(parts) == 2:
-            return area, int(parts[0]) * 8 + int(parts[1]), 1
-        if len(parts) == 1:
-            return area, int(parts[0]), 1
-        return None
-    if len(parts) != 1:
-        return None
-    nbytes = SIZE_PREFIX_BITS[size] // 8
-    return area, int(parts[0]) * nbytes * 8, SIZE_PREFIX_BITS[size]
-
-
-def check_address_type(decl_ctx, src, pos, addr, t):
-    rest = addr[2:]
-    size = rest[0] if rest and rest[0] in SIZE_PREFIX_BITS else "X"
-    if size == "X" and rest and rest[0] != "X" and "." not in rest:
-        size = "X"
-    bits = SIZE_PREFIX_BITS[size]
-    base = t.base if t is not ERROR else None
-    if base is None or not isinstance(base, Elementary):
-        decl_ctx.error(src, pos, f"located variable at {addr} must have an elementary type")
-        return
-    if bits == 1:
-        if base is not BOOL:
-            decl_ctx.error(src, pos, f"{addr} is a bit address: its variable must be BOOL, "
-                                     f"not {base.name}")
-    elif base.bits != bits or base.cat == "bool":
-        decl_ctx.error(src, pos, f"{addr} holds {bits} bits; {base.name} has "
-                                 f"{base.bits if base.cat != 'bool' else 1}")
 
 
 def _mentions(node, name: str) -> bool:

@@ -22,7 +22,7 @@ import pytest
 
 from iec2kmod import interp, sim
 from iec2kmod.parse import frontend
-from iec2kmod.checks.config import WATCHDOG_DEFAULT_NS
+from iec2kmod.checks.tasks import WATCHDOG_DEFAULT_NS
 from iec2kmod.execmodel import SIM_ITERATION_NS
 
 ROOT = Path(__file__).resolve().parents[2]
