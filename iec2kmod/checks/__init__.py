@@ -14,7 +14,9 @@ order, collecting every diagnostic, and returns the checked Project
    blocks are in stdlib.py, and settle.py gives the standard calls on
    untyped values their type once the statement around them is checked.
 3. 'configure' (config.py, and ``check_recursion`` here): configurations,
-   resources, tasks, program instances and their connections.
+   resources, program instances and their connections; tasks in tasks.py,
+   the rules of located variables (one address, one variable) in
+   located.py.
 4. 'lint' (``lint`` here): unused variables."""
 
 from __future__ import annotations

@@ -1,6 +1,12 @@
-"""Pass 'configure': configurations, resources, tasks and program instances;
-VAR_EXTERNAL matched against globals; the seed's rules on directly
-represented variables."""
+"""Pass 'configure': configurations, resources and program instances, their
+connections, VAR_EXTERNAL matched against globals, access paths and
+VAR_CONFIG.
+
+``ConfigChecker`` walks each configuration; two parts of it are mixed in,
+each in its file, on the state it sets up: the tasks (checks/tasks.py
+``TaskChecks``: INTERVAL, PRIORITY, SINGLE, the watchdog pragma) and the
+rules of located variables (checks/located.py ``LocatedRules``: an address
+is accessed by one variable of one resource)."""
 
 from __future__ import annotations
 

@@ -469,7 +469,7 @@ class Declarer(Constants):
                 # I/O of every OpenPLC program), and an incomplete location
                 # (%I*, %Q*, %M*) in a program or function block is completed
                 # by the configuration's VAR_CONFIG; the configuration checks
-                # that one address belongs to one variable (checks/config.py)
+                # that one address belongs to one variable (checks/located.py)
                 if not addr.endswith("*"):
                     check_address_type(self, src, decl.pos, addr, t)
                 return

@@ -1,4 +1,18 @@
-"""Located variables."""
+"""Pass 'configure', located variables: the rules of directly represented
+addresses (``AT %IX0.0``) over a whole configuration.
+
+An address has a type (``check_address_type``: a bit address is BOOL, a
+byte, word, double or long address an elementary type of that size, which
+the pass 'declare' checks too) and a span of bits (``address_span``); it is
+accessed by exactly one variable, of one resource (``check_address_rules``:
+no address twice, no overlapping spans); a program type that declares
+located variables has one instance; an incomplete location (``AT %I*``) is
+completed by VAR_CONFIG.
+
+``LocatedRules`` is mixed into checks.config.ConfigChecker, whose
+``error``, ``addresses``, ``paths``, ``located_owner`` and ``completed`` it
+uses; ``note_address``, ``note_direct`` and ``note_global_use`` record what
+the rest of that pass finds."""
 
 from __future__ import annotations
 
@@ -9,6 +23,7 @@ from .types import BOOL, ERROR, Elementary, FBType
 
 
 class LocatedRules:
+    # ------------------------------------------------ program instances
     def program_located(self, pou, inst, pc, r, src):
         """The located variables a program type declares (ed.2
         located_var_declarations) belong to its one instance: a second
@@ -49,7 +64,7 @@ class LocatedRules:
                                    f"in the configuration's VAR_CONFIG ({path} AT "
                                    f"{v.location[:-1]}... : {v.type.name};)")
 
-    # -------------------------------------------------- located rules
+    # -------------------------------------------------------- addresses
     def note_address(self, v: Var, resource, src):
         if v.location:
             self.note_direct(v.location, resource, src, v.pos, f"'{v.name}'", var=v)

@@ -71,7 +71,7 @@ class TaskInfo:
     single: Var | None = None
     single_name: str | None = None
     # the watchdog ({watchdog ...} pragma in front of the TASK, see
-    # checks/config.py): a cycle longer than watchdog_ns faults the task
+    # checks/tasks.py): a cycle longer than watchdog_ns faults the task
     # (0: no limit); so do watchdog_overruns cycles in a row that end
     # after the next release (0: no limit)
     watchdog_ns: int = 0

@@ -1,4 +1,9 @@
-"""Pass 'configure': tasks."""
+"""Pass 'configure', tasks: a TASK's INTERVAL, PRIORITY and SINGLE checked,
+and the {watchdog ...} pragma in front of it read (the limits both engines
+and the kernel module apply to a cycle).
+
+``TaskChecks`` is mixed into checks.config.ConfigChecker, whose ``decl``
+(constant values), ``error``, ``warning`` and ``watchdogs_used`` it uses."""
 
 from __future__ import annotations
 

@@ -75,7 +75,7 @@ class TaskPlan:
     priority: int
     single: GlobalPlan | None
     instances: list = field(default_factory=list)
-    watchdog_ns: int = 0          # see checks/config.py
+    watchdog_ns: int = 0          # see checks/tasks.py
     watchdog_overruns: int = 0
 
 

@@ -110,7 +110,7 @@ class TaskRun:
     priority: int
     single: tuple | None     # (container, key) of the SINGLE variable
     programs: list = field(default_factory=list)
-    watchdog_ns: int = 0     # 0: no limit (checks/config.py)
+    watchdog_ns: int = 0     # 0: no limit (checks/tasks.py)
     watchdog_overruns: int = 0
 
 

@@ -53,7 +53,7 @@ class PragmaKind:
 PRAGMAS = {k.name: k for k in (
     PragmaKind("watchdog", "{watchdog TIME} | {watchdog TIME, N} | {watchdog off, N}",
                "right in front of a TASK declaration (blanks between)",
-               "that task", "iec2kmod/checks/config.py"),
+               "that task", "iec2kmod/checks/tasks.py"),
     PragmaKind("selective", "{selective} | {selective on} | {selective off}",
                "right in front of a POU, a variable declaration or a program "
                "instance (blanks between)",
