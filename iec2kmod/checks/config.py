@@ -13,7 +13,7 @@ from __future__ import annotations
 from .. import ast
 from .body import BodyChecker
 from .consts import ConstError
-from .located import LocatedRules, _qual, check_address_type
+from .located import LocatedRules, check_address_type
 from .symbols import Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo
 from .tasks import TaskChecks
 from .types import ERROR, ArrayT, ErrorT, FBType, StructT, assignable, identical
@@ -146,7 +146,7 @@ class ConfigChecker(TaskChecks, LocatedRules):
                                              "configuration global of the same name")
                 self.note_address(v, r.name, src)
                 if v.location:
-                    self.paths.setdefault(v.location, _qual(r, v.name))
+                    self.paths.setdefault(v.location, r.path(v.name))
         for t in rnode.tasks:
             if t.name.upper() in r.tasks:
                 self.error(src, t.pos, f"task '{t.name}' is already defined")
@@ -439,7 +439,7 @@ class ConfigChecker(TaskChecks, LocatedRules):
                     chain = self.instance_chain(d.path, cfg)
                     if chain is not None:
                         r, inst, vs = chain
-                        path = ".".join([_qual(r, inst.name)] + [v.name for v in vs])
+                        path = ".".join([r.path(inst.name)] + [v.name for v in vs])
                         self.completed.add(path.upper())
                         self.paths.setdefault(d.location, path)
             if d.init is not None and t is not ERROR:

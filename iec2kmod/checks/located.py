@@ -44,7 +44,7 @@ class LocatedRules:
                        "give each instance its address in VAR_CONFIG")
             return
         self.located_owner[pou.key] = (pc.name, _place(src, pc.pos))
-        path = _qual(r, inst.name)
+        path = r.path(inst.name)
         for v in located:
             self.note_direct(v.location, r.name, v.src, v.pos,
                              f"'{path}.{v.name}'", var=v)
@@ -56,7 +56,7 @@ class LocatedRules:
         done = self.completed
         for r in cfg.resources:
             for inst in r.programs:
-                for path, v in _incomplete(inst.pou, _qual(r, inst.name), 0):
+                for path, v in _incomplete(inst.pou, r.path(inst.name), 0):
                     if path.upper() not in done:
                         self.error(cfg.src, inst.node.pos,
                                    f"'{path}' is declared AT {v.location} "
@@ -167,12 +167,6 @@ def _tables_note(addr1: str, addr2: str) -> str:
     return (" (iec2kmod's process image is one array of bytes per area, %QW0 holding "
             "%QX0.0 to %QX1.7; OpenPLC keeps each size in a table of its own, where "
             f"{addr1} and {addr2} are two things: give one of them another address)")
-
-
-def _qual(r, name):
-    """IEC path of a name in resource r, as the variable table writes it (a
-    configuration without RESOURCE has one implicit resource, not written)."""
-    return f"{r.name}.{name}" if r.node.name else name
 
 
 def _place(src, pos):

@@ -119,6 +119,12 @@ class ResourceInfo:
     tasks: dict = field(default_factory=dict)
     programs: list = field(default_factory=list)
 
+    def path(self, name: str) -> str:
+        """IEC path of a name in this resource, as the variable table writes
+        it (a configuration without RESOURCE has one implicit resource, whose
+        name is not written)."""
+        return f"{self.name}.{name}" if self.node.name else name
+
 
 @dataclass(eq=False)
 class ConfigInfo:
