@@ -1,5 +1,23 @@
 """Semantic checks: the passes after parsing.  ``check_project`` runs them in
-order, collecting every diagnostic, and returns the checked Project."""
+order, collecting every diagnostic, and returns the checked Project
+(checks/symbols.py).
+
+1. 'declare' (declare.py): user types (types.py) and POU interfaces into
+   the project's symbol tables, their constant expressions and initial
+   values evaluated and checked (consts.py, by fold.py's rules), the steps
+   of SFC bodies declared (sfc.py); before it, the direct variables of each
+   PROGRAM named (direct.py).
+2. 'resolve' (body.py, ``BodyChecker``): every POU body typed and its names
+   resolved.  body.py holds the statements; expr.py names, expressions and
+   assignment compatibility; calls.py calls and argument binding; il.py
+   Instruction List; sfc.py SFC.  The standard functions and function
+   blocks are in stdlib.py, and settle.py gives the standard calls on
+   untyped values their type once the statement around them is checked.
+3. 'configure' (config.py, and ``check_recursion`` here): configurations,
+   resources, program instances and their connections; tasks in tasks.py,
+   the rules of located variables (one address, one variable) in
+   located.py.
+4. 'lint' (``lint`` here): unused variables."""
 
 from __future__ import annotations
 

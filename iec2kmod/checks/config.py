@@ -1,30 +1,22 @@
-"""Pass 'configure': configurations, resources, tasks and program instances;
-VAR_EXTERNAL matched against globals; the seed's rules on directly
-represented variables."""
+"""Pass 'configure': configurations, resources and program instances, their
+connections, VAR_EXTERNAL matched against globals, access paths and
+VAR_CONFIG.
+
+``ConfigChecker`` walks each configuration; two parts of it are mixed in,
+each in its file, on the state it sets up: the tasks (checks/tasks.py
+``TaskChecks``: INTERVAL, PRIORITY, SINGLE, the watchdog pragma) and the
+rules of located variables (checks/located.py ``LocatedRules``: an address
+is accessed by one variable of one resource)."""
 
 from __future__ import annotations
 
-import os
-import re
-
 from .. import ast
-from ..parse.literals import LiteralError, parse_duration
 from .body import BodyChecker
-from .declare import ConstError, address_span, check_address_type
-from .symbols import (Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo,
-                      TaskInfo, Var)
-from .types import BOOL, ERROR, ArrayT, ErrorT, FBType, StructT, assignable, identical
-
-MAX_PRIORITY = 48   # IEC 0 (most urgent) .. 48 -> SCHED_FIFO 49 .. 1
-
-
-# The watchdog of a task (issue 9): set by a pragma in front of its TASK
-# declaration, {watchdog TIME} or {watchdog TIME, N}; TIME is a TIME literal
-# or "off", N the number of overrunning cycles in a row that fault the task
-# (0 or absent: no such limit).  Without a pragma: WATCHDOG_DEFAULT_NS and
-# no overrun limit.
-WATCHDOG_DEFAULT_NS = 5_000_000_000
-WATCHDOG_MAX_OVERRUNS = 1_000_000
+from .consts import ConstError
+from .located import LocatedRules, check_address_type
+from .symbols import Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo
+from .tasks import TaskChecks
+from .types import ERROR, ArrayT, ErrorT, FBType, StructT, assignable, identical
 
 
 class _Scope:
@@ -47,7 +39,7 @@ class _Scope:
             s = s.outer
         return None
 
-class ConfigChecker:
+class ConfigChecker(TaskChecks, LocatedRules):
     def __init__(self, project, declarer, diags):
         self.p = project
         self.decl = declarer
@@ -154,7 +146,7 @@ class ConfigChecker:
                                              "configuration global of the same name")
                 self.note_address(v, r.name, src)
                 if v.location:
-                    self.paths.setdefault(v.location, _qual(r, v.name))
+                    self.paths.setdefault(v.location, r.path(v.name))
         for t in rnode.tasks:
             if t.name.upper() in r.tasks:
                 self.error(src, t.pos, f"task '{t.name}' is already defined")
@@ -170,117 +162,6 @@ class ConfigChecker:
             if inst is not None:
                 r.programs.append(inst)
         return r
-
-    def task(self, t, r, cfg) -> TaskInfo:
-        src = cfg.src
-        info = TaskInfo(t.name, t.pos)
-        for key, (expr, pos) in t.props.items():
-            if key == "INTERVAL":
-                try:
-                    v = self.decl.const_value(expr, src, "INTERVAL")
-                except ConstError:
-                    self.error(src, expr.pos, "INTERVAL must be a constant TIME, e.g. T#10ms")
-                    continue
-                named = r.globals.get(expr.name.upper()) or cfg.globals.get(
-                    expr.name.upper()) if isinstance(expr, ast.Ref) else None
-                is_time = (isinstance(expr, ast.Lit) and expr.kind == "time") or (
-                    named is not None and named.constant and
-                    getattr(named.type, "cat", None) == "time")
-                if not is_time or v <= 0:
-                    self.error(src, expr.pos, "INTERVAL must be a positive TIME literal or "
-                                              "TIME constant, e.g. T#10ms")
-                    continue
-                if v < 50_000:
-                    self.error(src, expr.pos, "INTERVAL below 50 us cannot be met by a kernel "
-                                              "thread; use at least T#50us")
-                    continue
-                info.interval_ns = v
-            elif key == "PRIORITY":
-                try:
-                    v = self.decl.const_value(expr, src, "PRIORITY")
-                except ConstError:
-                    self.error(src, expr.pos, "PRIORITY must be an integer constant")
-                    continue
-                if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= MAX_PRIORITY:
-                    self.error(src, expr.pos, f"PRIORITY must be 0 (most urgent) .. "
-                                              f"{MAX_PRIORITY}")
-                    continue
-                info.priority = v
-            elif key == "SINGLE":
-                if not isinstance(expr, ast.Ref) or expr.accessors:
-                    self.error(src, expr.pos, "SINGLE must name a BOOL global variable")
-                    continue
-                v = r.globals.get(expr.name.upper()) or cfg.globals.get(expr.name.upper())
-                if v is None:
-                    self.error(src, expr.pos, f"unknown global variable '{expr.name}'")
-                    continue
-                if v.type is not BOOL:
-                    self.error(src, expr.pos, f"SINGLE variable '{expr.name}' must be BOOL, "
-                                              f"not {v.type.name}")
-                    continue
-                v.used = True
-                info.single = v
-                info.single_name = v.name
-        self.watchdog(info, t, src)
-        if "PRIORITY" not in t.props:
-            self.error(src, t.pos, f"task '{t.name}' needs a PRIORITY")
-        if info.interval_ns is None and info.single is None and \
-                "INTERVAL" not in t.props and "SINGLE" not in t.props:
-            self.error(src, t.pos, f"task '{t.name}' needs an INTERVAL (periodic) or a SINGLE "
-                                   "(event) variable")
-        if "INTERVAL" in t.props and "SINGLE" in t.props:
-            self.error(src, t.pos, f"task '{t.name}' has both INTERVAL and SINGLE: a task is "
-                                   "periodic or event-driven")
-        return info
-
-    def watchdog(self, info: TaskInfo, t, src) -> None:
-        """The {watchdog ...} pragma right in front of the TASK, if any (the
-        parser attached it to the Task: parse/lexical.attach)."""
-        info.watchdog_ns = WATCHDOG_DEFAULT_NS
-        m = next((p for p in t.pragmas or () if p.kind == "watchdog"), None)
-        if not m:
-            return
-        self.watchdogs_used.add((src.path, m.start))
-        pos = m.start
-        words = [w.strip() for w in m.body.split(",")]
-        usage = "write {watchdog T#20ms}, {watchdog T#20ms, 3} or {watchdog off, 3}"
-        if len(words) > 2 or not words[0]:
-            self.error(src, pos, f"malformed watchdog pragma: {usage}")
-            return
-        if words[0].lower() == "off":
-            ns = 0
-        else:
-            body = re.match(r"(?:T|TIME)#(.+)\Z", words[0], re.I)
-            try:
-                ns = parse_duration(body.group(1)) if body else None
-            except LiteralError:
-                ns = None
-            if ns is None:
-                self.error(src, pos, f"watchdog time '{words[0]}' is not a TIME literal: "
-                                     f"{usage}")
-                return
-            if ns <= 0:
-                self.error(src, pos, "the watchdog time must be positive (or off)")
-                return
-        n = 0
-        if len(words) == 2:
-            if not words[1].isdigit() or int(words[1]) > WATCHDOG_MAX_OVERRUNS:
-                self.error(src, pos, f"the overrun limit '{words[1]}' is not a number of "
-                                     f"cycles 0..{WATCHDOG_MAX_OVERRUNS}: {usage}")
-                return
-            n = int(words[1])
-        if n and not info.interval_ns:
-            self.error(src, pos, "an overrun limit needs a periodic task (INTERVAL)")
-            return
-        info.watchdog_ns, info.watchdog_overruns = ns, n
-
-    def unused_watchdogs(self, units) -> None:
-        for unit in units:
-            src = unit.src
-            for m in unit.pragmas or ():
-                if m.kind == "watchdog" and (src.path, m.start) not in self.watchdogs_used:
-                    self.warning(src, m.start, "watchdog pragma applies to nothing: put it "
-                                                  "right in front of a TASK declaration")
 
     def program_instance(self, pc, r, cfg):
         src = cfg.src
@@ -324,46 +205,6 @@ class ConfigChecker:
         self.bind_externals(pou, r, cfg, inst, src)
         self.program_located(pou, inst, pc, r, src)
         return inst
-
-    def program_located(self, pou, inst, pc, r, src):
-        """The located variables a program type declares (ed.2
-        located_var_declarations) belong to its one instance: a second
-        instance would give their addresses a second variable."""
-        located = [v for v in pou.vars.values() if v.location and not v.location.endswith("*")]
-        if not located:
-            return
-        owner = self.located_owner.get(pou.key)
-        if owner is not None:
-            v = located[0]
-            more = f" and {len(located) - 1} more" if len(located) > 1 else ""
-            self.error(src, pc.pos,
-                       f"a second instance '{pc.name}' of program '{pou.name}', which declares "
-                       f"'{v.name}' AT {v.location}{more} ({_place(v.src, v.pos)}): the first "
-                       f"instance '{owner[0]}' ({owner[1]}) has that address, and one address is "
-                       "accessed by exactly one variable; instantiate the program once, or "
-                       f"declare '{v.name}' AT {v.location[:3].rstrip('XBWDL0123456789.')}* and "
-                       "give each instance its address in VAR_CONFIG")
-            return
-        self.located_owner[pou.key] = (pc.name, _place(src, pc.pos))
-        path = _qual(r, inst.name)
-        for v in located:
-            self.note_direct(v.location, r.name, v.src, v.pos,
-                             f"'{path}.{v.name}'", var=v)
-            self.paths.setdefault(v.location, f"{path}.{v.name}")
-
-    def check_completed(self, cfg):
-        """Every incomplete location (AT %I*) of a program instance, or of a
-        function block instance in one, is completed by VAR_CONFIG."""
-        done = self.completed
-        for r in cfg.resources:
-            for inst in r.programs:
-                for path, v in _incomplete(inst.pou, _qual(r, inst.name), 0):
-                    if path.upper() not in done:
-                        self.error(cfg.src, inst.node.pos,
-                                   f"'{path}' is declared AT {v.location} "
-                                   f"({_place(v.src, v.pos)}): its location must be completed "
-                                   f"in the configuration's VAR_CONFIG ({path} AT "
-                                   f"{v.location[:-1]}... : {v.type.name};)")
 
     def inout_connection(self, conn, param, r, cfg, inst):
         """A program's VAR_IN_OUT refers to a whole global of its type."""
@@ -598,7 +439,7 @@ class ConfigChecker:
                     chain = self.instance_chain(d.path, cfg)
                     if chain is not None:
                         r, inst, vs = chain
-                        path = ".".join([_qual(r, inst.name)] + [v.name for v in vs])
+                        path = ".".join([r.path(inst.name)] + [v.name for v in vs])
                         self.completed.add(path.upper())
                         self.paths.setdefault(d.location, path)
             if d.init is not None and t is not ERROR:
@@ -634,95 +475,6 @@ class ConfigChecker:
             chain.append(v)
             pou = v.type.pou if isinstance(v.type, FBType) else None
         return r, inst, chain
-
-    # -------------------------------------------------- located rules
-    def note_address(self, v: Var, resource, src):
-        if v.location:
-            self.note_direct(v.location, resource, src, v.pos, f"'{v.name}'", var=v)
-
-    def note_direct(self, addr, resource, src, pos, who, var=None, typ=None):
-        # [who, declaring resource, src, pos, variable, resources using it, type]
-        self.addresses.setdefault(addr, []).append(
-            [who, resource, src, pos, var, set(), typ if var is None else var.type])
-
-    def note_global_use(self, g, r, src, pos):
-        """A located configuration global used by a program of resource r."""
-        if not g.location:
-            return
-        for entry in self.addresses.get(g.location, []):
-            if entry[4] is g:
-                entry[5].add(r.name)
-
-    def check_address_rules(self, src):
-        spans = []
-        for addr, entries in self.addresses.items():
-            if len(entries) > 1:
-                first = entries[0]
-                for e in entries[1:]:
-                    self.error(e[2], e[3], f"address {addr} is already used by {first[0]} "
-                                           f"({_place(first[2], first[3])}): one address is "
-                                           "accessed by exactly one variable")
-            for e in entries:
-                resources = set(e[5])
-                if e[1] is not None:
-                    resources.add(e[1])
-                if len(resources) > 1:
-                    self.error(e[2], e[3], f"located variable {e[0]} at {addr} is used by "
-                                           f"resources {', '.join(sorted(resources))}: a located "
-                                           "address belongs to one resource")
-            span = address_span(addr)
-            if span is not None:
-                spans.append((span, addr, entries[0]))
-        spans.sort(key=lambda s: (s[0][0], s[0][1]))
-        for (a, b) in zip(spans, spans[1:]):
-            (area1, start1, n1), addr1, e1 = a
-            (area2, start2, n2), addr2, e2 = b
-            if area1 == area2 and start2 < start1 + n1:
-                self.error(e2[2], e2[3], f"address {addr2} overlaps {addr1} ({e1[0]}, "
-                                         f"{_place(e1[2], e1[3])}): one address is accessed by "
-                                         "exactly one variable" + _tables_note(addr1, addr2))
-
-
-def _size(addr: str) -> str:
-    return addr[2] if len(addr) > 2 and addr[2].isalpha() else "X"
-
-
-def _tables_note(addr1: str, addr2: str) -> str:
-    """For two addresses of different sizes: how the areas are laid out,
-    and the dialect that keeps the sizes apart."""
-    if _size(addr1) == _size(addr2):
-        return ""
-    return (" (iec2kmod's process image is one array of bytes per area, %QW0 holding "
-            "%QX0.0 to %QX1.7; OpenPLC keeps each size in a table of its own, where "
-            f"{addr1} and {addr2} are two things: give one of them another address)")
-
-
-def _qual(r, name):
-    """IEC path of a name in resource r, as the variable table writes it (a
-    configuration without RESOURCE has one implicit resource, not written)."""
-    return f"{r.name}.{name}" if r.node.name else name
-
-
-def _place(src, pos):
-    """file:line:col of a declaration (the file's name: the same message
-    wherever the project lies)."""
-    if src is None or pos is None:
-        return "?"
-    line, col = src.linecol(pos)
-    return f"{os.path.basename(src.path)}:{line}:{col}"
-
-
-def _incomplete(pou, path, depth):
-    """(path, Var) of every incomplete location in an instance of pou: its
-    own and those of the function block instances it holds."""
-    if pou is None or depth > 32:
-        return
-    for v in pou.vars.values():
-        if v.location and v.location.endswith("*"):
-            yield f"{path}.{v.name}", v
-        elif isinstance(v.type, FBType) and not v.type.pou.standard and \
-                v.section in ("VAR", "VAR_INPUT", "VAR_OUTPUT"):
-            yield from _incomplete(v.type.pou, f"{path}.{v.name}", depth + 1)
 
 
 def _same_type(a, b):

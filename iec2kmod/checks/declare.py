@@ -1,14 +1,23 @@
 """Pass 'declare': user types and POU interfaces into the project's symbol
-tables, constant expressions evaluated, duplicates reported."""
+tables, duplicates reported.
+
+``Declarer`` holds the types (a type spec to its Type, in dependency order)
+and the POUs (their interfaces: VAR blocks, access paths, ENO, located
+variables and the type of their address).  The constant expressions its
+declarations hold (array bounds, string lengths, subrange limits,
+enumeration values) and their initial values are evaluated and checked by
+the mixin ``Constants`` (checks/consts.py), which the later passes use
+through the Declarer too (``const_value``, ``constants_of``)."""
 
 from __future__ import annotations
 
-from contextlib import contextmanager
-
 from .. import ast
-from . import fold, stdlib
+from . import stdlib
+from .consts import Constants
+from .located import check_address_type
+from .sfc import declare_steps
 from .symbols import POUInfo, Project, Var
-from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, Type, assignable)
+from .types import (BOOL, ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT, SubrangeT, Type)
 from .types import identical as _identical
 
 SECTIONS_IN_POU = {
@@ -22,35 +31,14 @@ SECTIONS_IN_POU = {
 MAX_STRING = 65534
 
 
-class ConstError(Exception):
-    pass
-
-
-class ConstScope:
-    """Names visible to a constant expression (Declarer.scope_of) and the
-    constants it used (so they count as used)."""
-
-    __slots__ = ("entries", "outer", "used")
-
-    def __init__(self, entries, outer):
-        self.entries = entries
-        self.outer = outer
-        self.used: set = set()
-
-
-class Declarer:
+class Declarer(Constants):
     def __init__(self, project: Project, diags):
         self.p = project
         self.diags = diags
         self.enum_values: dict[str, list] = {}  # upper value name -> [EnumT]
         self._pending_types: dict[str, ast.TypeDef] = {}
         self._resolving: set = set()
-        # named constants: the scope a constant expression is evaluated in
-        self._const_scope = ConstScope({}, None)
-        self._config_scope = ConstScope({}, None)
-        self._pou_scopes: dict[str, ConstScope] = {}
-        self._const_busy: set = set()
-        self._resource_constants: set = set()
+        super().__init__()
 
     # ------------------------------------------------------------ errors
     def error(self, src, pos, msg):
@@ -58,164 +46,6 @@ class Declarer:
 
     def warning(self, src, pos, msg):
         self.diags.warning(src, pos, msg)
-
-    # ------------------------------------------------------- constants
-    def const_value(self, expr, src, what="value"):
-        """Evaluates a constant expression (literals, enum values, named
-        constants, arithmetic) by the folder's rules (checks/fold.py) and
-        sets ``const`` on the literals and operators it folds; raises
-        ConstError with a message."""
-        v = self._const_value(expr, src, what)
-        if expr.const is None and isinstance(v, (int, float)) and (
-                isinstance(expr, (ast.UnOp, ast.BinOp)) or fold.literal(expr) is not None):
-            expr.const = v
-        return v
-
-    def _const_value(self, expr, src, what):
-        if isinstance(expr, ast.Lit):
-            if expr.kind in fold.NUMERIC:
-                return fold.literal(expr)
-            if expr.kind == "enum":
-                t = self.lookup_type(expr.type_name, src, expr.pos, report=False)
-                if isinstance(t, EnumT) and t.has(expr.value):
-                    return t.values[expr.value.upper()][1]
-                raise ConstError(f"unknown enumeration value {expr.text}")
-            return expr.value
-        if isinstance(expr, ast.UnOp):
-            return fold.unary(expr.op, self.const_value(expr.operand, src, what))
-        if isinstance(expr, ast.BinOp):
-            a = self.const_value(expr.left, src, what)
-            b = self.const_value(expr.right, src, what)
-            if expr.op in fold.ARITH_OPS:
-                try:
-                    return fold.binary(expr.op, a, b)
-                except ZeroDivisionError:
-                    raise ConstError("division by zero in a constant expression") from None
-        if isinstance(expr, ast.Ref) and not expr.accessors:
-            key = expr.name.upper()
-            found = self._const_scope.entries.get(key)
-            if found is not None and found[0] != "var":
-                return self.named_constant(key, found, what)
-            hits = self.enum_values.get(key, [])
-            if len(hits) == 1:
-                return hits[0].values[key][1]
-            if found is not None:
-                raise ConstError(f"{what} must be a constant expression: '{expr.name}' is a "
-                                 "variable (a named constant is declared VAR CONSTANT, or "
-                                 "VAR_EXTERNAL CONSTANT for the configuration's VAR_GLOBAL "
-                                 "CONSTANT, with an initial value)")
-        raise ConstError(f"{what} must be a constant expression")
-
-    # ------------------------------------------------- named constants
-    # A constant expression may name a constant (ed.3 7.3.2, 6.4.4: array
-    # bounds, string lengths, subranges, CASE labels): a VAR CONSTANT of the
-    # same POU (or VAR_GLOBAL CONSTANT of the configuration or resource)
-    # with a constant initial value, in any order of declaration, or a
-    # VAR_EXTERNAL CONSTANT, whose value is the configuration's VAR_GLOBAL
-    # CONSTANT of that name: a POU type has one layout for all its
-    # instances, so a resource's global cannot give it.
-    def named_constant(self, key, found, what):
-        kind, init, src, name = found
-        scope = self._const_scope
-        if kind == "external":
-            scope.used.add(key)
-            g = self._config_scope.entries.get(key)
-            if g is None or g[0] != "const":
-                why = ("; a resource's constant of that name cannot give it (a POU type has "
-                       "one layout for all its instances)" if key in self._resource_constants
-                       else ", which this project does not declare")
-                raise ConstError(f"{what}: VAR_EXTERNAL CONSTANT '{name}' takes its value from "
-                                 f"the configuration's VAR_GLOBAL CONSTANT {name}{why}")
-            _, init, src, name = g
-            scope = self._config_scope
-        mark = (id(scope), key)
-        if mark in self._const_busy:
-            raise ConstError(f"constant '{name}' is defined in terms of itself")
-        self._const_busy.add(mark)
-        saved = self._const_scope
-        self._const_scope = scope
-        try:
-            value = self.const_value(init, src, what)
-        finally:
-            self._const_scope = saved
-            self._const_busy.discard(mark)
-        scope.used.add(key)
-        return value
-
-    @staticmethod
-    def scope_of(blocks, src, outer=None) -> "ConstScope":
-        """The names a list of VAR blocks declares, as a ConstScope over
-        *outer*'s: 'const' (a CONSTANT with an initial value), 'external'
-        (VAR_EXTERNAL CONSTANT) or 'var' (any other variable)."""
-        entries = dict(outer.entries) if outer is not None else {}
-        for block in blocks:
-            if block.kind in ("VAR_ACCESS", "VAR_CONFIG"):
-                continue
-            constant = "CONSTANT" in block.qualifiers
-            for decl in block.decls:
-                if constant and block.kind == "VAR_EXTERNAL":
-                    kind = "external"
-                elif constant and decl.init is not None and \
-                        block.kind in ("VAR", "VAR_GLOBAL") and not decl.location:
-                    kind = "const"
-                else:
-                    kind = "var"
-                for name, _ in decl.names:
-                    entries[name.upper()] = (kind, decl.init, src, name)
-        return ConstScope(entries, outer)
-
-    def pou_scope(self, pou) -> "ConstScope":
-        scope = self._pou_scopes.get(pou.key)
-        if scope is None:
-            scope = self.scope_of(pou.node.blocks, pou.node.src)
-            self._pou_scopes[pou.key] = scope
-        return scope
-
-    @contextmanager
-    def constants_of(self, scope):
-        """Constant expressions inside name *scope*'s constants."""
-        saved = self._const_scope
-        self._const_scope = scope
-        try:
-            yield scope
-        finally:
-            self._const_scope = saved
-
-    def collect_config_constants(self, units):
-        """The configuration's VAR_GLOBAL CONSTANTs, before the POUs are
-        declared: their VAR_EXTERNAL CONSTANTs may size arrays."""
-        configs = [c for u in units for c in u.configurations]
-        if configs:
-            self._config_node = configs[0]
-            self._config_scope = self.config_scope(configs[0])
-            self._resource_constants = {
-                key for r in configs[0].resources
-                for key, found in self.scope_of(r.blocks, configs[0].src).entries.items()
-                if found[0] == "const"}
-
-    def config_scope(self, node) -> "ConstScope":
-        """The constants a configuration's own declarations see."""
-        if node is getattr(self, "_config_node", None) and self._config_scope.entries:
-            return self._config_scope
-        return self.scope_of([b for b in node.blocks if b.kind == "VAR_GLOBAL"], node.src)
-
-    @staticmethod
-    def mark_used(scope, table):
-        for key in scope.used:
-            v = table.get(key)
-            if v is not None:
-                v.used = True
-
-    def const_int(self, expr, src, what):
-        try:
-            v = self.const_value(expr, src, what)
-        except ConstError as exc:
-            self.error(src, expr.pos, str(exc))
-            return None
-        if isinstance(v, bool) or not isinstance(v, int):
-            self.error(src, expr.pos, f"{what} must be an integer constant")
-            return None
-        return v
 
     # ------------------------------------------------------------ types
     def declare_types(self, units):
@@ -399,157 +229,6 @@ class Declarer:
             return t
         raise AssertionError(f"unknown spec {spec!r}")
 
-    # ---------------------------------------------------- initializers
-    def check_initializer(self, init, t, src):
-        """Checks an initial value for type *t*; returns it, an expression
-        that names constants folded to the literal of its value (the code
-        generators and the interpreter initialise from literals)."""
-        if isinstance(init, ast.ArrayInit):
-            if not isinstance(t, ArrayT):
-                self.error(src, init.pos, f"an array initializer cannot initialize {t.name}")
-                return init
-            n = 0
-            for i, (count, value) in enumerate(init.items):
-                k = count if count is not None else 1
-                if count is not None and count < 1:
-                    self.error(src, init.pos, "repetition count must be at least 1")
-                n += k
-                if value is not None:
-                    init.items[i] = (count, self.check_initializer(value, t.elem, src))
-            if n > t.count:
-                self.error(src, init.pos, f"{n} initial values for an array of {t.count} elements")
-            return init
-        if isinstance(init, ast.StructInit):
-            if not isinstance(t, StructT):
-                if isinstance(t, FBType):
-                    pou = t.pou
-                    for i, (fname, fval, fpos) in enumerate(init.fields):
-                        v = pou.var(fname)
-                        if v is None or v.section not in ("VAR_INPUT", "VAR_OUTPUT", "VAR"):
-                            self.error(src, fpos, f"'{t.name}' has no member '{fname}'")
-                        else:
-                            init.fields[i] = (fname, self.check_initializer(fval, v.type, src),
-                                              fpos)
-                    return init
-                self.error(src, init.pos, f"a structure initializer cannot initialize {t.name}")
-                return init
-            for i, (fname, fval, fpos) in enumerate(init.fields):
-                f = t.fields.get(fname.upper())
-                if f is None:
-                    self.error(src, fpos, f"structure '{t.name}' has no member '{fname}'")
-                    continue
-                init.fields[i] = (fname, self.check_initializer(fval, f[1], src), fpos)
-            return init
-        # an expression: a constant of an assignable type
-        try:
-            v = self.const_value(init, src, "initial value")
-        except ConstError as exc:
-            if isinstance(init, ast.Ref) and isinstance(t, EnumT) and t.has(init.name) \
-                    and not init.accessors:
-                return init
-            if isinstance(init, ast.Lit) and init.kind in ("string", "wstring"):
-                v = init.value
-            else:
-                self.error(src, init.pos, str(exc))
-                return init
-        if self.names_constant(init):
-            folded = self.folded(v, init, t)
-            if folded is None:
-                self.error(src, init.pos, "initial value: a named constant of this kind "
-                                          f"cannot initialize {t.name}")
-                return init
-            init = folded
-        self.check_const_fits(v, init, t, src)
-        return init
-
-    def names_constant(self, expr) -> bool:
-        """Whether a constant expression names a constant of the scope."""
-        if isinstance(expr, ast.Ref):
-            found = self._const_scope.entries.get(expr.name.upper())
-            return not expr.accessors and found is not None and found[0] != "var"
-        if isinstance(expr, ast.UnOp):
-            return self.names_constant(expr.operand)
-        if isinstance(expr, ast.BinOp):
-            return self.names_constant(expr.left) or self.names_constant(expr.right)
-        return False
-
-    @staticmethod
-    def folded(v, expr, t):
-        """The literal of value *v* of a constant expression for type *t*
-        (None for a value no literal kind carries: a string, an enum)."""
-        cat = getattr(getattr(t, "base", None), "cat", None)
-        if isinstance(v, bool):
-            return ast.Lit(expr.pos, "TRUE" if v else "FALSE", "bool", v)
-        if isinstance(v, int):
-            if cat in ("time", "date", "tod", "dt"):
-                return ast.Lit(expr.pos, str(v), cat, v)
-            if isinstance(t, EnumT):
-                return None
-            return ast.Lit(expr.pos, str(v), "int", v)
-        if isinstance(v, float):
-            return ast.Lit(expr.pos, repr(v), "real", v)
-        return None
-
-    def check_const_fits(self, v, expr, t, src):
-        if t is ERROR:
-            return
-        base = t.base
-        lit_kind = getattr(expr, "kind", None) if isinstance(expr, ast.Lit) else None
-        if isinstance(t, EnumT):
-            if isinstance(expr, ast.Lit) and expr.kind == "enum":
-                et = self.lookup_type(expr.type_name, src, expr.pos, report=False)
-                if et is not t:
-                    self.error(src, expr.pos, f"{expr.text} is not a value of {t.name}")
-                return
-            if isinstance(expr, ast.Ref) and t.has(expr.name):
-                return
-            self.error(src, expr.pos, "initial value of an enumeration must be one of its values")
-            return
-        if isinstance(base, StringT):
-            if lit_kind not in ("string", "wstring"):
-                self.error(src, expr.pos, f"cannot initialize {t.name} with a non-string value")
-            elif (lit_kind == "wstring") != base.wide:
-                self.error(src, expr.pos, f"cannot initialize {t.name} with a "
-                                          f"{'WSTRING' if lit_kind == 'wstring' else 'STRING'}")
-            elif len(v) > base.length:
-                self.warning(src, expr.pos, f"initial string of {len(v)} characters is "
-                                            f"truncated to {base.length}")
-            return
-        if not isinstance(base, Elementary):
-            self.error(src, expr.pos, f"cannot initialize {t.name} with a single value")
-            return
-        if isinstance(expr, ast.Lit) and expr.type_name and expr.kind in ("int", "real", "bool"):
-            lt = ELEMENTARY.get(expr.type_name.upper())
-            if lt is not None and not assignable(lt, base):
-                self.error(src, expr.pos, f"cannot initialize {t.name} with {lt.name}")
-                return
-        if isinstance(v, bool):
-            if base.cat not in ("bool", "bit"):
-                self.error(src, expr.pos, f"cannot initialize {t.name} with a BOOL")
-            return
-        if isinstance(v, float):
-            if base.cat != "real":
-                self.error(src, expr.pos, f"cannot initialize {t.name} with a REAL value")
-            return
-        if lit_kind in ("time", "date", "tod", "dt"):
-            if base.cat != lit_kind:
-                self.error(src, expr.pos, f"cannot initialize {t.name} with a {lit_kind.upper()} "
-                                          "literal")
-            return
-        if base.cat in ("time", "date", "tod", "dt"):
-            self.error(src, expr.pos, f"cannot initialize {t.name} with an integer")
-            return
-        if base.cat != "real":
-            lo, hi = base.range
-            if base.cat == "bool" and v not in (0, 1):
-                self.error(src, expr.pos, f"{v} is not a BOOL value")
-            elif not lo <= v <= hi:
-                self.error(src, expr.pos, f"initial value {v} is out of range for {base.name}")
-                return
-        if isinstance(t, SubrangeT) and not t.low <= v <= t.high:
-            self.error(src, expr.pos, f"initial value {v} is outside the subrange "
-                                      f"{t.low}..{t.high}")
-
     # ------------------------------------------------------------ POUs
     def declare_pous(self, units):
         self.collect_config_constants(units)
@@ -613,7 +292,6 @@ class Declarer:
             self.program_access(pou, block)
         self.declare_eno(pou)
         if node.sfc is not None:
-            from .sfc import declare_steps
             declare_steps(self, pou)
         for v in pou.vars.values():
             if v.section == "VAR_INPUT":
@@ -791,7 +469,7 @@ class Declarer:
                 # I/O of every OpenPLC program), and an incomplete location
                 # (%I*, %Q*, %M*) in a program or function block is completed
                 # by the configuration's VAR_CONFIG; the configuration checks
-                # that one address belongs to one variable (checks/config.py)
+                # that one address belongs to one variable (checks/located.py)
                 if not addr.endswith("*"):
                     check_address_type(self, src, decl.pos, addr, t)
                 return
@@ -836,49 +514,6 @@ class Declarer:
                                       "(completed by VAR_CONFIG)")
             return
         check_address_type(self, src, decl.pos, addr, t)
-
-
-SIZE_PREFIX_BITS = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
-
-
-def address_span(addr: str):
-    """(area, first bit, bit count) of a direct address, or None when it has
-    more than the two levels byte.bit."""
-    area = addr[1]
-    rest = addr[2:]
-    size = "X"
-    if rest and rest[0] in SIZE_PREFIX_BITS:
-        size, rest = rest[0], rest[1:]
-    parts = rest.split(".")
-    if size == "X":
-        if len(parts) == 2:
-            return area, int(parts[0]) * 8 + int(parts[1]), 1
-        if len(parts) == 1:
-            return area, int(parts[0]), 1
-        return None
-    if len(parts) != 1:
-        return None
-    nbytes = SIZE_PREFIX_BITS[size] // 8
-    return area, int(parts[0]) * nbytes * 8, SIZE_PREFIX_BITS[size]
-
-
-def check_address_type(decl_ctx, src, pos, addr, t):
-    rest = addr[2:]
-    size = rest[0] if rest and rest[0] in SIZE_PREFIX_BITS else "X"
-    if size == "X" and rest and rest[0] != "X" and "." not in rest:
-        size = "X"
-    bits = SIZE_PREFIX_BITS[size]
-    base = t.base if t is not ERROR else None
-    if base is None or not isinstance(base, Elementary):
-        decl_ctx.error(src, pos, f"located variable at {addr} must have an elementary type")
-        return
-    if bits == 1:
-        if base is not BOOL:
-            decl_ctx.error(src, pos, f"{addr} is a bit address: its variable must be BOOL, "
-                                     f"not {base.name}")
-    elif base.bits != bits or base.cat == "bool":
-        decl_ctx.error(src, pos, f"{addr} holds {bits} bits; {base.name} has "
-                                 f"{base.bits if base.cat != 'bool' else 1}")
 
 
 def _mentions(node, name: str) -> bool:

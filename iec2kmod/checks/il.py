@@ -1,11 +1,13 @@
 """Pass 'resolve', Instruction List: the type of the current result along
 every path (labels and jumps included), each operator and operand checked
-against it.  Mixed into checks.body.BodyChecker, whose expression, call and
-assignment checks it uses."""
+against it.  Mixed into checks.body.BodyChecker, whose expression and
+assignment checks (checks/expr.py) and call checks (checks/calls.py) it
+uses."""
 
 from __future__ import annotations
 
 from .. import ast
+from ..diagnostics import Diagnostics
 from . import stdlib
 from .symbols import Var
 from .types import BOOL, ERROR, ErrorT, FBType, LiteralT, common, concrete, is_bit, literal_fits
@@ -24,7 +26,6 @@ class ILChecks:
         # that a label knows the type it is reached with
         self.label_cr = {}
         real_diags = self.diags
-        from ..diagnostics import Diagnostics
         self.diags = Diagnostics()
         self.il_list(instrs, None)
         self.diags = real_diags

@@ -1,5 +1,6 @@
-"""Symbols: variables, POU interfaces, resources and the checked project that
-the code generator consumes."""
+"""Symbols: variables, enumeration values (what a name in a body resolves
+to), POU interfaces, resources and the checked project that the code
+generator consumes."""
 
 from __future__ import annotations
 
@@ -70,7 +71,7 @@ class TaskInfo:
     single: Var | None = None
     single_name: str | None = None
     # the watchdog ({watchdog ...} pragma in front of the TASK, see
-    # checks/config.py): a cycle longer than watchdog_ns faults the task
+    # checks/tasks.py): a cycle longer than watchdog_ns faults the task
     # (0: no limit); so do watchdog_overruns cycles in a row that end
     # after the next release (0: no limit)
     watchdog_ns: int = 0
@@ -118,6 +119,12 @@ class ResourceInfo:
     tasks: dict = field(default_factory=dict)
     programs: list = field(default_factory=list)
 
+    def path(self, name: str) -> str:
+        """IEC path of a name in this resource, as the variable table writes
+        it (a configuration without RESOURCE has one implicit resource, whose
+        name is not written)."""
+        return f"{self.name}.{name}" if self.node.name else name
+
 
 @dataclass(eq=False)
 class ConfigInfo:
@@ -151,3 +158,12 @@ class Project:
     pous: dict = field(default_factory=dict)         # upper name -> POUInfo (user)
     configurations: list = field(default_factory=list)
     units: list = field(default_factory=list)
+
+
+class EnumValue:
+    """What an unqualified or qualified enumeration value resolves to."""
+
+    def __init__(self, enum, name):
+        self.enum = enum
+        self.name = name
+        self.value = enum.values[name.upper()][1]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.body import EnumValue
+from ..checks.symbols import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, ELEMENTARY, ArrayT, Elementary, EnumT, FBType,
                             LiteralT, StringT, StructT, SubrangeT, concrete)

@@ -75,7 +75,7 @@ class TaskPlan:
     priority: int
     single: GlobalPlan | None
     instances: list = field(default_factory=list)
-    watchdog_ns: int = 0          # see checks/config.py
+    watchdog_ns: int = 0          # see checks/tasks.py
     watchdog_overruns: int = 0
 
 
@@ -102,12 +102,6 @@ class Plan:
     directs: dict        # address used in a connection -> (C name, IEC type)
 
 
-def _qual(r, name):
-    """IEC path of a name in resource r (a configuration without RESOURCE
-    has one implicit resource whose name is not written)."""
-    return f"{r.name}.{name}" if r.node.name else name
-
-
 def _c_ident(*parts):
     return "_".join(p.lower() for p in parts if p)
 
@@ -122,7 +116,7 @@ def build_plan(project) -> Plan:
         by_var[id(v)] = g
     for r in cfg.resources:
         for v in r.globals.values():
-            g = GlobalPlan(_qual(r, v.name), "g_" + _c_ident(r.name, v.name), v, r.name)
+            g = GlobalPlan(r.path(v.name), "g_" + _c_ident(r.name, v.name), v, r.name)
             globals_.append(g)
             by_var[id(v)] = g
     instances, tasks = [], []
@@ -136,7 +130,7 @@ def build_plan(project) -> Plan:
             tasks.append(tp)
             rtasks[t.name.upper()] = tp
         for inst in r.programs:
-            ip = InstancePlan(_qual(r, inst.name), "inst_" + _c_ident(r.name, inst.name),
+            ip = InstancePlan(r.path(inst.name), "inst_" + _c_ident(r.name, inst.name),
                               inst.pou, r.name, inst.task.name if inst.task else None,
                               inst=inst)
             for key, g in inst.externals.items():
@@ -166,7 +160,7 @@ def build_plan(project) -> Plan:
         member = N.var(chain[0].name)
         for outer, v in zip(chain, chain[1:]):
             member += "." + N.member(outer.type.pou, v.name)
-        by_inst[(r.name, _qual(r, inst.name))].config_inits.append(
+        by_inst[(r.name, r.path(inst.name))].config_inits.append(
             (member, chain[-1].type, init))
     located = [(g.var.location, g) for g in globals_ if g.var.location]
     table = variable_table(globals_, instances)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.body import EnumValue
+from ..checks.symbols import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
                             StructT, SubrangeT, concrete)

@@ -111,7 +111,7 @@ class TaskRun:
     priority: int
     single: tuple | None     # (container, key) of the SINGLE variable
     programs: list = field(default_factory=list)
-    watchdog_ns: int = 0     # 0: no limit (checks/config.py)
+    watchdog_ns: int = 0     # 0: no limit (checks/tasks.py)
     watchdog_overruns: int = 0
 
 
@@ -208,7 +208,7 @@ class Machine:
             for v in r.globals.values():
                 g[v.key] = self.init.value(v.type, v.init)
                 self.cells[id(v)] = (g, v.key)
-                self.global_paths.append((self._qual(r, v.name), v, g))
+                self.global_paths.append((r.path(v.name), v, g))
         self.directs = {}            # address -> value
         self.direct_types = {}
         self.tasks = []
@@ -225,7 +225,7 @@ class Machine:
                 self.tasks.append(tr)
                 rtasks[t.name.upper()] = tr
             for pi in r.programs:
-                path = self._qual(r, pi.name)
+                path = r.path(pi.name)
                 inst = self.new_instance(pi.pou, scope)
                 for _, target, chain, init in cfg.config_inits:
                     if target is pi:        # VAR_CONFIG: an instance-specific initial value
@@ -255,9 +255,6 @@ class Machine:
                 run = ProgramRun(path, inst, self.bodies[pi.pou.key], inputs, outputs)
                 if pi.task is not None:
                     rtasks[pi.task.name.upper()].programs.append(run)
-
-    def _qual(self, r, name):
-        return f"{r.name}.{name}" if r.node.name else name
 
     def _direct(self, address, t):
         if address not in self.directs:

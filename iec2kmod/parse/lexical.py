@@ -70,7 +70,7 @@ class PragmaKind:
 PRAGMAS = {k.name: k for k in (
     PragmaKind("watchdog", "{watchdog TIME} | {watchdog TIME, N} | {watchdog off, N}",
                "right in front of a TASK declaration (blanks between)",
-               "that task: Task.pragmas", "iec2kmod/checks/config.py"),
+               "that task: Task.pragmas", "iec2kmod/checks/tasks.py"),
     PragmaKind("selective", "{selective} | {selective on} | {selective off}",
                "right in front of a POU, a variable declaration of a POU or a "
                "program instance (blanks between; in front of a VAR block's "

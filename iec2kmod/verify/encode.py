@@ -28,7 +28,7 @@ import z3
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.body import EnumValue
+from ..checks.symbols import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (ArrayT, BOOL, Elementary, EnumT, FBType, LiteralT, StringT,
                             StructT, SubrangeT, concrete)

@@ -43,7 +43,7 @@ from xml.sax.saxutils import escape
 
 from .. import ast
 from ..checks import stdlib
-from ..checks.body import EnumValue
+from ..checks.symbols import EnumValue
 from ..checks.symbols import Var
 from ..checks.types import (BOOL, Elementary, EnumT, FBType, LiteralT, StructT, SubrangeT,
                             common, concrete)

@@ -175,7 +175,7 @@ struct iec_task {
 	int single_event;	/* event number of its SINGLE variable, -1 none */
 	u32 loop_budget;	/* iterations per cycle before "endless loop" */
 	/*
-	 * The watchdog ({watchdog ...} pragma, iec2kmod/checks/config.py): a
+	 * The watchdog ({watchdog ...} pragma, iec2kmod/checks/tasks.py): a
 	 * cycle longer than watchdog_ns faults the task where it is (0: no
 	 * limit); watchdog_overruns cycles in a row that end after the next
 	 * release fault it too (0: no limit).

@@ -10,7 +10,7 @@
  * runs to completion (execution takes no time on the clock that releases
  * the tasks).  A task that faults stops; the others go on.
  *
- * The watchdog (iec2kmod/checks/config.py) runs on simulated execution
+ * The watchdog (iec2kmod/checks/tasks.py) runs on simulated execution
  * time: SIM_ITERATION_NS per loop iteration, nothing else.  A cycle gets
  * only the iterations that fit in its watchdog time (the budget, then
  * faulting with IEC_FAULT_WATCHDOG); a cycle whose iterations take longer

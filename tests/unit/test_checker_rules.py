@@ -18,7 +18,7 @@ def _errors(stmt):
 
 
 def test_bit_access_needs_a_bit_string_or_integer():
-    """checks/body.py: `isinstance(bt, Elementary) and bt.cat in (...)` with
+    """checks/expr.py: `isinstance(bt, Elementary) and bt.cat in (...)` with
     `or` accepted r.3 on a REAL."""
     assert _errors("b := r.3;") == ["bit access .3 needs a bit string, not REAL"]
     assert _errors("b := t.1;") == ["bit access .1 needs a bit string, not TIME"]
@@ -28,7 +28,7 @@ def test_bit_access_needs_a_bit_string_or_integer():
 
 
 def test_constant_index_arithmetic():
-    """checks/body.py _literal_value: `a is None or b is None` with `and`
+    """checks/expr.py _literal_value: `a is None or b is None` with `and`
     crashed (None + 1) on a[i + 1]; the constant forms are folded and
     checked against the bounds."""
     assert _errors("i := a[i + 1]; i := a[1 + i]; i := a[i * 2]; i := a[4 - i];") == []

@@ -3,7 +3,7 @@
 faults, at the same simulated times and places, in the C simulator and the
 reference interpreter.
 
-Simulated time (iec2kmod/checks/config.py): each loop iteration costs
+Simulated time (iec2kmod/execmodel.py): each loop iteration costs
 SIM_ITERATION_NS of simulated execution time.  A 5 ms watchdog therefore
 allows 50,000 iterations, and the 50,001st faults, located at its loop; a
 1 ms task whose cycles run 20,000 iterations (2 ms) overruns every cycle,
@@ -22,7 +22,7 @@ import pytest
 
 from iec2kmod import interp, sim
 from iec2kmod.parse import frontend
-from iec2kmod.checks.config import WATCHDOG_DEFAULT_NS
+from iec2kmod.checks.tasks import WATCHDOG_DEFAULT_NS
 from iec2kmod.execmodel import SIM_ITERATION_NS
 
 ROOT = Path(__file__).resolve().parents[2]
