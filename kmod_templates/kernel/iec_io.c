@@ -86,8 +86,10 @@
  * are not the variables' values: a forced input, a scaled REAL, a clamped
  * output, a safe state or a failed read each make the two differ.
  */
+#include <linux/delay.h>
 #include <linux/errno.h>
 #include <linux/interrupt.h>
+#include <linux/jiffies.h>
 #include <linux/kernel.h>
 #include <linux/minmax.h>
 #include <linux/module.h>
@@ -639,12 +641,12 @@ static void iec_io_withdraw(struct iec_io *io)
  */
 static void iec_io_settle(struct iec_io *io, int base)
 {
-	int tries;
+	unsigned long end = jiffies + 5 * HZ;
 
 	if (!io->exposed)
 		return;
-	for (tries = 0; module_refcount(THIS_MODULE) > base; tries++) {
-		if (tries == 5000) {
+	while (module_refcount(THIS_MODULE) > base) {
+		if (time_after(jiffies, end)) {
 			pr_err("iec2kmod: resource %s: a user device's opener still holds the module after 5 s\n",
 			       io->resource);
 			return;
