@@ -152,6 +152,13 @@ def status_text(st) -> str:
                       [[b.resource, b.address, b.variable, b.where, "in" if b.input else "out",
                         b.safe_text, "-" if b.last is None else b.last, b.value or "-"]
                        for b in io], right=(6,))]
+    irqs = io_interrupts(st)
+    if irqs:
+        out += ["", "interrupts (COUNT: taken since the load; /sys/module/<module>/iec_io):",
+                table(["RESOURCE", "ADDRESS", "VARIABLE", "SOURCE", "IRQ", "WAKES", "COUNT"],
+                      [[q.resource, q.address, q.variable, q.where, q.irq,
+                        ",".join(q.tasks) or "-", "-" if q.count is None else q.count]
+                       for q in irqs], right=(4, 6))]
     out += ["", table(["SLOT", "PROGRAM TYPE", "MODULE", "BUILD", "SINCE"],
                       [[s.index, s.type_name, s.module or "(empty)", s.build_id or "-",
                         fmt_since(s.since_ns, st.now_ns)] for s in st.slots])]
@@ -167,6 +174,15 @@ def io_bindings(st) -> list:
     return io.bindings(s.data.get("io") or {}) if s is not None else []
 
 
+def io_interrupts(st) -> list:
+    """The running configuration's interrupt sources with their counts
+    (manager/io.py), from the state saved at load; [] without."""
+    from . import io
+    from .ops import running_state
+    s = running_state(st)
+    return io.interrupts(s.data.get("irqs") or {}) if s is not None else []
+
+
 def status_json(st) -> dict:
     return {
         "configuration": st.configuration, "module": st.module, "abi": st.abi,
@@ -177,6 +193,7 @@ def status_json(st) -> dict:
                       for r in st.resources],
         "slots": [dict(s.__dict__) for s in st.slots],
         "io": [dict(b.__dict__, where=b.where, last_value=b.value) for b in io_bindings(st)],
+        "interrupts": [dict(q.__dict__, where=q.where) for q in io_interrupts(st)],
     }
 
 

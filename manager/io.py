@@ -13,6 +13,11 @@ input holds the forced value while the device gives another, a REAL holds
 volts while the device exchanges counts, an integer output above the
 channel's range is clamped on its way out, and after a stop the device
 holds the safe value while the variable keeps the program's last one.
+
+Interrupts (INTERRUPT of the I/O map, an event task woken by a device's
+IRQ): the same file ends with one line a source, "irq <address>
+<device.source> <line> <count>", the interrupts its handler took since
+the load.
 """
 
 from __future__ import annotations
@@ -114,19 +119,77 @@ def summary(m: dict) -> Dict[str, list]:
     return out
 
 
+def _iec_io(module: str, sysroot: Optional[str]) -> str:
+    """The resource module's iec_io file; "" when it has none."""
+    try:
+        with open(f"{sysroot or SYSFS}/module/{module}/iec_io") as f:
+            return f.read()
+    except OSError:
+        return ""
+
+
 def last_values(module: str, sysroot: Optional[str] = None) -> Dict[str, Optional[int]]:
     """Address -> the raw sample last exchanged (None: none yet), from the
     resource module's iec_io file; {} when the module has none."""
-    try:
-        with open(f"{sysroot or SYSFS}/module/{module}/iec_io") as f:
-            text = f.read()
-    except OSError:
-        return {}
     out: Dict[str, Optional[int]] = {}
-    for line in text.splitlines():
+    for line in _iec_io(module, sysroot).splitlines():
         words = line.split()
         if len(words) == 3:
             out[words[0].upper()] = None if words[2] == "-" else int(words[2])
+    return out
+
+
+def interrupt_counts(module: str, sysroot: Optional[str] = None) -> Dict[str, int]:
+    """Address -> the interrupts taken since the load, from the resource
+    module's iec_io file ("irq <address> <source> <line> <count>")."""
+    out: Dict[str, int] = {}
+    for line in _iec_io(module, sysroot).splitlines():
+        words = line.split()
+        if len(words) == 5 and words[0] == "irq" and words[4].isdigit():
+            out[words[1].upper()] = int(words[4])
+    return out
+
+
+@dataclass
+class Interrupt:
+    resource: str
+    module: str
+    address: str            # the SINGLE variable's address, %IX9.0
+    variable: str
+    device: str
+    source: str             # ACK
+    irq: int
+    tasks: List[str]        # the event tasks it wakes
+    count: Optional[int] = None     # taken since the load; None: not known
+
+    @property
+    def where(self) -> str:
+        return f"{self.device}.{self.source}"
+
+
+def interrupt_summary(m: dict) -> Dict[str, list]:
+    """The manifest's interrupt sources with their variables' paths, per
+    resource (what the state file keeps beside summary()); {} for none."""
+    addresses = {a.upper(): p for a, p in (m.get("addresses") or {}).items()}
+    modules = {r["name"].upper(): r["module"] for r in m.get("resources", [])}
+    out = {}
+    for res, io in sorted((m.get("io") or {}).items()):
+        if io.get("interrupts"):
+            out[res] = [dict(q, variable=addresses.get(q["address"].upper(), "?"),
+                             module=modules.get(res.upper(), "?"))
+                        for q in io["interrupts"]]
+    return out
+
+
+def interrupts(irqs: Dict[str, list], sysroot: Optional[str] = None) -> List[Interrupt]:
+    """The sources of interrupt_summary() with their counts."""
+    out = []
+    for res, qs in sorted(irqs.items()):
+        counts = interrupt_counts(qs[0]["module"], sysroot) if qs else {}
+        for q in qs:
+            out.append(Interrupt(res, q["module"], q["address"], q["variable"], q["device"],
+                                 q["source"], int(q["irq"]), list(q.get("tasks") or []),
+                                 counts.get(q["address"].upper())))
     return out
 
 

@@ -270,8 +270,11 @@ def state_dir() -> Path:
 
 
 def _io_summary(m: dict) -> dict:
-    from .io import summary
-    return summary(m)
+    """The state's "io" (bindings) and "irqs" (interrupt sources), when
+    the project has them."""
+    from .io import interrupt_summary, summary
+    irqs = interrupt_summary(m)
+    return {"io": summary(m), **({"irqs": irqs} if irqs else {})} if m.get("io") else {}
 
 
 class State:
@@ -378,7 +381,7 @@ class State:
                     "source_hash": m.get("source_hash"), "slots": {},
                     # the I/O bindings (plc-manager status): a few lines,
                     # where the manifest may be megabytes
-                    **({"io": _io_summary(m)} if m.get("io") else {})},
+                    **_io_summary(m)},
                    m, manifest_dirty=True, manifest_text=getattr(project, "text", None))
 
     @staticmethod

@@ -278,8 +278,13 @@ def _resource_source(env, comp, rm):
                  used.get(b["c_name"], (False, False))[0]]
         io_out = [i for i, b in enumerate(io["binds"] if io else []) if not b["input"] and
                   used.get(b["c_name"], (False, False))[1]]
+        # the devices each direction uses, each once: a cycle asks only
+        # these for their whole-cycle hooks (iec_io.c, struct iec_io_set)
+        io_devs = {d: sorted({io["binds"][i]["dev"] for i in idx})
+                   for d, idx in (("in", io_in), ("out", io_out))}
         tasks.append({"index": tp.index, "name": tp.name, "interval": tp.interval_ns or 0,
                       "io_in": io_in, "io_out": io_out,
+                      "io_in_devs": io_devs["in"], "io_out_devs": io_devs["out"],
                       "priority": tp.priority,
                       "single_event": single_events[id(tp.single.var)] if tp.single else -1,
                       "loop_budget": LOOP_BUDGET, "image": image,

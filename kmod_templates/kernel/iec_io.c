@@ -49,7 +49,22 @@
  * the line's irq/N thread (SCHED_FIFO 50, above the PLC tasks), marks each
  * task's event pending with the stamp as its release and wakes its thread.
  * Unload frees the line first (iec_io_irq_off(): free_irq() waits for a
- * running handler), then stops the task threads.
+ * running handler), then stops the task threads.  Each line's handled
+ * interrupts are counted (the threaded side) and shown in iec_io.
+ *
+ * User space.  A device user space reaches (iec_io_user.c's character
+ * device) is made reachable by iec_io_expose() as the module init's very
+ * last step, after everything else that can fail (devices, task threads,
+ * interrupt lines), and unreachable by iec_io_withdraw() as the exit's
+ * first: an open() cannot take a reference on a module whose init then
+ * fails, except when a second device's exposure fails after a first one's:
+ * the failed init then waits for such an opener to let go of the module
+ * (iec_io_settle()).
+ *
+ * The hot path.  The devices a task's inputs and outputs use, each once,
+ * are generated beside the task's bindings (struct iec_io_set): a cycle
+ * asks only those for cycle_in()/cycle_out(), without a walk of the
+ * bindings.
  *
  * Scaling: a digital channel is 0/1 in a BOOL; an analog channel's raw
  * sample 0..maxdata is the value of an integer variable, or, in a REAL or
@@ -65,14 +80,19 @@
  * the variable), the one written (a forced output's forced value, clamped
  * or scaled), or the safe value written on stop, fault, load and unload.
  * /sys/module/<resource module>/iec_io shows them, one line a binding:
- * "<address> <device.subdevice.channel> <raw>", "-" for none yet.  They
+ * "<address> <device.subdevice.channel> <raw>", "-" for none yet; then
+ * one line an interrupt source: "irq <address> <device.source> <line>
+ * <interrupts handled since the load>".  They
  * are not the variables' values: a forced input, a scaled REAL, a clamped
  * output, a safe state or a failed read each make the two differ.
  */
+#include <linux/delay.h>
 #include <linux/errno.h>
 #include <linux/interrupt.h>
+#include <linux/jiffies.h>
 #include <linux/kernel.h>
 #include <linux/minmax.h>
+#include <linux/module.h>
 #include <linux/string.h>
 #include <linux/sysfs.h>
 #include <asm/fpu/api.h>
@@ -122,6 +142,15 @@ struct iec_io_provider {
 	int (*cycle_in)(struct iec_io_dev *d, struct iec_task *t,
 			const char **why);
 	void (*cycle_out)(struct iec_io_dev *d, struct iec_task *t, bool safe);
+	/*
+	 * Optional, for a device user space reaches (iec_io_user.c).
+	 * expose(), module init's last step, may sleep: make it reachable
+	 * (0 or -errno, why: text); withdraw() makes it unreachable again
+	 * (exit's first step, or a failed init), after which no open() of
+	 * it is under way in the provider's code.
+	 */
+	int (*expose)(struct iec_io_dev *d, const char **why);
+	void (*withdraw)(struct iec_io_dev *d);
 };
 
 struct iec_io_dev {
@@ -129,6 +158,7 @@ struct iec_io_dev {
 	const struct iec_io_provider *prov;
 	unsigned int minor;
 	void *handle;			/* the provider's */
+	bool exposed;			/* expose() done, withdraw() not yet */
 };
 
 struct iec_io_bind {
@@ -150,6 +180,18 @@ struct iec_io_bind {
 	struct iec_io_scale scale;	/* phys: the range (iec_io_real.h) */
 };
 
+/*
+ * A task's bound inputs, or its bound outputs (generated beside the task):
+ * the bindings, their staging array and the devices they use.
+ */
+struct iec_io_set {
+	const u16 *idx;			/* indexes in the bindings */
+	u32 *raw;			/* staging: one sample a binding */
+	u32 n;
+	const u16 *devs;		/* the devices idx[] use, each once */
+	u32 ndevs;
+};
+
 /* An interrupt source bound to the event tasks of one SINGLE variable. */
 struct iec_io_irq {
 	const char *address;		/* %IX9.0 */
@@ -162,7 +204,7 @@ struct iec_io_irq {
 	struct iec_resource *res;
 	unsigned long base;		/* the provider's (an I/O port base) */
 	ktime_t stamp;			/* set by the primary handler */
-	u64 count;			/* handled interrupts (threaded side) */
+	u64 count;			/* handled interrupts (threaded side; iec_io) */
 	bool on;
 };
 
@@ -181,6 +223,7 @@ struct iec_io {
 	 * once seen[] is set (the sysfs file iec_io) */
 	u32 *last;
 	u8 *seen;
+	bool exposed;			/* a device was exposed (iec_io_settle) */
 };
 
 static void iec_io_seen(struct iec_io *io, const struct iec_io_bind *b, u32 raw)
@@ -249,29 +292,30 @@ static void iec_io_fault(struct iec_io *io, struct iec_task *t,
 	iec_fault_locate(&t->ctx, text, 0);
 }
 
-/* Does one of the bindings idx[] (all: idx NULL) use device dev? */
-static __maybe_unused bool iec_io_uses(const struct iec_io *io,
-				       const u16 *idx, u32 n, u32 dev)
+/* Does a binding use device dev?  (load and unload only) */
+static bool iec_io_used(const struct iec_io *io, u32 dev)
 {
 	u32 i;
 
-	for (i = 0; i < n; i++)
-		if (io->binds[idx ? idx[i] : i].dev == dev)
+	for (i = 0; i < io->nbinds; i++)
+		if (io->binds[i].dev == dev)
 			return true;
 	return false;
 }
 
-/* cycle_out() of the devices that have one among idx[] (all: idx NULL) */
-static __maybe_unused void iec_io_cycle_out(struct iec_io *io,
-					    struct iec_task *t,
-					    const u16 *idx, u32 n, bool safe)
+/* cycle_out() of the devices of s that have one (s NULL: every used one) */
+static void iec_io_cycle_out(struct iec_io *io, struct iec_task *t,
+			     const struct iec_io_set *s, bool safe)
 {
-	u32 j;
+	u32 j, n = s ? s->ndevs : io->nopen;
 
-	for (j = 0; j < io->nopen; j++) {
-		struct iec_io_dev *d = &io->devs[j];
+	for (j = 0; j < n; j++) {
+		u32 k = s ? s->devs[j] : j;
+		struct iec_io_dev *d = &io->devs[k];
 
-		if (d->prov->cycle_out && iec_io_uses(io, idx, n, j))
+		if (!d->prov->cycle_out || k >= io->nopen)
+			continue;
+		if (s || iec_io_used(io, k))
 			d->prov->cycle_out(d, t, safe);
 	}
 }
@@ -280,20 +324,21 @@ static __maybe_unused void iec_io_cycle_out(struct iec_io *io,
  * Steps 1, 2, 4 and 5 (__maybe_unused: a resource whose tasks only read, or
  * only write, or only wait for interrupts uses some of them).
  *
- * Step 1: the task's inputs into raw[]; false (and a fault) on an error.
+ * Step 1: the task's inputs s into s->raw[]; false (and a fault) on an
+ * error.
  */
 static __maybe_unused bool iec_io_read(struct iec_io *io, struct iec_task *t,
-			const u16 *idx, u32 *raw, u32 n)
+				       const struct iec_io_set *s)
 {
 	const char *why = "";
 	u32 i;
 
-	for (i = 0; i < io->ndevs; i++) {
-		struct iec_io_dev *d = &io->devs[i];
+	for (i = 0; i < s->ndevs; i++) {
+		struct iec_io_dev *d = &io->devs[s->devs[i]];
 		char *text = io->fault_text[t - t->res->tasks];
 		int ret;
 
-		if (!d->prov->cycle_in || !iec_io_uses(io, idx, n, i))
+		if (!d->prov->cycle_in)
 			continue;
 		ret = d->prov->cycle_in(d, t, &why);
 		if (ret < 0) {
@@ -306,96 +351,95 @@ static __maybe_unused bool iec_io_read(struct iec_io *io, struct iec_task *t,
 			return false;
 		}
 	}
-	for (i = 0; i < n; i++) {
-		const struct iec_io_bind *b = &io->binds[idx[i]];
+	for (i = 0; i < s->n; i++) {
+		const struct iec_io_bind *b = &io->binds[s->idx[i]];
 		struct iec_io_dev *d = &io->devs[b->dev];
-		int ret = d->prov->read(d, b, &raw[i]);
+		int ret = d->prov->read(d, b, &s->raw[i]);
 
 		if (ret < 0) {
 			iec_io_fault(io, t, b, ret);
 			return false;
 		}
-		iec_io_seen(io, b, raw[i]);
+		iec_io_seen(io, b, s->raw[i]);
 	}
 	return true;
 }
 
 /* Step 2, under the image lock: the staged inputs into their variables. */
-static __maybe_unused void iec_io_store(struct iec_io *io, const u16 *idx, const u32 *raw,
-			 u32 n)
+static __maybe_unused void iec_io_store(struct iec_io *io,
+					const struct iec_io_set *s)
 {
 	bool fpu = false;
 	u32 i;
 
-	for (i = 0; i < n; i++) {
-		const struct iec_io_bind *b = &io->binds[idx[i]];
+	for (i = 0; i < s->n; i++) {
+		const struct iec_io_bind *b = &io->binds[s->idx[i]];
 
 		if (!IEC_IO_PHYS || !b->phys) {
-			iec_io_put(b, raw[i]);
+			iec_io_put(b, s->raw[i]);
 			continue;
 		}
 		if (!fpu) {
 			kernel_fpu_begin();
 			fpu = true;
 		}
-		iec_io_real_store(&b->scale, b->var, b->size, raw[i]);
+		iec_io_real_store(&b->scale, b->var, b->size, s->raw[i]);
 	}
 	if (fpu)
 		kernel_fpu_end();
 }
 
-/* Step 4, under the image lock: the task's outputs into raw[]. */
-static __maybe_unused void iec_io_stage(struct iec_io *io, const u16 *idx, u32 *raw, u32 n)
+/* Step 4, under the image lock: the task's outputs s into s->raw[]. */
+static __maybe_unused void iec_io_stage(struct iec_io *io,
+					const struct iec_io_set *s)
 {
 	bool fpu = false;
 	u32 i;
 
-	for (i = 0; i < n; i++) {
-		const struct iec_io_bind *b = &io->binds[idx[i]];
+	for (i = 0; i < s->n; i++) {
+		const struct iec_io_bind *b = &io->binds[s->idx[i]];
 
 		if (!IEC_IO_PHYS || !b->phys) {
-			raw[i] = iec_io_get(b);
+			s->raw[i] = iec_io_get(b);
 			continue;
 		}
 		if (!fpu) {
 			kernel_fpu_begin();
 			fpu = true;
 		}
-		raw[i] = iec_io_real_load(&b->scale, b->var, b->size);
+		s->raw[i] = iec_io_real_load(&b->scale, b->var, b->size);
 	}
 	if (fpu)
 		kernel_fpu_end();
 }
 
-/* Step 5: raw[] to the devices; a fault on the first error. */
+/* Step 5: s->raw[] to the devices; a fault on the first error. */
 static __maybe_unused void iec_io_write(struct iec_io *io, struct iec_task *t,
-			 const u16 *idx, const u32 *raw, u32 n)
+					const struct iec_io_set *s)
 {
 	u32 i;
 
-	for (i = 0; i < n; i++) {
-		const struct iec_io_bind *b = &io->binds[idx[i]];
+	for (i = 0; i < s->n; i++) {
+		const struct iec_io_bind *b = &io->binds[s->idx[i]];
 		struct iec_io_dev *d = &io->devs[b->dev];
-		int ret = d->prov->write(d, b, raw[i]);
+		int ret = d->prov->write(d, b, s->raw[i]);
 
 		if (ret < 0) {
 			iec_io_fault(io, t, b, ret);
 			return;
 		}
-		iec_io_seen(io, b, raw[i]);
+		iec_io_seen(io, b, s->raw[i]);
 	}
-	iec_io_cycle_out(io, t, idx, n, false);
+	iec_io_cycle_out(io, t, s, false);
 }
 
-/* Outputs idx[] (all outputs: idx NULL) to their safe state; best effort. */
-static void iec_io_safe(struct iec_io *io, const u16 *idx, u32 n)
+/* The outputs of s (every output: s NULL) to their safe state; best effort. */
+static void iec_io_safe(struct iec_io *io, const struct iec_io_set *s)
 {
-	u32 i;
+	u32 i, n = s ? s->n : io->nbinds;
 
-	if (!idx)
-		n = io->nbinds;
 	for (i = 0; i < n; i++) {
-		const struct iec_io_bind *b = &io->binds[idx ? idx[i] : i];
+		const struct iec_io_bind *b = &io->binds[s ? s->idx[i] : i];
 		struct iec_io_dev *d = &io->devs[b->dev];
 
 		if (b->input || b->hold || b->dev >= io->nopen)
@@ -406,7 +450,7 @@ static void iec_io_safe(struct iec_io *io, const u16 *idx, u32 n)
 		else
 			iec_io_seen(io, b, b->safe);
 	}
-	iec_io_cycle_out(io, NULL, idx, n, true);
+	iec_io_cycle_out(io, NULL, s, true);
 }
 
 /*
@@ -438,6 +482,16 @@ static ssize_t iec_io_show(struct kobject *kobj, struct kobj_attribute *attr,
 			len += sysfs_emit_at(buf, len, "%s %s -\n", b->address,
 					     b->channel);
 		}
+	}
+	for (i = 0; io && i < io->nirqs; i++) {
+		const struct iec_io_irq *q = &io->irqs[i];
+
+		if (len > PAGE_SIZE - 128) {
+			len += sysfs_emit_at(buf, len, "...\n");
+			break;
+		}
+		len += sysfs_emit_at(buf, len, "irq %s %s %u %llu\n", q->address,
+				     q->source, q->line, READ_ONCE(q->count));
 	}
 	return len;
 }
@@ -482,7 +536,7 @@ static int iec_io_open(struct iec_io *io)
 			goto err;
 		}
 	}
-	iec_io_safe(io, NULL, 0);	/* outputs start in their safe state */
+	iec_io_safe(io, NULL);		/* outputs start in their safe state */
 	iec_io_this = io;
 	if (sysfs_create_file(&THIS_MODULE->mkobj.kobj, &iec_io_attr.attr))
 		pr_warn("iec2kmod: resource %s: no iec_io file in sysfs\n", io->resource);
@@ -504,7 +558,7 @@ static __maybe_unused irqreturn_t iec_io_irq_thread(int irq, void *arg)
 	ktime_t stamp = READ_ONCE(q->stamp);
 	u32 i;
 
-	q->count++;
+	WRITE_ONCE(q->count, q->count + 1);	/* iec_io_show() reads it */
 	for (i = 0; i < q->ntasks; i++) {
 		struct iec_task *t = &q->res->tasks[q->tasks[i]];
 
@@ -560,10 +614,81 @@ static int iec_io_irq_on(struct iec_io *io, struct iec_resource *res)
 	return 0;
 }
 
+/* Exit's first step, or a failed init: no device reachable any more. */
+static void iec_io_withdraw(struct iec_io *io)
+{
+	u32 i;
+
+	for (i = io->ndevs; i-- > 0;) {
+		struct iec_io_dev *d = &io->devs[i];
+
+		if (!d->exposed)
+			continue;
+		d->prov->withdraw(d);
+		d->exposed = false;
+	}
+}
+
+/*
+ * A failed init's last step, everything undone.  If a device had been
+ * exposed, an open() that found it took a reference on this module (the
+ * file operations' owner) and keeps it until the VFS drops it, after the
+ * provider refused the open (iec_user_fopen(): the module is not live).
+ * The module is freed as soon as init returns, so wait, bounded, until the
+ * count is back to base, what it was when init began.  Nothing else holds
+ * the module then: the task threads are gone and the configuration let
+ * the resource go.
+ */
+static void iec_io_settle(struct iec_io *io, int base)
+{
+	unsigned long end = jiffies + 5 * HZ;
+
+	if (!io->exposed)
+		return;
+	while (module_refcount(THIS_MODULE) > base) {
+		if (time_after(jiffies, end)) {
+			pr_err("iec2kmod: resource %s: a user device's opener still holds the module after 5 s\n",
+			       io->resource);
+			return;
+		}
+		usleep_range(1000, 2000);
+	}
+}
+
+/*
+ * Module init's last step: every device user space reaches made reachable,
+ * or -errno with none reachable (then undo the rest of init, and
+ * iec_io_settle()).
+ */
+static int iec_io_expose(struct iec_io *io)
+{
+	const char *why = "";
+	u32 i;
+	int ret;
+
+	for (i = 0; i < io->ndevs; i++) {
+		struct iec_io_dev *d = &io->devs[i];
+
+		if (!d->prov->expose)
+			continue;
+		ret = d->prov->expose(d, &why);
+		if (ret) {
+			pr_err("iec2kmod: resource %s: device %s (%s): %s (errno %d); not loading\n",
+			       io->resource, d->name, d->prov->name, why, -ret);
+			iec_io_withdraw(io);
+			return ret;
+		}
+		d->exposed = true;
+		io->exposed = true;
+	}
+	return 0;
+}
+
 /* Module exit, the threads stopped: safe state, then the devices go. */
 static void iec_io_exit(struct iec_io *io)
 {
+	iec_io_withdraw(io);	/* done already, unless init failed before */
 	sysfs_remove_file(&THIS_MODULE->mkobj.kobj, &iec_io_attr.attr);
-	iec_io_safe(io, NULL, 0);
+	iec_io_safe(io, NULL);
 	iec_io_close(io);
 }

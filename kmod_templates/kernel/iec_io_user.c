@@ -87,8 +87,16 @@
  * spinlock_t (a sleeping lock on RT, never taken in atomic context) and
  * wake the readers.  The open file holds the module (fops owner): the
  * resource cannot be removed while a daemon holds the device or a mapping
- * of it (delete_module says "in use").  open() is refused until the
- * module's init has completed, so no file outlives a failed load.
+ * of it (delete_module says "in use").
+ *
+ * A failed load: the device node is registered by iec_user_expose(), the
+ * module init's very last step (iec_io_expose(), after the other devices,
+ * the task threads and the interrupt lines), and deregistered first at
+ * exit.  So with one user device, a load that fails never showed the node;
+ * with several, only the failure of a later device's registration can
+ * follow an earlier one's.  An open() racing it is refused (the module is
+ * not live until init returns), and the failed init waits for its module
+ * reference to go (iec_io_settle()): no file outlives a failed load.
  */
 #include <linux/atomic.h>
 #include <linux/fs.h>
@@ -184,7 +192,6 @@ struct iec_user_dev {
 	atomic64_t published;
 	wait_queue_head_t wq;
 	atomic_t writer;		/* a read-write opener */
-	bool registered;
 };
 
 /* what an open file knows */
@@ -364,31 +371,44 @@ static int iec_user_open(struct iec_io_dev *d, const char **why)
 	init_waitqueue_head(&u->wq);
 	atomic64_set(&u->published, 0);
 	atomic_set(&u->writer, 0);
-	u->misc.minor = MISC_DYNAMIC_MINOR;
-	u->misc.name = u->node;
-	u->misc.fops = &iec_user_fops;
-	u->misc.mode = 0600;
-	ret = misc_register(&u->misc);
-	if (ret) {
-		*why = "its character device cannot be registered (is the name taken?)";
-		goto err;
-	}
-	u->registered = true;
 	return 0;
 err:
 	iec_user_free(u);
 	return ret;
 }
 
-/* module exit (no file can be open: each holds the module) or failed init */
+/* module exit or failed init, the device withdrawn: no file is open */
 static void iec_user_close(struct iec_io_dev *d)
+{
+	iec_user_free(d->handle);
+}
+
+/* module init's last step (iec_io_expose()): /dev/<node> appears */
+static int iec_user_expose(struct iec_io_dev *d, const char **why)
+{
+	struct iec_user_dev *u = d->handle;
+	int ret;
+
+	u->misc.minor = MISC_DYNAMIC_MINOR;
+	u->misc.name = u->node;
+	u->misc.fops = &iec_user_fops;
+	u->misc.mode = 0600;
+	ret = misc_register(&u->misc);
+	if (ret)
+		*why = "its character device cannot be registered (is the name taken?)";
+	return ret;
+}
+
+/*
+ * exit's first step, or a failed init: after misc_deregister() (misc_open()
+ * runs under the same mutex) no open() is in iec_user_fopen() and none can
+ * find the device
+ */
+static void iec_user_withdraw(struct iec_io_dev *d)
 {
 	struct iec_user_dev *u = d->handle;
 
-	if (u->registered)
-		misc_deregister(&u->misc);
-	u->registered = false;
-	iec_user_free(u);
+	misc_deregister(&u->misc);
 }
 
 static int iec_user_check(struct iec_io_dev *d, const struct iec_io_bind *b,
@@ -555,4 +575,6 @@ static const struct iec_io_provider iec_io_user = {
 	.write = iec_user_write,
 	.cycle_in = iec_user_cycle_in,
 	.cycle_out = iec_user_cycle_out,
+	.expose = iec_user_expose,
+	.withdraw = iec_user_withdraw,
 };

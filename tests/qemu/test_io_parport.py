@@ -14,7 +14,8 @@ byte per two cycles.  Each cycle that writes STROBE low makes the port raise
 IRQ 7 (the control register's interrupt enable is set by resource Events,
 whose INTERRUPT binding requests the line); every interrupt runs event task
 onack once: its count equals the cycles that wrote STROBE low, the kernel's
-count of the line and the handler's own count logged at unload.  After the
+count of the line, the handler's count `plc-manager status` shows with the
+interrupt (from the module's iec_io file) and the one logged at unload.  After the
 unload, comedi_parport re-attached with its own IRQ makes the load fail,
 naming the interrupt.  The status lines (comedi_parport's DI subdevice) are not bound: with a file chardev
 QEMU's port emulates them itself (a printer handshake) and nothing outside
@@ -105,6 +106,14 @@ def test_traffic_light_bytes_and_ack_interrupts(guest, comedi, guest_workdir):
     status = g.run("cat /sys/kernel/iec2kmod/crossing/status").output
     m = re.search(r"task events\.onack .*?cycles (\d+)", status)
     assert m and int(m.group(1)) == acks, status
+    # plc-manager status lists the interrupt: the line's own count, the task
+    text = pm(g, "status")[1]
+    rows = [ln.split() for ln in text.split("interrupts (COUNT: taken since the load", 1)[-1]
+            .splitlines() if ln.startswith("Events ")]
+    assert rows == [["Events", "%IX9.0", "Events.ack", "lpt.ACK", "7", "onack", str(acks)]], text
+    assert [(q["address"], q["irq"], q["tasks"], q["count"])
+            for q in json.loads(pm(g, "status", "--json")[1])["interrupts"]] == [
+        ("%IX9.0", 7, ["onack"], acks)]
 
     # unload with the line requested: freed before the threads stop
     pm(g, "stop")

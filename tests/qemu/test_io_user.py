@@ -240,3 +240,85 @@ def test_a_daemon_closes_the_loop(guest, comedi, daemons, guest_workdir):
     assert g.run(f"ls {NODE} {MON}").exit_code != 0
     assert "iec2kmod: task bench.fast stopped: I/O device error in io fb: inputs stale" \
         in g.run("dmesg").output
+
+
+# insmod of the resource module while a thread keeps opening its user
+# devices and a netlink socket hears the kernel's uevents: what user space
+# could see of a load that fails
+FAILED_INSMOD = r"""
+import collections, ctypes, errno, json, os, socket, sys, threading, time
+ko, probe, nodes = sys.argv[1], sys.argv[2], sys.argv[3:]
+ev = socket.socket(socket.AF_NETLINK, socket.SOCK_DGRAM, 15)    # NETLINK_KOBJECT_UEVENT
+ev.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
+ev.bind((0, 1))
+opens, done = collections.Counter(), threading.Event()
+def opener():
+    while not done.is_set():
+        for n in nodes:
+            try:
+                os.close(os.open(n, os.O_RDONLY))
+                opens["opened"] += 1
+            except OSError as e:
+                opens[errno.errorcode.get(e.errno, str(e.errno))] += 1
+th = threading.Thread(target=opener)
+th.start()
+time.sleep(0.2)
+libc = ctypes.CDLL(None, use_errno=True)
+fd = os.open(ko, os.O_RDONLY)
+rc = libc.syscall(313, fd, b"", 0)                              # finit_module
+err = ctypes.get_errno() if rc else 0
+os.close(fd)
+time.sleep(0.2)
+done.set()
+th.join()
+with open(probe, "w") as f:     # an event the socket must hear: it listens
+    f.write("change")
+events = []
+ev.settimeout(1.0)
+try:
+    while True:
+        events.append(ev.recv(65536).split(b"\0")[0].decode())
+except socket.timeout:
+    pass
+print(json.dumps({"rc": rc, "errno": errno.errorcode.get(err, str(err)), "opens": opens,
+                  "events": events, "left": [n for n in nodes if os.path.exists(n)]}))
+"""
+
+
+def test_a_failed_load_never_shows_its_user_devices(guest, comedi, guest_workdir):
+    """The resource module inserted by hand (as plc-manager would not: its
+    device check refuses first) with comedi loaded but no board at
+    /dev/comedi0: its own check refuses at init, after the user devices fb
+    and mon (before daq in the I/O map) were opened.  Their character
+    devices are registered as init's last step, so none ever appears: no
+    uevent names /dev/iec_io_rig_bench_*, a thread opening both nodes all
+    along gets only ENOENT, nothing is left, and the configuration's other
+    modules come out (nothing holds them).  Before, each node was
+    registered with its device and removed again (an add and a remove
+    uevent each)."""
+    g = guest
+    tree = Path(guest_workdir) / "io_user_fail"
+    manifest = gen_and_build(PROJECT, tree)
+    res = manifest["load_order"][-1]
+    assert res == "iec_rig_r_bench", manifest["load_order"]
+    comedi()                    # comedi and kcomedilib: no board attached
+    for name in manifest["load_order"][:-1]:
+        g.check_call(f"insmod {tree / name / (name + '.ko')}")
+    probe = f"/sys/module/{manifest['load_order'][0]}/uevent"
+    r = g.pyrun(code=FAILED_INSMOD, argv=[str(tree / res / (res + ".ko")), probe, NODE, MON],
+                timeout=120)
+    assert r.exit_code == 0, r.output
+    got = json.loads(r.output.strip().splitlines()[-1])
+    print("failed insmod:", got)
+    assert got["rc"] == -1 and got["errno"] == "ENODEV", got
+    assert f"change@/module/{manifest['load_order'][0]}" in got["events"], got
+    assert [e for e in got["events"] if "iec_io_" in e] == [], got
+    assert set(got["opens"]) == {"ENOENT"} and got["opens"]["ENOENT"] > 2, got
+    assert got["left"] == [] and res not in loaded_modules(g), got
+    assert ("iec2kmod: resource Bench: device daq (comedi minor 0): no attached comedi "
+            "device at that minor") in g.run("dmesg").output
+    g.check_call(f"echo clear all > /sys/kernel/iec2kmod/{manifest['configuration'].lower()}"
+                 "/control")
+    for name in reversed(manifest["load_order"][:-1]):
+        g.check_call(f"rmmod {name}")
+    assert loaded_modules(g) == []

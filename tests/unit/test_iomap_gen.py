@@ -68,6 +68,31 @@ def test_the_resource_module_reads_and_writes_its_devices_outside_the_lock(tmp_p
     assert "iec_io" not in (out / "iec_rig_config" / "main.c").read_text()
 
 
+def test_a_task_asks_only_the_devices_its_bindings_use(tmp_path):
+    """projects/io_user: devices fb and mon (user) and daq (comedi); task
+    fast reads all three and writes fb and daq.  Each direction carries the
+    devices it uses, once each, which the cycle asks for cycle_in() and
+    cycle_out() (iec_io.c) instead of walking the bindings every cycle;
+    init makes the user devices reachable last, exit withdraws them
+    first."""
+    p, out = gen(tmp_path, ROOT / "tests" / "qemu" / "projects" / "io_user")
+    assert p.returncode == 0, p.stderr
+    main = (out / "iec_rig_r_bench" / "main.c").read_text()
+    assert "static const u16 task0_io_in_devs[] = { 0, 1, 2 };" in main
+    assert "static const u16 task0_io_out_devs[] = { 0, 2 };" in main
+    assert "\t.devs = task0_io_out_devs,\n" in main
+    cin = _between(main, "static void task0_copy_in(", "\n}\n")
+    assert "iec_io_read(&io, t, &task0_in);" in cin
+    assert "iec_io_write(&io, t, &task0_out);" in main
+    init = _between(main, "static int __init resource_init(", "\n}\n")
+    order = [init.index(s) for s in ("iec_io_open(&io)", "iec_resource_init(&resource)",
+                                     "iec_io_irq_on(&io, &resource)", "iec_io_expose(&io)",
+                                     "return 0;", "iec_io_settle(&io, base);")]
+    assert order == sorted(order), init
+    leave = _between(main, "static void __exit resource_exit(", "\n}\n")
+    assert leave.index("iec_io_withdraw(&io);") < leave.index("iec_io_irq_off(&io);"), leave
+
+
 def test_an_output_no_task_writes_is_in_no_task_list(tmp_path):
     (tmp_path / "p").mkdir()
     st = (PROJECT / "loop.st").read_text().replace("  aout1 := setp;\n", "")

@@ -159,3 +159,54 @@ def test_user_slots_in_status_and_the_device_check():
         ("fb.0", "-", "fb.1", "1.5")
     dint.last, real.last = 0xFFFFFFFE, 0x3FC00000
     assert (dint.value, real.value) == ("-2", "1.5")
+
+
+PARPORT = ROOT / "tests" / "qemu" / "projects" / "io_parport"
+
+
+def test_status_shows_the_interrupts_and_their_counts(tmp_path, monkeypatch):
+    """projects/io_parport: resource Events binds no channel, only the
+    INTERRUPT that wakes task onack.  status lists it (address, variable,
+    device.source, IRQ, the task it wakes, the count from the kernel's
+    iec_io file) in text and JSON; without the kernel's line the count is
+    unknown.  Before, status showed no interrupt at all."""
+    out = tmp_path / "t"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    p = subprocess.run([sys.executable, "-m", "iec2kmod", "gen", str(PARPORT), "-o", str(out)],
+                       env=env, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    monkeypatch.setenv("PLC_MANAGER_STATE_DIR", str(tmp_path / "state"))
+    s = State.create(Project.open(out))
+    s.data.update(source_hash="s", interface_hash="i")
+    s.save()
+    sysfs = tmp_path / "sys"
+    for mod in ("iec_crossing_r_events", "iec_crossing_r_lights"):
+        (sysfs / "module" / mod).mkdir(parents=True)
+    (sysfs / "module" / "iec_crossing_r_events" / "iec_io").write_text(
+        "irq %IX9.0 lpt.ACK 7 205\n")
+    (sysfs / "module" / "iec_crossing_r_lights" / "iec_io").write_text(
+        "%QX0.0 lpt.0.0 1\n")
+    monkeypatch.setattr(io, "SYSFS", str(sysfs))
+    st = _status()
+    st.configuration, st.module = "Crossing", "iec_crossing_config"
+    text = status_text(st)
+    head = "interrupts (COUNT: taken since the load; /sys/module/<module>/iec_io):"
+    assert head in text, text
+    rows = text.split(head, 1)[1].splitlines()[1:4]
+    assert rows[0].split() == ["RESOURCE", "ADDRESS", "VARIABLE", "SOURCE", "IRQ", "WAKES",
+                               "COUNT"], text
+    assert rows[1].split() == ["Events", "%IX9.0", "Events.ack", "lpt.ACK", "7", "onack",
+                               "205"], text
+    assert rows[2].strip() == "", text       # one source; the binding table is apart
+    # the interrupt line is not a binding: Lights' table is unchanged
+    assert [ln.split()[:2] for ln in text.splitlines() if ln.startswith("Lights ")][0] == \
+        ["Lights", "%QX0.0"], text
+    assert status_json(st)["interrupts"] == [
+        {"resource": "Events", "module": "iec_crossing_r_events", "address": "%IX9.0",
+         "variable": "Events.ack", "device": "lpt", "source": "ACK", "irq": 7,
+         "tasks": ["onack"], "count": 205, "where": "lpt.ACK"}]
+    # a module that shows no count (older, or gone): the source, count "-"
+    (sysfs / "module" / "iec_crossing_r_events" / "iec_io").write_text("")
+    rows = [ln for ln in status_text(st).splitlines() if ln.startswith("Events ")]
+    assert len(rows) == 1 and rows[0].split()[-2:] == ["onack", "-"], rows
+    assert status_json(st)["interrupts"][0]["count"] is None
