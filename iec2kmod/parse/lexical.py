@@ -135,13 +135,14 @@ def of_kind(text: str, kind: str) -> list[Pragma]:
 
 def in_front_of(text: str, pos: int, kind: str) -> Pragma | None:
     """The pragma of that kind that ends right before pos, with only
-    blanks between, or None."""
+    blanks between (whitespace, comments, inline C: as for {selective}),
+    or None."""
     best = None
     for p in pragmas(text):
         if p.end > pos:
             break
         best = p
-    if best is None or best.kind != kind or text[best.end:pos].strip():
+    if best is None or best.kind != kind or not blank(text, best.end, pos):
         return None
     return best
 

@@ -41,12 +41,15 @@ def test_pragmas_are_scanned_once_with_their_kind_and_offsets():
 
 
 def test_in_front_of_only_across_blanks():
-    text = "{watchdog T#5ms}\n  TASK t; {watchdog T#1s} (* c *) TASK u;"
+    text = ("{watchdog T#5ms}\n  TASK t; {watchdog T#1s} (* c *) // d\n TASK u;"
+            " {watchdog T#2s} PROGRAM p WITH u : P; TASK v;")
     t = text.index("TASK t")
     u = text.index("TASK u")
+    v = text.index("TASK v")
     assert lexical.in_front_of(text, t, "watchdog").start == 0
     assert lexical.in_front_of(text, t, "selective") is None
-    assert lexical.in_front_of(text, u, "watchdog") is None
+    assert lexical.in_front_of(text, u, "watchdog").text == "{watchdog T#1s}"
+    assert lexical.in_front_of(text, v, "watchdog") is None
 
 
 def test_parser_warns_at_pragmas_no_pass_reads():

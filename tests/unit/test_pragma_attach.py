@@ -25,8 +25,9 @@ CONFIGURATION c
 RESOURCE r ON PLC
 {watchdog T#20ms, 2}
 TASK t (INTERVAL := T#10ms, PRIORITY := 1);
-{watchdog T#5ms} (* a comment between: applies to nothing *)
+{watchdog T#5ms} (* a comment between is a blank, as for {selective} *)
 TASK u (INTERVAL := T#10ms, PRIORITY := 2);
+{watchdog T#1ms}
 PROGRAM i WITH t : p;
 END_RESOURCE
 END_CONFIGURATION
@@ -43,13 +44,15 @@ def _unit():
 def test_every_pragma_of_the_file_is_on_the_unit_in_order():
     unit = _unit()
     assert [p.kind for p in unit.pragmas] == ["verify", "assume", "verify", "assume",
-                                              "watchdog", "watchdog"]
+                                              "watchdog", "watchdog", "watchdog"]
 
 
 def test_watchdog_on_the_task_right_behind_it():
     t, u = _unit().configurations[0].resources[0].tasks
     assert [p.body.strip() for p in t.pragmas] == ["T#20ms, 2"]
-    assert u.pragmas == ()
+    assert [p.body.strip() for p in u.pragmas] == ["T#5ms"]
+    pc = _unit().configurations[0].resources[0].programs[0]
+    assert pc.pragmas == ()          # a {watchdog} in front of a program instance: nothing
 
 
 def test_verify_and_assume_on_their_pou_or_the_file():

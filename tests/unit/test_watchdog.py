@@ -161,3 +161,17 @@ def test_event_task_overrun_limit_and_misplaced_pragma(tmp_path):
     assert "error: an overrun limit needs a periodic task (INTERVAL)" in p.stderr, p.stderr
     assert "warning: watchdog pragma applies to nothing: put it right in front of a TASK" \
         in p.stderr, p.stderr
+
+
+def test_a_comment_between_the_pragma_and_its_task(tmp_path):
+    """Blanks between a {watchdog} and its TASK are what the grammar skips,
+    comments too, as for {selective} (parse/lexical.PRAGMAS): the pragma is
+    not lost with a warning because a comment names the task."""
+    src = SOURCE.replace("{watchdog T#5ms}", "{watchdog T#7ms} (* the fast task *)\n        // ok")
+    assert "{watchdog T#7ms}" in src
+    (tmp_path / "wd.st").write_text(src)
+    r = frontend.run([str(tmp_path / "wd.st")], use_cache=False)
+    assert r.ok and not r.diags.warnings, [d.message for d in r.diags.warnings]
+    tasks = [t for c in r.project.configurations for res in c.resources
+             for t in res.tasks.values()]
+    assert 7_000_000 in [t.watchdog_ns for t in tasks]
