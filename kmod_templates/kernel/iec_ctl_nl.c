@@ -287,29 +287,7 @@ static int iec_nl_res_stop(struct sk_buff *skb, struct genl_info *info)
 	return iec_nl_res(info, false);
 }
 
-static int iec_nl_slot_clear(struct sk_buff *skb, struct genl_info *info)
-{
-	long slot = -1;
-	int err;
-
-	if (info->attrs[IEC_A_SLOT_INDEX]) {
-		slot = nla_get_u32(info->attrs[IEC_A_SLOT_INDEX]);
-		if (slot >= iec_cfg->nslots) {
-			NL_SET_ERR_MSG_ATTR(info->extack,
-					    info->attrs[IEC_A_SLOT_INDEX],
-					    "no such slot");
-			return -ENOENT;
-		}
-	}
-	mutex_lock(&iec_ctl_mutex);
-	err = iec_gft_clear(slot);
-	mutex_unlock(&iec_ctl_mutex);
-	if (err == -ETIMEDOUT)
-		NL_SET_ERR_MSG(info->extack,
-			       "a task does not come back from its cycle (kernel log, status: in_cycle)");
-	return err;
-}
-
+/* The slot a SLOT_* command names, -1 for every slot, or -ENOENT */
 static long iec_nl_slot_arg(struct genl_info *info)
 {
 	long slot = -1;
@@ -324,6 +302,22 @@ static long iec_nl_slot_arg(struct genl_info *info)
 		}
 	}
 	return slot;
+}
+
+static int iec_nl_slot_clear(struct sk_buff *skb, struct genl_info *info)
+{
+	long slot = iec_nl_slot_arg(info);
+	int err;
+
+	if (slot < -1)
+		return slot;
+	mutex_lock(&iec_ctl_mutex);
+	err = iec_gft_clear(slot);
+	mutex_unlock(&iec_ctl_mutex);
+	if (err == -ETIMEDOUT)
+		NL_SET_ERR_MSG(info->extack,
+			       "a task does not come back from its cycle (kernel log, status: in_cycle)");
+	return err;
 }
 
 /* The quick half of a swap: the staged builds replace the running ones. */
