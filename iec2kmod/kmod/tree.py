@@ -147,7 +147,8 @@ def write_tree(comp, out: Path) -> dict:
         image_header="iec_image.h", slots=slots, vars=cfg_vars, nevents=len(mp.single_events),
         enum_sets=_enum_sets(cfg_enums),
         init_decls=f.decls, needs_i=any("for (i = 0;" in ln for ln in init), init=f.pre + init)
-    runtime = ["iec_config_rt.c", "iec_ctl.c", "iec_vars.c"] + _runtime_used([main, image_h], False)
+    runtime = ["iec_config_rt.c", "iec_ctl.c", "iec_ctl_nl.c", "iec_ctl_sysfs.c", "iec_vars.c"] + \
+        _runtime_used([main, image_h], False)
     _write_module(out, mp.config_module, {"main.c": main},
                   ["main.o"] + [f[:-2] + ".o" for f in runtime], [], runtime=runtime)
 

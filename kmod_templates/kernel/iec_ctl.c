@@ -1,6 +1,13 @@
 // SPDX-License-Identifier: GPL-2.0-only OR MIT
 /*
- * iec_ctl.c - the configuration's control plane.
+ * iec_ctl.c - the configuration's control plane: what its two interfaces
+ * share, and their registration.
+ *
+ *   iec_ctl.c        the privilege model's monitor group, iec_ctl_mutex,
+ *                    resource and task start/stop, init and exit
+ *   iec_ctl_nl.c     the generic netlink family "iec2kmod" and its commands
+ *   iec_ctl_sysfs.c  /sys/kernel/iec2kmod/<configuration>/{status,control}
+ *   iec_vars.c       the variable commands and the force lists
  *
  * The privilege model: every netlink command, every control write and
  * every status read needs CAP_NET_ADMIN (in the initial user namespace),
@@ -9,55 +16,19 @@
  * monitor_gid=GID: members of that group may read (IEC_CMD_STATUS,
  * IEC_CMD_VAR_GET, IEC_CMD_VAR_LIST, the status file) and nothing else.
  *
- * sysfs, for people and shell scripts (status 0444, control 0200; the
- * checks above on every read and write):
- *   /sys/kernel/iec2kmod/<configuration>/status    resources, tasks, slots
- *   /sys/kernel/iec2kmod/<configuration>/control   "start <resource>|all",
- *                                                   "start <resource>.<task>"
- *                                                   (that task alone: a
- *                                                   restart after a fault),
- *                                                   "stop <resource>|all",
- *                                                   "run <resource>|all MS"
- *                                                   (start; every periodic
- *                                                   task stops by itself
- *                                                   before its first release
- *                                                   MS ms after the start,
- *                                                   running late releases
- *                                                   late instead of skipping
- *                                                   them: a fixed number of
- *                                                   cycles)
- *                                                   "clear <slot>|all"
- *   The control file takes exactly one command: one line of known words
- *   separated by single spaces, at most one trailing newline, nothing
- *   after it (no NUL, no second line).
- *
- * Generic netlink family "iec2kmod" (iec_nl.h), for plc-manager: status,
- * variable list/read/write/force/unforce, resource (or task) start, resource
- * stop, slot clear.
- * Every command needs CAP_NET_ADMIN in the initial namespace (the read
- * commands: or monitor_gid, above) and is checked strictly against its own
- * policy.  Commands run one at a time
- * (iec_ctl_mutex); they may sleep, but never while holding a raw lock.
- * The variable commands and the force lists are in iec_vars.c.
+ * Netlink commands and control writes run one at a time (iec_ctl_mutex);
+ * they may sleep, but never while holding a raw lock.
  */
-#include <linux/capability.h>
 #include <linux/cred.h>
-#include <linux/kobject.h>
+#include <linux/lockdep.h>
 #include <linux/module.h>
 #include <linux/mutex.h>
 #include <linux/string.h>
-#include <linux/sysfs.h>
-#include <linux/timekeeping.h>
 #include <net/genetlink.h>
 
 #include "iec_kmod.h"
 #include "iec_ctl.h"
 #include "iec_nl.h"
-
-static struct kobject *iec_root_kobj;
-static struct kobject *iec_cfg_kobj;
-
-static const char *const iec_state_names[] = { "stopped", "running", "fault" };
 
 /* serialises netlink commands, sysfs control and the force lists */
 DEFINE_MUTEX(iec_ctl_mutex);
@@ -69,7 +40,7 @@ MODULE_PARM_DESC(monitor_gid,
 		 "group that may read status and variables without CAP_NET_ADMIN (default -1: none)");
 
 /* The caller is in the read-only monitor group (monitor_gid). */
-static bool iec_monitor(void)
+bool iec_monitor(void)
 {
 	kgid_t gid;
 
@@ -77,239 +48,6 @@ static bool iec_monitor(void)
 		return false;
 	gid = make_kgid(&init_user_ns, monitor_gid);
 	return gid_valid(gid) && in_group_p(gid);
-}
-
-/*
- * The read commands (STATUS, VAR_GET, VAR_LIST): CAP_NET_ADMIN as for
- * GENL_ADMIN_PERM (of the sender and of the socket's opener), or the
- * monitor group.
- */
-int iec_nl_may_read(const struct sk_buff *skb)
-{
-	return netlink_capable(skb, CAP_NET_ADMIN) || iec_monitor() ? 0 : -EPERM;
-}
-
-static int iec_nl_var_list_start(struct netlink_callback *cb)
-{
-	return iec_nl_may_read(cb->skb);
-}
-
-/* ------------------------------------------------------------------ */
-/* generic netlink                                                    */
-/* ------------------------------------------------------------------ */
-
-static int iec_put_task(struct sk_buff *skb, struct iec_task *t)
-{
-	const struct iec_task_stats *s = &t->stats;
-	u64 cycles = READ_ONCE(s->cycles);
-	struct nlattr *nest;
-	u64 evaluated;
-
-	nest = nla_nest_start(skb, IEC_A_TASK);
-	if (!nest)
-		return -EMSGSIZE;
-	if (nla_put_string(skb, IEC_A_NAME, t->name) ||
-	    nla_put_u8(skb, IEC_A_STATE, READ_ONCE(t->state)) ||
-	    nla_put_s64(skb, IEC_A_INTERVAL_NS, t->interval_ns, IEC_A_PAD) ||
-	    nla_put_s32(skb, IEC_A_PRIORITY, t->priority) ||
-	    nla_put_u32(skb, IEC_A_LAST_CPU, t->thread ? task_cpu(t->thread) : 0) ||
-	    nla_put_u64_64bit(skb, IEC_A_CYCLES, cycles, IEC_A_PAD) ||
-	    nla_put_u64_64bit(skb, IEC_A_OVERRUNS, s->overruns, IEC_A_PAD) ||
-	    nla_put_u64_64bit(skb, IEC_A_FAULTS, s->faults, IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_EXEC_MIN_NS, s->exec_min_ns, IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_EXEC_AVG_NS,
-			cycles ? div64_s64(s->exec_sum_ns, cycles) : 0, IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_EXEC_MAX_NS, s->exec_max_ns, IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_LAT_AVG_NS,
-			cycles ? div64_s64(s->latency_sum_ns, cycles) : 0, IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_LAT_MAX_NS, s->latency_max_ns, IEC_A_PAD) ||
-	    nla_put(skb, IEC_A_HIST, sizeof(s->hist), s->hist))
-		goto cancel;
-	/* inside a cycle now: for how long (a task that does not come back) */
-	if ((smp_load_acquire(&t->cycle_seq) & 1) &&
-	    nla_put_s64(skb, IEC_A_IN_CYCLE_NS,
-			ktime_to_ns(ktime_sub(ktime_get(), READ_ONCE(t->cycle_start))),
-			IEC_A_PAD))
-		goto cancel;
-	/* selective execution: the task's counts of blocks (iec_sel.h) */
-	evaluated = READ_ONCE(t->ctx.sel_evaluated) + READ_ONCE(t->ctx.sel_plain);
-	if ((evaluated || READ_ONCE(t->ctx.sel_skipped)) &&
-	    (nla_put_u64_64bit(skb, IEC_A_SEL_EVALUATED, evaluated, IEC_A_PAD) ||
-	     nla_put_u64_64bit(skb, IEC_A_SEL_SKIPPED,
-			       READ_ONCE(t->ctx.sel_skipped), IEC_A_PAD)))
-		goto cancel;
-	if (s->fault_code &&
-	    (nla_put_string(skb, IEC_A_FAULT_NAME, iec_fault_name(s->fault_code)) ||
-	     nla_put_string(skb, IEC_A_FAULT_POU, s->fault_pou_name) ||
-	     nla_put_s32(skb, IEC_A_FAULT_LINE, s->fault_line) ||
-	     nla_put_s64(skb, IEC_A_FAULT_NS, ktime_to_ns(s->fault_time), IEC_A_PAD)))
-		goto cancel;
-	if (nla_put_u64_64bit(skb, IEC_A_STARTS, s->starts, IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_STARTED_NS, ktime_to_ns(s->started), IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_LAST_END_NS, ktime_to_ns(READ_ONCE(s->last_end)),
-			IEC_A_PAD))
-		goto cancel;
-	nla_nest_end(skb, nest);
-	return 0;
-
-cancel:
-	nla_nest_cancel(skb, nest);
-	return -EMSGSIZE;
-}
-
-static int iec_put_resource(struct sk_buff *skb, struct iec_resource *r)
-{
-	struct nlattr *nest;
-	u32 i;
-
-	nest = nla_nest_start(skb, IEC_A_RESOURCE);
-	if (!nest)
-		return -EMSGSIZE;
-	if (nla_put_string(skb, IEC_A_NAME, r->name) ||
-	    nla_put_string(skb, IEC_A_MODULE, module_name(r->owner)) ||
-	    nla_put_s32(skb, IEC_A_CPU, r->cpu))
-		goto cancel;
-	for (i = 0; i < r->ntasks; i++)
-		if (iec_put_task(skb, &r->tasks[i]))
-			goto cancel;
-	nla_nest_end(skb, nest);
-	return 0;
-
-cancel:
-	nla_nest_cancel(skb, nest);
-	return -EMSGSIZE;
-}
-
-/*
- * A slot's program type lives in its module.  The reference is read under
- * rcu_read_lock(): a replaced module is freed only after the
- * synchronize_rcu() of module removal, so what we read stays valid.
- */
-/* "res.task" of the task with @task_id; the caller holds iec_resources_lock */
-static int iec_put_task_path(struct sk_buff *skb, int attr, u32 task_id)
-{
-	struct iec_resource *r;
-	char path[128];
-	u32 k;
-
-	list_for_each_entry(r, &iec_resources, node)
-		for (k = 0; k < r->ntasks; k++)
-			if (r->tasks[k].task_id == task_id) {
-				snprintf(path, sizeof(path), "%s.%s", r->name,
-					 r->tasks[k].name);
-				return nla_put_string(skb, attr, path);
-			}
-	return 0;	/* its resource is gone */
-}
-
-/* One GFT slot; the caller holds iec_resources_lock. */
-static int iec_put_slot(struct sk_buff *skb, u32 i)
-{
-	const struct iec_gft_slot *slot = &iec_cfg->slots[i];
-	const struct iec_program_type *p, *staged;
-	struct nlattr *nest;
-	int err = 0;
-
-	nest = nla_nest_start(skb, IEC_A_SLOT);
-	if (!nest)
-		return -EMSGSIZE;
-	rcu_read_lock();
-	p = rcu_dereference_raw(slot->cur);
-	if (nla_put_u32(skb, IEC_A_SLOT_INDEX, i) ||
-	    nla_put_string(skb, IEC_A_NAME, slot->type_name) ||
-	    nla_put_u64_64bit(skb, IEC_A_SLOT_IFACE, slot->iface_hash, IEC_A_PAD) ||
-	    nla_put_s64(skb, IEC_A_SINCE_NS, ktime_to_ns(slot->since), IEC_A_PAD) ||
-	    nla_put_u64_64bit(skb, IEC_A_PUBLICATIONS, slot->publications, IEC_A_PAD) ||
-	    (p && (nla_put_string(skb, IEC_A_MODULE, module_name(p->owner)) ||
-		   nla_put_string(skb, IEC_A_BUILD_ID, p->build_id) ||
-		   nla_put_s64(skb, IEC_A_FIRST_RUN_NS, READ_ONCE(p->first_run_ns),
-			       IEC_A_PAD) ||
-		   (READ_ONCE(p->first_run_task) &&
-		    iec_put_task_path(skb, IEC_A_FIRST_RUN_TASK,
-				      READ_ONCE(p->first_run_task) - 1)))))
-		err = -EMSGSIZE;
-	/* a staged build is dropped under iec_ctl_mutex (held): it stays */
-	staged = READ_ONCE(slot->staged);
-	if (!err && staged && nla_put_string(skb, IEC_A_STAGED, staged->build_id))
-		err = -EMSGSIZE;
-	rcu_read_unlock();
-	if (err) {
-		nla_nest_cancel(skb, nest);
-		return err;
-	}
-	nla_nest_end(skb, nest);
-	return 0;
-}
-
-static size_t iec_status_size(void)
-{
-	struct iec_resource *r;
-	size_t n = 512 + strlen(iec_cfg->name) + strlen(iec_cfg->source_hash) +
-		   strlen(iec_cfg->iface_hash);
-	u32 i;
-
-	list_for_each_entry(r, &iec_resources, node) {
-		n += 256 + strlen(r->name);
-		for (i = 0; i < r->ntasks; i++)
-			n += 512 + strlen(r->tasks[i].name) + IEC_POU_NAME_LEN +
-			     IEC_HIST_BUCKETS * sizeof(u64);
-	}
-	for (i = 0; i < iec_cfg->nslots; i++)
-		n += 460 + strlen(iec_cfg->slots[i].type_name) + MODULE_NAME_LEN;
-	return n;
-}
-
-/*
- * The status; with SLOTS_ONLY without the resources and their tasks (the
- * swap's confirmation polls the slots: a reply a tenth of the size).
- */
-static int iec_nl_status(struct sk_buff *skb, struct genl_info *info)
-{
-	bool slots_only = nla_get_flag(info->attrs[IEC_A_SLOTS_ONLY]);
-	struct iec_resource *r;
-	struct sk_buff *msg;
-	void *hdr;
-	u32 i;
-	int err = iec_nl_may_read(skb);
-
-	if (err)
-		return err;
-	err = -EMSGSIZE;
-	mutex_lock(&iec_ctl_mutex);
-	mutex_lock(&iec_resources_lock);
-	msg = genlmsg_new(iec_status_size(), GFP_KERNEL);
-	if (!msg) {
-		err = -ENOMEM;
-		goto out;
-	}
-	hdr = genlmsg_put_reply(msg, info, &iec_nl_family, 0, IEC_CMD_STATUS);
-	if (!hdr)
-		goto out_free;
-	if (nla_put_u32(msg, IEC_A_ABI, IEC_KMOD_ABI) ||
-	    nla_put_string(msg, IEC_A_NAME, iec_cfg->name) ||
-	    nla_put_string(msg, IEC_A_MODULE, module_name(THIS_MODULE)) ||
-	    nla_put_string(msg, IEC_A_SOURCE_HASH, iec_cfg->source_hash) ||
-	    nla_put_string(msg, IEC_A_IFACE_HASH, iec_cfg->iface_hash) ||
-	    nla_put_s64(msg, IEC_A_NOW_NS, ktime_get_real_ns(), IEC_A_PAD) ||
-	    nla_put_u32(msg, IEC_A_NFORCED, iec_forced_count()))
-		goto out_free;
-	list_for_each_entry(r, &iec_resources, node)
-		if (!slots_only && iec_put_resource(msg, r))
-			goto out_free;
-	for (i = 0; i < iec_cfg->nslots; i++)
-		if (iec_put_slot(msg, i))
-			goto out_free;
-	genlmsg_end(msg, hdr);
-	mutex_unlock(&iec_resources_lock);
-	mutex_unlock(&iec_ctl_mutex);
-	return genlmsg_reply(msg, info);
-
-out_free:
-	nlmsg_free(msg);
-out:
-	mutex_unlock(&iec_resources_lock);
-	mutex_unlock(&iec_ctl_mutex);
-	return err;
 }
 
 /* The task "<resource>.<task>" names, or NULL; *r is its resource. */
@@ -341,9 +79,9 @@ static struct iec_task *iec_task_find(const char *name, struct iec_resource **r)
  * tasks of its resource are left as they are).
  * A stop returns once every task it stopped acknowledged (its thread is
  * idle: no cycle runs, the resource module may go), or -ETIMEDOUT after
- * the bound, naming the task that did not.
+ * the bound, naming the task that did not.  The caller holds iec_ctl_mutex.
  */
-static int iec_control_resource(const char *name, bool start, u32 run_ms)
+int iec_control_resource(const char *name, bool start, u32 run_ms)
 {
 	/* a common first release, late enough for every task to be asleep */
 	ktime_t epoch = ktime_add_ms(ktime_get(), IEC_START_DELAY_MS);
@@ -354,6 +92,7 @@ static int iec_control_resource(const char *name, bool start, u32 run_ms)
 	int ret = -ENOENT;
 	u32 i;
 
+	lockdep_assert_held(&iec_ctl_mutex);
 	if (name && !strcmp(name, "all"))
 		name = NULL;
 	mutex_lock(&iec_resources_lock);
@@ -401,409 +140,26 @@ static int iec_control_resource(const char *name, bool start, u32 run_ms)
 	return ret;
 }
 
-static int iec_nl_res(struct genl_info *info, bool start)
-{
-	const char *name = NULL;
-	int err;
-
-	err = iec_nla_strict_string(info->attrs[IEC_A_NAME], info->extack);
-	if (err)
-		return err;
-	if (info->attrs[IEC_A_NAME])
-		name = nla_data(info->attrs[IEC_A_NAME]);
-	mutex_lock(&iec_ctl_mutex);
-	err = iec_control_resource(name, start, 0);
-	mutex_unlock(&iec_ctl_mutex);
-	if (err == -ENOENT)
-		NL_SET_ERR_MSG_ATTR(info->extack, info->attrs[IEC_A_NAME],
-				    "no such resource or task");
-	else if (err == -EOPNOTSUPP)
-		NL_SET_ERR_MSG_ATTR(info->extack, info->attrs[IEC_A_NAME],
-				    "tasks are stopped by resource");
-	else if (err == -ETIMEDOUT)
-		NL_SET_ERR_MSG(info->extack,
-			       "a task does not come back from its cycle (kernel log, status: in_cycle)");
-	return err;
-}
-
-static int iec_nl_res_start(struct sk_buff *skb, struct genl_info *info)
-{
-	return iec_nl_res(info, true);
-}
-
-static int iec_nl_res_stop(struct sk_buff *skb, struct genl_info *info)
-{
-	return iec_nl_res(info, false);
-}
-
-
-static int iec_nl_slot_clear(struct sk_buff *skb, struct genl_info *info)
-{
-	long slot = -1;
-	int err;
-
-	if (info->attrs[IEC_A_SLOT_INDEX]) {
-		slot = nla_get_u32(info->attrs[IEC_A_SLOT_INDEX]);
-		if (slot >= iec_cfg->nslots) {
-			NL_SET_ERR_MSG_ATTR(info->extack,
-					    info->attrs[IEC_A_SLOT_INDEX],
-					    "no such slot");
-			return -ENOENT;
-		}
-	}
-	mutex_lock(&iec_ctl_mutex);
-	err = iec_gft_clear(slot);
-	mutex_unlock(&iec_ctl_mutex);
-	if (err == -ETIMEDOUT)
-		NL_SET_ERR_MSG(info->extack,
-			       "a task does not come back from its cycle (kernel log, status: in_cycle)");
-	return err;
-}
-
-static long iec_nl_slot_arg(struct genl_info *info)
-{
-	long slot = -1;
-
-	if (info->attrs[IEC_A_SLOT_INDEX]) {
-		slot = nla_get_u32(info->attrs[IEC_A_SLOT_INDEX]);
-		if (slot >= iec_cfg->nslots) {
-			NL_SET_ERR_MSG_ATTR(info->extack,
-					    info->attrs[IEC_A_SLOT_INDEX],
-					    "no such slot");
-			return -ENOENT;
-		}
-	}
-	return slot;
-}
-
-/* The quick half of a swap: the staged builds replace the running ones. */
-static int iec_nl_slot_publish(struct sk_buff *skb, struct genl_info *info)
-{
-	long slot = iec_nl_slot_arg(info);
-	int err;
-
-	if (slot < -1)
-		return slot;
-	mutex_lock(&iec_ctl_mutex);
-	err = iec_gft_publish_staged(slot);
-	mutex_unlock(&iec_ctl_mutex);
-	if (err == -ENOENT)
-		NL_SET_ERR_MSG(info->extack, "nothing is staged (insmod ... stage=1)");
-	else if (err == -ETIMEDOUT)
-		NL_SET_ERR_MSG(info->extack,
-			       "published; a task does not come back from its cycle (the old body stays loaded)");
-	return err < 0 ? err : 0;
-}
-
-static int iec_nl_slot_unstage(struct sk_buff *skb, struct genl_info *info)
-{
-	long slot = iec_nl_slot_arg(info);
-	int err;
-
-	if (slot < -1)
-		return slot;
-	mutex_lock(&iec_ctl_mutex);
-	err = iec_gft_unstage(slot);
-	mutex_unlock(&iec_ctl_mutex);
-	return err;
-}
-
-/* commands that take no attribute at all */
-static const struct nla_policy iec_nl_none_policy[IEC_A_MAX + 1] = {};
-
-static const struct nla_policy iec_nl_res_policy[IEC_A_MAX + 1] = {
-	[IEC_A_NAME] = { .type = NLA_NUL_STRING, .len = 63 },
-};
-
-static const struct nla_policy iec_nl_status_policy[IEC_A_MAX + 1] = {
-	[IEC_A_SLOTS_ONLY] = { .type = NLA_FLAG },
-};
-
-static const struct nla_policy iec_nl_slot_policy[IEC_A_MAX + 1] = {
-	[IEC_A_SLOT_INDEX] = { .type = NLA_U32 },
-};
-
-static const struct genl_ops iec_nl_ops[] = {
-	/* the read commands check iec_nl_may_read() themselves */
-	{
-		.cmd = IEC_CMD_STATUS,
-		.doit = iec_nl_status,
-		.policy = iec_nl_status_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_VAR_GET,
-		.doit = iec_nl_var_get,
-		.policy = iec_nl_get_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_VAR_LIST,
-		.start = iec_nl_var_list_start,
-		.dumpit = iec_nl_var_list,
-		.policy = iec_nl_none_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_VAR_SET,
-		.flags = GENL_ADMIN_PERM,
-		.doit = iec_nl_var_set,
-		.policy = iec_nl_set_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_VAR_FORCE,
-		.flags = GENL_ADMIN_PERM,
-		.doit = iec_nl_var_force,
-		.policy = iec_nl_set_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_VAR_UNFORCE,
-		.flags = GENL_ADMIN_PERM,
-		.doit = iec_nl_var_unforce,
-		.policy = iec_nl_unforce_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_RES_START,
-		.flags = GENL_ADMIN_PERM,
-		.doit = iec_nl_res_start,
-		.policy = iec_nl_res_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_RES_STOP,
-		.flags = GENL_ADMIN_PERM,
-		.doit = iec_nl_res_stop,
-		.policy = iec_nl_res_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_SLOT_CLEAR,
-		.flags = GENL_ADMIN_PERM,
-		.doit = iec_nl_slot_clear,
-		.policy = iec_nl_slot_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_SLOT_PUBLISH,
-		.flags = GENL_ADMIN_PERM,
-		.doit = iec_nl_slot_publish,
-		.policy = iec_nl_slot_policy,
-		.maxattr = IEC_A_MAX,
-	},
-	{
-		.cmd = IEC_CMD_SLOT_UNSTAGE,
-		.flags = GENL_ADMIN_PERM,
-		.doit = iec_nl_slot_unstage,
-		.policy = iec_nl_slot_policy,
-		.maxattr = IEC_A_MAX,
-	},
-};
-
-/* netnsok stays 0: the family exists in the initial namespace only */
-struct genl_family iec_nl_family = {
-	.name = IEC_NL_FAMILY,
-	.version = IEC_NL_VERSION,
-	.maxattr = IEC_A_MAX,
-	.parallel_ops = true,
-	.module = THIS_MODULE,
-	.ops = iec_nl_ops,
-	.n_ops = ARRAY_SIZE(iec_nl_ops),
-};
-
-/* ------------------------------------------------------------------ */
-/* sysfs                                                              */
-/* ------------------------------------------------------------------ */
-
-/* Appends to a sysfs page; a status longer than a page ends in "...". */
-static __printf(3, 4) void iec_emit(char *buf, int *len, const char *fmt, ...)
-{
-	va_list args;
-
-	if (*len >= PAGE_SIZE - 5)
-		return;
-	va_start(args, fmt);
-	*len += vscnprintf(buf + *len, PAGE_SIZE - 4 - *len, fmt, args);
-	va_end(args);
-	if (*len >= PAGE_SIZE - 5)
-		*len += scnprintf(buf + *len, PAGE_SIZE - *len, "...\n");
-}
-
-static ssize_t status_show(struct kobject *kobj, struct kobj_attribute *attr,
-			   char *buf)
-{
-	struct iec_resource *r;
-	int len = 0;
-	u32 i;
-
-	/* the file mode is not enough: a root without capabilities is refused */
-	if (!capable(CAP_NET_ADMIN) && !iec_monitor())
-		return -EPERM;
-	iec_emit(buf, &len, "configuration %s source %s interface %s\n",
-		 iec_cfg->name, iec_cfg->source_hash, iec_cfg->iface_hash);
-	mutex_lock(&iec_resources_lock);
-	list_for_each_entry(r, &iec_resources, node) {
-		iec_emit(buf, &len, "resource %s module %s cpu %d\n",
-			 r->name, module_name(r->owner), r->cpu);
-		for (i = 0; i < r->ntasks; i++) {
-			struct iec_task *t = &r->tasks[i];
-			struct iec_task_stats *s = &t->stats;
-			int st = READ_ONCE(t->state);
-
-			iec_emit(buf, &len,
-				 "task %s.%s state %s interval_ns %lld priority %d cycles %llu overruns %llu exec_min_ns %lld exec_max_ns %lld exec_avg_ns %lld latency_max_ns %lld faults %llu fault %s pou %s line %d in_cycle_ms %lld starts %llu\n",
-				 r->name, t->name,
-				 st >= 0 && st <= IEC_TASK_FAULT ? iec_state_names[st] : "?",
-				 t->interval_ns, t->priority, s->cycles,
-				 s->overruns, s->exec_min_ns, s->exec_max_ns,
-				 s->cycles ? div64_s64(s->exec_sum_ns, s->cycles) : 0,
-				 s->latency_max_ns, s->faults,
-				 s->fault_code ? iec_fault_name(s->fault_code) : "none",
-				 s->fault_code ? s->fault_pou_name : "-",
-				 s->fault_line,
-				 (smp_load_acquire(&t->cycle_seq) & 1) ?
-				 ktime_ms_delta(ktime_get(), READ_ONCE(t->cycle_start)) : -1LL,
-				 s->starts);
-		}
-	}
-	mutex_unlock(&iec_resources_lock);
-	for (i = 0; i < iec_cfg->nslots; i++) {
-		struct iec_gft_slot *slot = &iec_cfg->slots[i];
-		struct iec_program_type *p;
-
-		rcu_read_lock();	/* see iec_put_slot() */
-		p = rcu_dereference_raw(slot->cur);
-		iec_emit(buf, &len,
-			 "slot %u %s interface %016llx module %s build %s since %lld publications %llu\n",
-			 i, slot->type_name, slot->iface_hash,
-			 p ? module_name(p->owner) : "-",
-			 p ? p->build_id : "-",
-			 ktime_to_ns(slot->since), slot->publications);
-		rcu_read_unlock();
-	}
-	return len;
-}
-
-/*
- * Splits the one line of a control write into at most @max words (single
- * spaces between them); -EINVAL for anything else: a NUL, a second line,
- * a control character, an empty word, too many words.
- */
-static int iec_control_words(char *line, size_t count, char **words, int max)
-{
-	int n = 0;
-	char *p;
-
-	if (count && line[count - 1] == '\n')
-		count--;
-	line[count] = '\0';
-	/* printable ASCII only (names are IEC identifiers) */
-	for (p = line; p < line + count; p++)
-		if ((u8)*p < 0x20 || (u8)*p > 0x7e)
-			return -EINVAL;
-	while ((p = strsep(&line, " "))) {
-		if (!*p || n == max)
-			return -EINVAL;
-		words[n++] = p;
-	}
-	return n;
-}
-
-static ssize_t control_store(struct kobject *kobj, struct kobj_attribute *attr,
-			     const char *buf, size_t count)
-{
-	char line[96], *w[3];
-	int ret, n;
-	u32 slot, run_ms = 0;
-
-	/* the file mode is not enough: a root without capabilities is refused */
-	if (!capable(CAP_NET_ADMIN))
-		return -EPERM;
-	if (count >= sizeof(line))
-		return -EINVAL;
-	memcpy(line, buf, count);
-	n = iec_control_words(line, count, w, ARRAY_SIZE(w));
-	if (n < 2)
-		return -EINVAL;
-	if (!strcmp(w[0], "run")) {
-		if (n != 3 || kstrtou32(w[2], 10, &run_ms) || !run_ms)
-			return -EINVAL;
-	} else if (n != 2) {
-		return -EINVAL;
-	}
-	mutex_lock(&iec_ctl_mutex);
-	if (!strcmp(w[0], "start") || !strcmp(w[0], "stop")) {
-		ret = iec_control_resource(w[1], w[0][2] == 'a', 0);
-	} else if (!strcmp(w[0], "run")) {
-		ret = iec_control_resource(w[1], true, run_ms);
-	} else if (!strcmp(w[0], "clear")) {
-		if (!strcmp(w[1], "all")) {
-			ret = iec_gft_clear(-1);
-		} else {
-			ret = kstrtou32(w[1], 10, &slot);
-			if (!ret)
-				ret = iec_gft_clear(slot);
-		}
-	} else {
-		ret = -EINVAL;
-	}
-	mutex_unlock(&iec_ctl_mutex);
-	return ret ? ret : count;
-}
-
-static struct kobj_attribute status_attr = __ATTR(status, 0444, status_show, NULL);
-static struct kobj_attribute control_attr = __ATTR(control, 0200, NULL, control_store);
-
-static struct attribute *iec_attrs[] = {
-	&status_attr.attr,
-	&control_attr.attr,
-	NULL,
-};
-
-static const struct attribute_group iec_group = {
-	.attrs = iec_attrs,
-};
-
 int iec_ctl_init(void)
 {
 	int ret;
 
-	iec_root_kobj = kobject_create_and_add("iec2kmod", kernel_kobj);
-	if (!iec_root_kobj)
-		return -ENOMEM;
-	iec_cfg_kobj = kobject_create_and_add(iec_cfg->name, iec_root_kobj);
-	if (!iec_cfg_kobj) {
-		ret = -ENOMEM;
-		goto err_root;
-	}
-	ret = sysfs_create_group(iec_cfg_kobj, &iec_group);
+	ret = iec_ctl_sysfs_init();
 	if (ret)
-		goto err_cfg;
+		return ret;
 	ret = genl_register_family(&iec_nl_family);
 	if (ret) {
 		pr_err("iec2kmod: generic netlink family %s: error %d\n",
 		       IEC_NL_FAMILY, ret);
-		goto err_group;
+		iec_ctl_sysfs_exit();
 	}
-	return 0;
-
-err_group:
-	sysfs_remove_group(iec_cfg_kobj, &iec_group);
-err_cfg:
-	kobject_put(iec_cfg_kobj);
-err_root:
-	kobject_put(iec_root_kobj);
 	return ret;
 }
 
 void iec_ctl_exit(void)
 {
 	genl_unregister_family(&iec_nl_family);
-	sysfs_remove_group(iec_cfg_kobj, &iec_group);
-	kobject_put(iec_cfg_kobj);
-	kobject_put(iec_root_kobj);
+	iec_ctl_sysfs_exit();
 	/* no resource is left: only forced configuration globals remain */
 	iec_vars_exit();
 }

@@ -5,7 +5,8 @@
  *   configuration module  the global image, the process image, the GFT,
  *                         the lock that makes copy-in/copy-out atomic,
  *                         sysfs and generic netlink (iec_config_rt.c,
- *                         iec_ctl.c, iec_vars.c); exports the iec2kmod_*
+ *                         iec_ctl.c, iec_ctl_nl.c, iec_ctl_sysfs.c,
+ *                         iec_vars.c); exports the iec2kmod_*
  *                         functions
  *   resource module       program instances (their state), the resource's
  *                         globals, one kthread per TASK (iec_resource_rt.c)
@@ -343,7 +344,7 @@ void iec2kmod_cycle_end(struct iec_task *t);
 void iec2kmod_force_globals(void);
 void iec2kmod_resource_gone(struct iec_resource *res);
 
-/* --- inside the configuration module (iec_config_rt.c, iec_ctl.c) ----- */
+/* --- inside the configuration module (iec_config_rt.c, iec_ctl*.c) ---- */
 int iec_config_init(struct iec_config *cfg);
 void iec_config_exit(struct iec_config *cfg);
 extern struct iec_config *iec_cfg;

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: GPL-2.0-only OR MIT */
 /*
  * iec_nl.h - the generic netlink protocol of the configuration module
- * (family IEC_NL_FAMILY, implemented in iec_ctl.c and iec_vars.c).
+ * (family IEC_NL_FAMILY, implemented in iec_ctl_nl.c and iec_vars.c).
  * plc-manager mirrors these numbers in manager/netlink.py; tests compare
  * both.
  *

@@ -2,7 +2,7 @@
 /*
  * iec_vars.c - variable access of the configuration's control plane: the
  * netlink commands VAR_GET, VAR_LIST, VAR_SET, VAR_FORCE and VAR_UNFORCE
- * (registered by iec_ctl.c, under its iec_ctl_mutex) and the force lists
+ * (in iec_ctl_nl.c's command table, under iec_ctl_mutex) and the force lists
  * the real-time tasks apply at their cycle boundaries.
  *
  * Variable access and the real-time tasks:
