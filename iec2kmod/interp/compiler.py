@@ -295,7 +295,7 @@ class PouCompiler:
             return self.apply_std(e.fn, [e.left, e.right], e.sig)
         if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
                 and isinstance(e.target.result, LiteralT):
-            return self.std_call(e, t)
+            return self.std_call(e)     # in e.sig: settle gave it t
         return None
 
     def lit_value(self, e):
@@ -418,16 +418,18 @@ class PouCompiler:
                 eno = self.writer(a.value, BOOL)
         return en, eno
 
-    def std_call(self, c, ctx_t=None):
+    def std_call(self, c):
         fres = c.target
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
-        rt = c.type if ctx_t is None else ctx_t
         f = self.apply_std(fres, args, c.sig)
         en, eno = self.en_eno(c)
         if en is None and eno is None:
             return f
-        dflt = self.m.init.default(concrete(rt)) if not isinstance(rt, LiteralT) else 0
+        # EN = FALSE: the default of the type the call is computed in (its
+        # sig, checks/settle.py; an exact computation on literals: the
+        # literal's own type, DINT, LINT or LREAL), as codegen's guarded_call
+        dflt = self.m.init.default(concrete(c.sig[0]))
 
         def guarded(env):
             if en is not None and not en(env):

@@ -612,7 +612,7 @@ class Encoder:
             return self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos)
         if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
                 and isinstance(e.target.result, LiteralT):
-            return self.std_call(e, frame, g, t)
+            return self.std_call(e, frame, g)     # in e.sig: settle gave it t
         return None
 
     def expr(self, e, frame, g):
@@ -690,9 +690,9 @@ class Encoder:
                 eno = a.value
         return en, eno
 
-    def std_call(self, c, frame, g, ctx_t=None):
+    def std_call(self, c, frame, g):
         fres = c.target
-        rt = c.type if ctx_t is None else ctx_t
+        rt = c.sig[0]       # the type the call is computed in (checks/settle.py)
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
         en, eno = self.en_eno(c, frame, g)
