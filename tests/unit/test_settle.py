@@ -118,3 +118,22 @@ def test_a_comparison_carries_the_type_its_operands_are_compared_in():
     got = [_sig(s.value) for s in unit.pous[0].body]
     assert got == [("BOOL", ["INT", "INT"]), ("BOOL", ["LREAL", "LREAL"]),
                    ("BOOL", ["DINT", "DINT"])]
+
+
+def test_a_literal_argument_keeps_its_value_where_every_argument_is_untyped():
+    # MAX(0, 4000000000): the arguments' common type (types.common) has no
+    # value; a literal given that type was made concrete as a DINT by the
+    # interpreter and verify (4000000000 stored as -294967296) while C
+    # computed MAX in LINT.  Each literal keeps its own value, in the common
+    # category (LIMIT(0, 5, 1.5): every argument a real literal)
+    from iec2kmod.checks.types import concrete
+    unit = _checked("PROGRAM p\nVAR l : LINT; r : LREAL; END_VAR\n"
+                    "l := MAX(0, 4000000000);\nr := LIMIT(0, 5, 1.5);\nEND_PROGRAM\n")
+    mx, lim = [s.value for s in unit.pous[0].body]
+    got = [[(type(a.value.type).__name__, a.value.type.cat, a.value.type.value,
+             concrete(a.value.type).name) for a in c.args] for c in (mx, lim)]
+    assert got == [
+        [("LiteralT", "int", 0, "DINT"), ("LiteralT", "int", 4000000000, "LINT")],
+        [("LiteralT", "real", 0.0, "LREAL"), ("LiteralT", "real", 5.0, "LREAL"),
+         ("LiteralT", "real", 1.5, "LREAL")],
+    ], got
