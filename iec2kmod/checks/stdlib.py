@@ -48,9 +48,10 @@ def call_types(fres: StdFunc, ctx_t=None):
     parameter types).  A call on untyped literals (ABS(-3), 1 + 2) takes the
     context's type; without one, ADD/SUB/MUL/DIV/MOD/EXPT stay untyped (a
     LiteralT: computed exactly on the values) and any other family takes the
-    literal's own type (DINT, LINT or LREAL).  Comparisons, MUX and the time
+    literal's own type (DINT, LINT or LREAL).  Comparisons and the time
     functions convert their operands to the parameters' common type, not the
-    result's.  Every back end (interp, verify, codegen) reads this one rule."""
+    result's; MUX its K to K's own type and its inputs to the result's.
+    Every back end (interp, verify, codegen) reads this one rule."""
     fam = fres.family
     pts = list(fres.param_types)
     res = fres.result
@@ -59,7 +60,14 @@ def call_types(fres: StdFunc, ctx_t=None):
     res = concrete(res) if not isinstance(res, LiteralT) else res
     if isinstance(res, LiteralT) and fam not in LITERAL_FAMILIES:
         res = concrete(res)
-    if fam in COMPARE_FAMILIES or fam == "MUX" or fam in TIME_FAMILIES:
+    if fam == "MUX":
+        # K is an integer of its own; the inputs are of the result's type
+        # (an untyped one takes the context's: MUX(1, 5, 2147483647 * 2)
+        # into a LINT multiplies in LINT)
+        ptypes = [concrete(pts[0])] + [
+            res if isinstance(pt, LiteralT) and not isinstance(res, LiteralT) else concrete(pt)
+            for pt in pts[1:]]
+    elif fam in COMPARE_FAMILIES or fam in TIME_FAMILIES:
         ptypes = [concrete(pt) for pt in pts]
     else:
         ptypes = [res if isinstance(pt, LiteralT) and not isinstance(res, LiteralT)

@@ -137,3 +137,16 @@ def test_a_literal_argument_keeps_its_value_where_every_argument_is_untyped():
         [("LiteralT", "real", 0.0, "LREAL"), ("LiteralT", "real", 5.0, "LREAL"),
          ("LiteralT", "real", 1.5, "LREAL")],
     ], got
+
+
+def test_mux_computes_an_untyped_input_in_its_result_type():
+    # the inputs are of MUX's result type (LINT here), K of its own: the
+    # checker gave 2147483647 * 2 a DINT (-2) where the back ends converted
+    # MUX's inputs to LINT, and verify's encoding failed on the widths
+    unit = _checked("PROGRAM p\nVAR l : LINT; END_VAR\nl := MUX(1, 5, 2147483647 * 2);\n"
+                    "END_PROGRAM\n")
+    calls = _calls(unit.pous[0].body, {})
+    assert {t: _sig(n) for t, n in calls.items()} == {
+        "MUX(1, 5, (2147483647 * 2))": ("LINT", ["DINT", "LINT", "LINT"]),
+        "(2147483647 * 2)": ("LINT", ["LINT", "LINT"]),
+    }
