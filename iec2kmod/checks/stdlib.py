@@ -6,8 +6,8 @@ from __future__ import annotations
 from .symbols import POUInfo, Var
 from .types import (BOOL, ELEMENTARY, INT, LREAL, TIME, AnyIntResult, Elementary, ErrorT,
                     LiteralT,
-                    StringT, STRING, assignable, cat, common, concrete, is_bit, is_bool, is_int,
-                    is_num, is_real, is_string, is_elementary)
+                    StringT, STRING, assignable, cat, common, concrete, concrete_bits, is_bit,
+                    is_bool, is_int, is_num, is_real, is_string, is_elementary)
 
 
 class CallError(Exception):
@@ -187,6 +187,16 @@ def _bitwise(name, types):
     for i, t in enumerate(types):
         _need(is_bit, t, "BOOL or a bit string (ANY_BIT)", i, name)
     r = _common_all(types, name)
+    if type(r) is LiteralT:
+        # untyped literals only: a bit string as for the shifts (DWORD;
+        # LWORD for a value beyond 32 bits), not the integer default DINT,
+        # which has no bitwise operations (types.concrete_bits)
+        lits = [t for t in types if isinstance(t, LiteralT)]
+        r = concrete_bits(*lits)
+        if r is None:
+            bad = next(t.value for t in lits if concrete_bits(t) is None)
+            raise CallError(f"{name} on untyped literals: {bad} is not a bit string value "
+                            f"(0 .. 16#FFFF_FFFF_FFFF_FFFF)")
     return StdFunc(name, name, [r] * len(types), r)
 
 

@@ -1021,13 +1021,16 @@ class PouCompiler:
                 env.cr = f(env)
             return ld
         if op in ("ST", "STN"):
-            w = self.writer(i.operand, cr_in)
-            if op == "STN":
-                nf = std.not_fn(concrete(cr_in))
+            if op == "STN":     # negated in the checker's type (sig)
+                st_t = concrete(i.sig[0])
+                w = self.writer(i.operand, st_t)
+                nf = std.not_fn(st_t)
+                cv = implicit(cr_in, st_t) or (lambda v: v)
 
                 def stn(env):
-                    w(env, nf(env.cr))
+                    w(env, nf(cv(env.cr)))
                 return stn
+            w = self.writer(i.operand, cr_in)
 
             def st(env):
                 w(env, env.cr)
@@ -1050,11 +1053,13 @@ class PouCompiler:
             def fb_input(env):
                 env.v[kv].v[pk] = st_(env.cr)
             return fb_input
-        if op == "NOT":
-            nf = std.not_fn(concrete(cr_in))
+        if op == "NOT":         # in the result's type: a bit string for a literal
+            res = concrete(i.cr_out)
+            nf = std.not_fn(res)
+            cv = implicit(cr_in, res) or (lambda v: v)
 
             def not_(env):
-                env.cr = nf(env.cr)
+                env.cr = nf(cv(env.cr))
             return not_
         if op in ("AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ADD", "SUB", "MUL", "DIV",
                   "MOD", "GT", "GE", "EQ", "NE", "LE", "LT"):

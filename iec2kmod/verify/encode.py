@@ -1568,10 +1568,12 @@ class Encoder:
             return
         if op in ("ST", "STN"):
             val = self.cr_get(frame, cr_in)
-            if op == "STN":
-                val = self.conv(val, cr_in, concrete(cr_in))
+            st_t = cr_in
+            if op == "STN":     # negated in the checker's type (sig)
+                st_t = concrete(i.sig[0])
+                val = self.conv(val, cr_in, st_t)
                 val = z3.Not(val) if z3.is_bool(val) else ~val
-            self.write(i.operand, val, cr_in, frame, g, i.pos)
+            self.write(i.operand, val, st_t, frame, g, i.pos)
             return
         if op in ("S", "R") and not isinstance(getattr(i.operand, "type", None), FBType):
             cr = self.conv(self.cr_get(frame, cr_in), cr_in, BOOL)
@@ -1587,8 +1589,8 @@ class Encoder:
                 gi = land(g, cond)
                 store_into(inst.v, param.key, gi, val)
             return
-        if op == "NOT":
-            val = self.conv(self.cr_get(frame, cr_in), cr_in, concrete(cr_in))
+        if op == "NOT":         # in the result's type: a bit string for a literal
+            val = self.conv(self.cr_get(frame, cr_in), cr_in, concrete(i.cr_out))
             self.cr_set(frame, rel, z3.Not(val) if z3.is_bool(val) else ~val)
             return
         if op in ("AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ADD", "SUB", "MUL", "DIV",
