@@ -337,6 +337,17 @@ class ExprEmitter:
             if rtype is BOOL:
                 return f"((iec_bool)({a} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {b}))"
             return f"iec_{op.lower()}_{N.type_tag(rtype)}({a}, {b})"
+        if e.fn is None:
+            # a declaration's constant expression (an initial value, an
+            # input's default: 2 + 3): the body checker never types one, so
+            # it has no sig; its value is the checker's fold (checks/fold.py)
+            # in type t, as the interpreter's initial values (interp/model.py)
+            if e.const is None:
+                raise CodegenError(f"constant expression {e!r} has no folded value")
+            v = e.const
+            lit = ast.Lit(e.pos, repr(e), "bool" if isinstance(v, bool) else
+                          "int" if isinstance(v, int) else "real", v)
+            return self.literal(f, lit, t)
         return self.std_apply(f, e.fn, [e.left, e.right], e.sig)
 
     def unop(self, f, e, t):

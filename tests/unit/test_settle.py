@@ -150,3 +150,20 @@ def test_mux_computes_an_untyped_input_in_its_result_type():
         "MUX(1, 5, (2147483647 * 2))": ("LINT", ["DINT", "LINT", "LINT"]),
         "(2147483647 * 2)": ("LINT", ["LINT", "LINT"]),
     }
+
+
+def test_an_initial_value_is_the_checkers_fold():
+    # an initial value is never typed by the body checker: its operators have
+    # no sig, and the C emitter stopped on them (AttributeError, an internal
+    # error); it emits the value checks/fold.py gave, as the interpreter does
+    from iec2kmod.codegen import generate
+    diags = Diagnostics()
+    unit = parse_source(SourceFile("t.st", "PROGRAM p\nVAR k : INT := 2 + 3; "
+                                   "l : LINT := 2147483647 + 1; r : LREAL := -(1 + 1); END_VAR\n"
+                                   "k := k + 1;\nEND_PROGRAM\n"), diags)
+    project = check_project([unit], diags)
+    assert not diags.errors
+    inits = [ln.strip() for ln in generate(project).header.splitlines()
+             if ln.strip().startswith("self->v_")]
+    assert inits == ["self->v_k = ((iec_int)5);", "self->v_l = ((iec_lint)2147483648LL);",
+                     "self->v_r = (-((iec_lreal)2.0));"], inits
