@@ -40,6 +40,12 @@ DATE_TIME_FAMILIES = TIME_FAMILIES - {"ADD_TIME", "SUB_TIME", "MUL_TIME", "DIV_T
 # the families whose untyped-literal result stays untyped without a context
 # (computed exactly on the literals)
 LITERAL_FAMILIES = ARITH_FAMILIES + ("EXPT",)
+# the categories (types.cat) a family on untyped literals may be computed in:
+# a context of another one (a bit string, BOOL, MOD into a REAL) is no
+# context, and the value is stored by the implicit conversion, as a literal's
+NUMERIC_CONTEXT = {"ADD": ("sint", "uint", "real"), "SUB": ("sint", "uint", "real"),
+                   "MUL": ("sint", "uint", "real"), "DIV": ("sint", "uint", "real"),
+                   "MOD": ("sint", "uint"), "EXPT": ("real",), "ABS": ("sint", "uint", "real")}
 
 
 def call_types(fres: StdFunc, ctx_t=None):
@@ -48,13 +54,19 @@ def call_types(fres: StdFunc, ctx_t=None):
     parameter types).  A call on untyped literals (ABS(-3), 1 + 2) takes the
     context's type; without one, ADD/SUB/MUL/DIV/MOD/EXPT stay untyped (a
     LiteralT: computed exactly on the values) and any other family takes the
-    literal's own type (DINT, LINT or LREAL).  Comparisons and the time
+    literal's own type (DINT, LINT or LREAL); a context the family cannot
+    compute in (NUMERIC_CONTEXT: 1 + 2 into a BYTE, MOD(7, 2) into a REAL) is
+    no context, and the result is converted to it as a literal is.  The
+    back ends convert a result computed in a LiteralT or another type than
+    the call's own to the call's type.  Comparisons and the time
     functions convert their operands to the parameters' common type, not the
     result's; MUX its K to K's own type and its inputs to the result's.
     Every back end (interp, verify, codegen) reads this one rule."""
     fam = fres.family
     pts = list(fres.param_types)
     res = fres.result
+    if ctx_t is not None and fam in NUMERIC_CONTEXT and cat(ctx_t) not in NUMERIC_CONTEXT[fam]:
+        ctx_t = None        # x := 1 + 2 into a BYTE: exact, then stored as a BYTE
     if isinstance(res, LiteralT):
         res = ctx_t if ctx_t is not None and not isinstance(ctx_t, LiteralT) else res
     res = concrete(res) if not isinstance(res, LiteralT) else res

@@ -348,7 +348,16 @@ class ExprEmitter:
             lit = ast.Lit(e.pos, repr(e), "bool" if isinstance(v, bool) else
                           "int" if isinstance(v, int) else "real", v)
             return self.literal(f, lit, t)
-        return self.std_apply(f, e.fn, [e.left, e.right], e.sig)
+        return self.std_result(self.std_apply(f, e.fn, [e.left, e.right], e.sig), e.sig, t)
+
+    def std_result(self, code, sig, t):
+        """The C of a standard call computed in its sig, as the type t it is
+        used in: a call the checker computes without the context's type
+        (exactly on untyped literals: 1 + 2 into a BYTE, stdlib.call_types)
+        is converted to it as a literal would be."""
+        if isinstance(sig[0], LiteralT) and t is not None and not isinstance(t, LiteralT):
+            return self.convert(code, concrete(sig[0]), t)
+        return code
 
     def unop(self, f, e, t):
         rtype = concrete(t)
@@ -429,7 +438,7 @@ class ExprEmitter:
         if isinstance(target, stdlib.StdFunc):
             args = [a.value for a in c.args if a.kind == "pos" or a.name.upper() not in
                     ("EN", "ENO")]
-            return self.std_apply(f, target, args, c.sig)
+            return self.std_result(self.std_apply(f, target, args, c.sig), c.sig, t)
         return self.body.user_function_call(f, c)
 
     def std_apply(self, f, fres: stdlib.StdFunc, args, sig):

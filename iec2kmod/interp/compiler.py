@@ -97,6 +97,15 @@ def conv_fn(f, src, dst):
     return lambda env: c(f(env))
 
 
+def _from_sig(f, sig, t):
+    """f(env) of a standard call computed in its sig, as type t: a call the
+    checker computes exactly on untyped literals where t cannot take it (1 +
+    2 into a BYTE, stdlib.call_types) is converted as a literal would be."""
+    if isinstance(sig[0], LiteralT) and t is not None and not isinstance(t, LiteralT):
+        return conv_fn(f, sig[0], t)
+    return f
+
+
 class PouCompiler:
     """Compiles the body of one POU."""
 
@@ -292,10 +301,10 @@ class PouCompiler:
     def in_context(self, e, t):
         """f(env) of untyped expression e computed in type t, or None."""
         if isinstance(e, ast.BinOp) and e.fn is not None:
-            return self.apply_std(e.fn, [e.left, e.right], e.sig)
+            return _from_sig(self.apply_std(e.fn, [e.left, e.right], e.sig), e.sig, t)
         if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
                 and isinstance(e.target.result, LiteralT):
-            return self.std_call(e)     # in e.sig: settle gave it t
+            return _from_sig(self.std_call(e), e.sig, t)     # in e.sig: settle gave it t
         return None
 
     def lit_value(self, e):
@@ -324,7 +333,7 @@ class PouCompiler:
     def binop(self, e):
         op = e.op
         if e.fn is not None:
-            return self.apply_std(e.fn, [e.left, e.right], e.sig)
+            return _from_sig(self.apply_std(e.fn, [e.left, e.right], e.sig), e.sig, e.type)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             c = e.sig[1][0]
             a = self.expr_as(e.left, c)
@@ -422,14 +431,17 @@ class PouCompiler:
         fres = c.target
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
-        f = self.apply_std(fres, args, c.sig)
+        f = _from_sig(self.apply_std(fres, args, c.sig), c.sig, c.type)
         en, eno = self.en_eno(c)
         if en is None and eno is None:
             return f
         # EN = FALSE: the default of the type the call is computed in (its
         # sig, checks/settle.py; an exact computation on literals: the
-        # literal's own type, DINT, LINT or LREAL), as codegen's guarded_call
+        # literal's own type, DINT, LINT or LREAL), as codegen's guarded_call,
+        # in the type f gives it (_from_sig)
         dflt = self.m.init.default(concrete(c.sig[0]))
+        conv = _from_sig(lambda env: dflt, c.sig, c.type)
+        dflt = conv(None)
 
         def guarded(env):
             if en is not None and not en(env):

@@ -609,10 +609,12 @@ class Encoder:
 
     def in_context(self, e, t, frame, g):
         if isinstance(e, ast.BinOp) and e.fn is not None:
-            return self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos)
+            return self.from_sig(self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos),
+                                 e.sig, t, frame, e.pos)
         if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
                 and isinstance(e.target.result, LiteralT):
-            return self.std_call(e, frame, g)     # in e.sig: settle gave it t
+            # in e.sig: settle gave it t
+            return self.from_sig(self.std_call(e, frame, g), e.sig, t, frame, e.pos)
         return None
 
     def expr(self, e, frame, g):
@@ -644,10 +646,20 @@ class Encoder:
             return self.call_expr(e, frame, g)
         raise AssertionError(f"expression {e!r}")
 
+    def from_sig(self, v, sig, t, frame, pos):
+        """A standard call's value computed in its sig, as type t: one the
+        checker computes exactly on untyped literals where t cannot take it
+        (1 + 2 into a BYTE, stdlib.call_types) is converted as a literal is
+        (the interpreter's _from_sig)."""
+        if isinstance(sig[0], LiteralT) and t is not None and not isinstance(t, LiteralT):
+            return self.conv(v, sig[0], t, frame, pos)
+        return v
+
     def binop(self, e, frame, g):
         op = e.op
         if e.fn is not None:
-            return self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos)
+            return self.from_sig(self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos),
+                                 e.sig, e.type, frame, e.pos)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             c = e.sig[1][0]
             a = self.expr_as(e.left, c, frame, g)
@@ -693,11 +705,14 @@ class Encoder:
     def std_call(self, c, frame, g):
         fres = c.target
         rt = c.sig[0]       # the type the call is computed in (checks/settle.py)
+        if isinstance(rt, LiteralT) and c.type is not None and not isinstance(c.type, LiteralT):
+            rt = c.type     # computed exactly, then converted to it (from_sig)
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
         en, eno = self.en_eno(c, frame, g)
         g2 = land(g, en) if en is not None else g
-        v = self.apply_std(fres, args, c.sig, frame, g2, c.pos)
+        v = self.from_sig(self.apply_std(fres, args, c.sig, frame, g2, c.pos), c.sig, c.type,
+                          frame, c.pos)
         if eno is not None:
             self.write(eno, en if en is not None else TRUE, BOOL, frame, g, c.pos)
         if en is not None:

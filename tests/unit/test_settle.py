@@ -167,3 +167,12 @@ def test_an_initial_value_is_the_checkers_fold():
              if ln.strip().startswith("self->v_")]
     assert inits == ["self->v_k = ((iec_int)5);", "self->v_l = ((iec_lint)2147483648LL);",
                      "self->v_r = (-((iec_lreal)2.0));"], inits
+
+
+def test_literal_arithmetic_in_a_context_it_cannot_be_computed_in_is_exact():
+    # a bit string, BOOL, MOD into a REAL: no context (stdlib.NUMERIC_CONTEXT);
+    # the call was computed in BYTE / LREAL, which C has no function for
+    unit = _checked("PROGRAM p\nVAR x : BYTE; r : LREAL; b : BOOL; i : INT; END_VAR\n"
+                    "x := 1 + 2;\nr := 7 MOD 2;\nb := 1 + 0;\ni := 1 + 2;\nEND_PROGRAM\n")
+    got = [_sig(s.value) for s in unit.pous[0].body]
+    assert got == [("literal", ["literal", "literal"])] * 3 + [("INT", ["INT", "INT"])], got
