@@ -365,6 +365,11 @@ class ExprEmitter:
             v = _const_int(e)
             if v is not None:
                 return c_int(v, rtype)      # -128, -9223372036854775808: one constant
+        if e.op == "-" and scalar_kind(rtype) in ("bit", "bool") and e.const is not None:
+            # an untyped -(-3) stored into a bit string: its folded value, as
+            # a literal (a bit string has no negation; the checker refuses a
+            # value the type cannot hold)
+            return c_int(int(e.const), rtype)
         a = self.emit(f, e.operand, rtype)
         if e.op == "+":
             return a

@@ -379,10 +379,15 @@ class PouCompiler:
             v = self._literal_unop(e)
             if v is not None:
                 return _const(v)
+        b = base_of(t)
+        if e.op == "-" and isinstance(b, Elementary) and b.cat in ("bit", "bool") \
+                and e.const is not None:
+            # an untyped -(-3) stored into a bit string or a BOOL: its folded
+            # value, as codegen's unop
+            return _const(bool(e.const) if b.cat == "bool" else wrap(int(e.const), b))
         a = self.expr_as(e.operand, t)
         if e.op == "+":
             return a
-        b = base_of(t)
         if e.op == "NOT":
             if b is BOOL:
                 return lambda env: not a(env)

@@ -678,6 +678,11 @@ class Encoder:
             v = self.ipc(frame.pou)._literal_unop(e)
             if v is not None:
                 return v if isinstance(t, LiteralT) else const_of(v, t)
+        if e.op == "-" and isinstance(base_of(t), Elementary) and base_of(t).cat in ("bit", "bool") \
+                and e.const is not None:
+            # an untyped -(-3) stored into a bit string or a BOOL: its folded
+            # value (codegen's unop)
+            return self.conv(int(e.const), LiteralT("int", int(e.const)), t, frame, e.pos)
         a = self.expr_as(e.operand, t, frame, g)
         if e.op == "+":
             return a
