@@ -172,7 +172,7 @@ class CallChecks:
             ordered
         for a, pt in zip(ordered, f.param_types):
             if isinstance(a.value.type, LiteralT):
-                a.value.type = pt
+                a.value.type = _literal_arg_type(a.value.type, pt)
         if cat(f.result) == "real" or any(cat(t) == "real" for t in f.param_types):
             self.pou.uses_real = True
         return f.result
@@ -292,3 +292,19 @@ def _vendor_note(key: str) -> str:
     if key.startswith("__"):
         return " (a name beginning with '__' is no IEC 61131-3 identifier: a vendor's built-in)"
     return ""
+
+
+def _literal_arg_type(t, pt):
+    """The type an untyped argument of a standard call takes: the call's
+    parameter type *pt*.  Where that is untyped too (every argument an
+    untyped literal: ``MAX(0, 4000000000)``, ``LIMIT(0, 5, 1.5)``), *pt* is
+    the arguments' common category (types.common) without a value, and the
+    argument keeps its own value in that category: a back end that makes a
+    literal concrete where nothing else decides (types.concrete: DINT, LINT
+    beyond DINT's range, LREAL) must see 4000000000, not the value-less
+    common type, which is DINT (the interpreter stored 4000000000 as a DINT,
+    -294967296, where C computed MAX in LINT)."""
+    if type(pt) is LiteralT and type(t) is LiteralT:
+        v = t.value
+        return LiteralT(pt.cat, float(v) if pt.cat == "real" else v)
+    return pt

@@ -21,7 +21,7 @@ from . import fold, stdlib
 from .symbols import EnumValue, Var
 from .types import (BOOL, ELEMENTARY, ERROR, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, assignable, cat, common,
-                    concrete, is_bit, is_int, literal_fits)
+                    concrete, concrete_bits, is_bit, is_int, literal_fits)
 
 ARITH = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD"}
 COMPARE = {"=": "EQ", "<>": "NE", "<": "LT", ">": "GT", "<=": "LE", ">=": "GE"}
@@ -338,9 +338,24 @@ class ExprChecks:
                 self.error(e.pos, f"operator {op}: incompatible operands {lt.name} and {rt.name}")
                 return ERROR
             if isinstance(c, LiteralT):
-                return concrete(c) if c.cat == "int" else ERROR
+                if c.cat != "int":
+                    return ERROR
+                if isinstance(c, AnyIntResult):
+                    return concrete(c)
+                return self._literal_bits(e, op, lt, rt)
             return c
         raise AssertionError(op)
+
+    def _literal_bits(self, e, op, *lits):
+        """The type of AND, OR, XOR or NOT on untyped integer literals:
+        types.concrete_bits (DWORD, LWORD beyond 32 bits)."""
+        t = concrete_bits(*lits)
+        if t is None:
+            bad = next(lit.value for lit in lits if concrete_bits(lit) is None)
+            self.error(e.pos, f"operator {op} on untyped literals: {bad} is not a bit string "
+                              f"value (0 .. 16#FFFF_FFFF_FFFF_FFFF)")
+            return ERROR
+        return t
 
     def _fold(self, e, t):
         if isinstance(t, LiteralT):
@@ -356,6 +371,8 @@ class ExprChecks:
             if not is_bit(t):
                 self.error(e.pos, f"NOT needs BOOL or a bit string, not {t.name}")
                 return ERROR
+            if isinstance(t, LiteralT) and not isinstance(t, AnyIntResult):
+                return self._literal_bits(e, "NOT", t)
             return concrete(t)
         if isinstance(t, LiteralT):
             v = _literal_value(e)

@@ -93,6 +93,8 @@ class ILChecks:
             t = self.il_operand(i)
             if op == "LDN" and not isinstance(t, ErrorT) and not is_bit(t):
                 self.error(i.pos, f"LDN needs BOOL or a bit string, not {t.name}")
+            elif op == "LDN" and type(t) is LiteralT:
+                return self._literal_bits(i, op, t)     # LDN 5: a bit string, as NOT 5
             return t
         if op in ("ST", "STN"):
             cr = self.need_cr(i, cr)
@@ -103,9 +105,16 @@ class ILChecks:
                 self.error(i.operand.pos, f"{op} needs a variable")
                 return cr
             tt = self.lvalue(i.operand)
+            stored = cr
             if op == "STN" and not isinstance(cr, ErrorT) and not is_bit(cr):
                 self.error(i.pos, f"STN needs BOOL or a bit string, not {cr.name}")
-            self.check_assign(cr, tt, ast.CR(i.pos, cr), i.operand)
+            elif op == "STN" and not isinstance(cr, ErrorT):
+                # the type the negation is computed in (and stored from): the
+                # current result's, a bit string for an untyped literal
+                stored = self._literal_bits(i, op, cr) if type(cr) is LiteralT else concrete(cr)
+                if not isinstance(stored, ErrorT):
+                    i.sig = (stored, [stored])
+            self.check_assign(stored, tt, ast.CR(i.pos, stored), i.operand)
             return cr
         if op in ("S", "R") and isinstance(i.operand, ast.Ref):
             sym = self.lookup(i.operand.name, i.operand.pos, report=False)
@@ -126,6 +135,10 @@ class ILChecks:
                 self.error(i.operand.pos, "NOT takes no operand")
             if not isinstance(cr, ErrorT) and not is_bit(cr):
                 self.error(i.pos, f"NOT needs BOOL or a bit string, not {cr.name}")
+            elif type(cr) is LiteralT:
+                # an untyped literal (LD 5 NOT): a bit string, as in ST; the
+                # back ends compute NOT in the result's type (cr_out)
+                return self._literal_bits(i, "NOT", cr)
             return cr
         if op in IL_LOGIC or op in IL_ARITH or op in IL_COMPARE:
             cr = self.need_cr(i, cr)
@@ -211,6 +224,11 @@ class ILChecks:
             if c is None:
                 self.error(pos, f"{op}: incompatible operands {cr.name} and {t.name}")
                 return ERROR
+            if type(c) is LiteralT and c.cat == "int":
+                # untyped literals (LD 5 AND 3): a bit string, as in ST
+                c = self._literal_bits(i, op, cr, t)
+                if isinstance(c, ErrorT):
+                    return c
             i.sig = (concrete(c), [concrete(c)] * 2)
             return concrete(c)
         if op in IL_ARITH:

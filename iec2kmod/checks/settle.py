@@ -14,7 +14,35 @@ standard function call, ``sig``: (result type, [parameter types]) by
 The context of an operand is the type its parent computes it in: the
 parameter type (the parent's result for an untyped operand of an
 arithmetic, ABS, MAX, ... call; the operands' common type for a comparison);
-none where the parent itself is computed exactly on literals."""
+none where the parent itself is computed exactly on literals.
+
+The rules for untyped expressions (IEC 61131-3 ed.3: an untyped literal
+takes the type its context requires; where none does, the checker's
+default), each decided once in checks/ and read by every engine:
+
+  * with a context, a call on untyped literals is computed in the
+    context's type (``l := 2147483647 + 1`` into a LINT: 2147483648);
+    MUX's inputs in its result's type, K in its own (stdlib.call_types);
+  * without one (a comparison of two untyped expressions, an index, a CASE
+    selector, a FOR bound of an untyped control expression), ADD, SUB, MUL,
+    DIV, MOD and EXPT are computed exactly on the values, any other family
+    in the literal's own type: DINT, LINT beyond DINT's range, LREAL for a
+    real literal (types.concrete); two untyped operands compared are
+    compared in DINT (their common type carries no value), LREAL if one is
+    real;
+  * a context the family cannot compute in (a bit string, BOOL, MOD into a
+    REAL: stdlib.NUMERIC_CONTEXT) is no context: the exact value is
+    converted to it as a literal is (``b := 1 + 2`` into a BYTE: 3);
+  * each literal argument of a call whose arguments are all untyped keeps
+    its own value (``MAX(0, 4000000000)``: 4000000000 is a LINT where the
+    call is computed without context: body._literal_arg_type);
+  * AND, OR, XOR and NOT (IL's too, LDN, STN) on untyped integer literals
+    are computed in a bit string, DWORD, LWORD beyond 32 bits
+    (types.concrete_bits), as SHL on a literal is: the integer default DINT
+    has no bitwise operations;
+  * an initial value is never typed here: its value is checks/fold.py's on
+    the literals, converted to the variable's type (interp/model.py;
+    codegen emits the folded constant)."""
 
 from __future__ import annotations
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 from .symbols import POUInfo, Var
 from .types import (BOOL, ELEMENTARY, INT, LREAL, TIME, AnyIntResult, Elementary, ErrorT,
                     LiteralT,
-                    StringT, STRING, assignable, cat, common, concrete, is_bit, is_bool, is_int,
-                    is_num, is_real, is_string, is_elementary)
+                    StringT, STRING, assignable, cat, common, concrete, concrete_bits, is_bit,
+                    is_bool, is_int, is_num, is_real, is_string, is_elementary)
 
 
 class CallError(Exception):
@@ -40,6 +40,12 @@ DATE_TIME_FAMILIES = TIME_FAMILIES - {"ADD_TIME", "SUB_TIME", "MUL_TIME", "DIV_T
 # the families whose untyped-literal result stays untyped without a context
 # (computed exactly on the literals)
 LITERAL_FAMILIES = ARITH_FAMILIES + ("EXPT",)
+# the categories (types.cat) a family on untyped literals may be computed in:
+# a context of another one (a bit string, BOOL, MOD into a REAL) is no
+# context, and the value is stored by the implicit conversion, as a literal's
+NUMERIC_CONTEXT = {"ADD": ("sint", "uint", "real"), "SUB": ("sint", "uint", "real"),
+                   "MUL": ("sint", "uint", "real"), "DIV": ("sint", "uint", "real"),
+                   "MOD": ("sint", "uint"), "EXPT": ("real",), "ABS": ("sint", "uint", "real")}
 
 
 def call_types(fres: StdFunc, ctx_t=None):
@@ -48,18 +54,32 @@ def call_types(fres: StdFunc, ctx_t=None):
     parameter types).  A call on untyped literals (ABS(-3), 1 + 2) takes the
     context's type; without one, ADD/SUB/MUL/DIV/MOD/EXPT stay untyped (a
     LiteralT: computed exactly on the values) and any other family takes the
-    literal's own type (DINT, LINT or LREAL).  Comparisons, MUX and the time
+    literal's own type (DINT, LINT or LREAL); a context the family cannot
+    compute in (NUMERIC_CONTEXT: 1 + 2 into a BYTE, MOD(7, 2) into a REAL) is
+    no context, and the result is converted to it as a literal is.  The
+    back ends convert a result computed in a LiteralT or another type than
+    the call's own to the call's type.  Comparisons and the time
     functions convert their operands to the parameters' common type, not the
-    result's.  Every back end (interp, verify, codegen) reads this one rule."""
+    result's; MUX its K to K's own type and its inputs to the result's.
+    Every back end (interp, verify, codegen) reads this one rule."""
     fam = fres.family
     pts = list(fres.param_types)
     res = fres.result
+    if ctx_t is not None and fam in NUMERIC_CONTEXT and cat(ctx_t) not in NUMERIC_CONTEXT[fam]:
+        ctx_t = None        # x := 1 + 2 into a BYTE: exact, then stored as a BYTE
     if isinstance(res, LiteralT):
         res = ctx_t if ctx_t is not None and not isinstance(ctx_t, LiteralT) else res
     res = concrete(res) if not isinstance(res, LiteralT) else res
     if isinstance(res, LiteralT) and fam not in LITERAL_FAMILIES:
         res = concrete(res)
-    if fam in COMPARE_FAMILIES or fam == "MUX" or fam in TIME_FAMILIES:
+    if fam == "MUX":
+        # K is an integer of its own; the inputs are of the result's type
+        # (an untyped one takes the context's: MUX(1, 5, 2147483647 * 2)
+        # into a LINT multiplies in LINT)
+        ptypes = [concrete(pts[0])] + [
+            res if isinstance(pt, LiteralT) and not isinstance(res, LiteralT) else concrete(pt)
+            for pt in pts[1:]]
+    elif fam in COMPARE_FAMILIES or fam in TIME_FAMILIES:
         ptypes = [concrete(pt) for pt in pts]
     else:
         ptypes = [res if isinstance(pt, LiteralT) and not isinstance(res, LiteralT)
@@ -179,6 +199,16 @@ def _bitwise(name, types):
     for i, t in enumerate(types):
         _need(is_bit, t, "BOOL or a bit string (ANY_BIT)", i, name)
     r = _common_all(types, name)
+    if type(r) is LiteralT:
+        # untyped literals only: a bit string as for the shifts (DWORD;
+        # LWORD for a value beyond 32 bits), not the integer default DINT,
+        # which has no bitwise operations (types.concrete_bits)
+        lits = [t for t in types if isinstance(t, LiteralT)]
+        r = concrete_bits(*lits)
+        if r is None:
+            bad = next(t.value for t in lits if concrete_bits(t) is None)
+            raise CallError(f"{name} on untyped literals: {bad} is not a bit string value "
+                            f"(0 .. 16#FFFF_FFFF_FFFF_FFFF)")
     return StdFunc(name, name, [r] * len(types), r)
 
 

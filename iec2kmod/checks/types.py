@@ -328,6 +328,20 @@ def common(a: Type, b: Type):
     return None
 
 
+def concrete_bits(*lits: LiteralT):
+    """The bit string AND, OR, XOR or NOT on untyped integer literals (``5
+    AND 3``, ``NOT 16#FF``) is computed in where nothing else decides: the
+    bit-string counterpart of ``concrete``'s DINT, DWORD, and LWORD where a
+    value needs more than 32 bits; None when a value is negative or needs
+    more than 64 bits (no bit string holds it).  A DINT, the integer
+    default, has no bitwise operations (ed.3 table 23: ANY_BIT)."""
+    if any(not 0 <= lit.value <= (1 << 64) - 1 for lit in lits):
+        return None
+    if all(lit.value <= (1 << 32) - 1 for lit in lits):
+        return ELEMENTARY["DWORD"]
+    return ELEMENTARY["LWORD"]
+
+
 def concrete(t: Type) -> Type:
     """A literal type made concrete (DINT or LREAL) where nothing else decides."""
     if isinstance(t, LiteralT):

@@ -950,18 +950,20 @@ class BodyEmitter:
                 lines.append(f"{self.cr_var(t, depth)} = {val};")
         elif op in ("ST", "STN"):
             cr = self.cr_var(cr_in, depth)
-            if op == "STN":
-                cr = f"((iec_bool)!{cr})" if concrete(cr_in) is BOOL else \
-                    f"iec_not_{N.type_tag(cr_in)}({cr})"
+            st_t = cr_in
+            if op == "STN":     # negated in the checker's type (sig)
+                st_t = concrete(i.sig[0])
+                cr = self.expr.convert(cr, cr_in, st_t)
+                cr = f"((iec_bool)!{cr})" if st_t is BOOL else f"iec_not_{N.type_tag(st_t)}({cr})"
             probe = Frame(self, i.pos)
             snap = self.pool_snapshot()
-            lines += self.assign_ref(probe, i.operand, Raw(cr, cr_in))
+            lines += self.assign_ref(probe, i.operand, Raw(cr, st_t))
             if probe.may_fault:
                 self.pool_restore(snap)
             if probe.may_fault and N.is_scalar(concrete(i.operand.type)):
-                return out + self.guarded_assign(i.operand, Raw(cr, cr_in), i.pos)
+                return out + self.guarded_assign(i.operand, Raw(cr, st_t), i.pos)
             if probe.may_fault:
-                return out + self.guarded_store(i.operand, Raw(cr, cr_in), i.pos)
+                return out + self.guarded_store(i.operand, Raw(cr, st_t), i.pos)
             f = probe
         elif op in ("S", "R") and not isinstance(getattr(i.operand, "type", None), FBType):
             lv, _, bit = self.expr.lvalue(f, i.operand)
@@ -976,10 +978,12 @@ class BodyEmitter:
             member = f"{self.var_access(inst)}.{N.member(pou, param.name)}"
             lines += self.assign_code(f, member, param.type, Raw(self.cr_var(cr_in, depth),
                                                                   cr_in))
-        elif op == "NOT":
-            cr = self.cr_var(cr_in, depth)
-            lines.append(f"{cr} = ((iec_bool)!{cr});" if concrete(cr_in) is BOOL else
-                         f"{cr} = iec_not_{N.type_tag(cr_in)}({cr});")
+        elif op == "NOT":       # in the result's type: a bit string for a literal
+            res = concrete(i.cr_out)
+            cr = self.expr.convert(self.cr_var(cr_in, depth), cr_in, res)
+            lines.append(f"{self.cr_var(res, depth)} = " +
+                         (f"((iec_bool)!{cr});" if res is BOOL else
+                          f"iec_not_{N.type_tag(res)}({cr});"))
         elif op in IL_LOGIC or op in IL_ARITH or op in IL_COMPARE:
             lines += self.il_apply(f, i, op, cr_in, i.operand, depth)
         elif op in ("JMP", "JMPC", "JMPCN"):

@@ -337,7 +337,27 @@ class ExprEmitter:
             if rtype is BOOL:
                 return f"((iec_bool)({a} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {b}))"
             return f"iec_{op.lower()}_{N.type_tag(rtype)}({a}, {b})"
-        return self.std_apply(f, e.fn, [e.left, e.right], e.sig)
+        if e.fn is None:
+            # a declaration's constant expression (an initial value, an
+            # input's default: 2 + 3): the body checker never types one, so
+            # it has no sig; its value is the checker's fold (checks/fold.py)
+            # in type t, as the interpreter's initial values (interp/model.py)
+            if e.const is None:
+                raise CodegenError(f"constant expression {e!r} has no folded value")
+            v = e.const
+            lit = ast.Lit(e.pos, repr(e), "bool" if isinstance(v, bool) else
+                          "int" if isinstance(v, int) else "real", v)
+            return self.literal(f, lit, t)
+        return self.std_result(self.std_apply(f, e.fn, [e.left, e.right], e.sig), e.sig, t)
+
+    def std_result(self, code, sig, t):
+        """The C of a standard call computed in its sig, as the type t it is
+        used in: a call the checker computes without the context's type
+        (exactly on untyped literals: 1 + 2 into a BYTE, stdlib.call_types)
+        is converted to it as a literal would be."""
+        if isinstance(sig[0], LiteralT) and t is not None and not isinstance(t, LiteralT):
+            return self.convert(code, concrete(sig[0]), t)
+        return code
 
     def unop(self, f, e, t):
         rtype = concrete(t)
@@ -345,6 +365,11 @@ class ExprEmitter:
             v = _const_int(e)
             if v is not None:
                 return c_int(v, rtype)      # -128, -9223372036854775808: one constant
+        if e.op == "-" and scalar_kind(rtype) in ("bit", "bool") and e.const is not None:
+            # an untyped -(-3) stored into a bit string: its folded value, as
+            # a literal (a bit string has no negation; the checker refuses a
+            # value the type cannot hold)
+            return c_int(int(e.const), rtype)
         a = self.emit(f, e.operand, rtype)
         if e.op == "+":
             return a
@@ -418,7 +443,7 @@ class ExprEmitter:
         if isinstance(target, stdlib.StdFunc):
             args = [a.value for a in c.args if a.kind == "pos" or a.name.upper() not in
                     ("EN", "ENO")]
-            return self.std_apply(f, target, args, c.sig)
+            return self.std_result(self.std_apply(f, target, args, c.sig), c.sig, t)
         return self.body.user_function_call(f, c)
 
     def std_apply(self, f, fres: stdlib.StdFunc, args, sig):

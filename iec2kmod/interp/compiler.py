@@ -97,6 +97,15 @@ def conv_fn(f, src, dst):
     return lambda env: c(f(env))
 
 
+def _from_sig(f, sig, t):
+    """f(env) of a standard call computed in its sig, as type t: a call the
+    checker computes exactly on untyped literals where t cannot take it (1 +
+    2 into a BYTE, stdlib.call_types) is converted as a literal would be."""
+    if isinstance(sig[0], LiteralT) and t is not None and not isinstance(t, LiteralT):
+        return conv_fn(f, sig[0], t)
+    return f
+
+
 class PouCompiler:
     """Compiles the body of one POU."""
 
@@ -292,10 +301,10 @@ class PouCompiler:
     def in_context(self, e, t):
         """f(env) of untyped expression e computed in type t, or None."""
         if isinstance(e, ast.BinOp) and e.fn is not None:
-            return self.apply_std(e.fn, [e.left, e.right], e.sig)
+            return _from_sig(self.apply_std(e.fn, [e.left, e.right], e.sig), e.sig, t)
         if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
                 and isinstance(e.target.result, LiteralT):
-            return self.std_call(e, t)
+            return _from_sig(self.std_call(e), e.sig, t)     # in e.sig: settle gave it t
         return None
 
     def lit_value(self, e):
@@ -324,7 +333,7 @@ class PouCompiler:
     def binop(self, e):
         op = e.op
         if e.fn is not None:
-            return self.apply_std(e.fn, [e.left, e.right], e.sig)
+            return _from_sig(self.apply_std(e.fn, [e.left, e.right], e.sig), e.sig, e.type)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             c = e.sig[1][0]
             a = self.expr_as(e.left, c)
@@ -370,10 +379,15 @@ class PouCompiler:
             v = self._literal_unop(e)
             if v is not None:
                 return _const(v)
+        b = base_of(t)
+        if e.op == "-" and isinstance(b, Elementary) and b.cat in ("bit", "bool") \
+                and e.const is not None:
+            # an untyped -(-3) stored into a bit string or a BOOL: its folded
+            # value, as codegen's unop
+            return _const(bool(e.const) if b.cat == "bool" else wrap(int(e.const), b))
         a = self.expr_as(e.operand, t)
         if e.op == "+":
             return a
-        b = base_of(t)
         if e.op == "NOT":
             if b is BOOL:
                 return lambda env: not a(env)
@@ -418,16 +432,21 @@ class PouCompiler:
                 eno = self.writer(a.value, BOOL)
         return en, eno
 
-    def std_call(self, c, ctx_t=None):
+    def std_call(self, c):
         fres = c.target
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
-        rt = c.type if ctx_t is None else ctx_t
-        f = self.apply_std(fres, args, c.sig)
+        f = _from_sig(self.apply_std(fres, args, c.sig), c.sig, c.type)
         en, eno = self.en_eno(c)
         if en is None and eno is None:
             return f
-        dflt = self.m.init.default(concrete(rt)) if not isinstance(rt, LiteralT) else 0
+        # EN = FALSE: the default of the type the call is computed in (its
+        # sig, checks/settle.py; an exact computation on literals: the
+        # literal's own type, DINT, LINT or LREAL), as codegen's guarded_call,
+        # in the type f gives it (_from_sig)
+        dflt = self.m.init.default(concrete(c.sig[0]))
+        conv = _from_sig(lambda env: dflt, c.sig, c.type)
+        dflt = conv(None)
 
         def guarded(env):
             if en is not None and not en(env):
@@ -1019,13 +1038,16 @@ class PouCompiler:
                 env.cr = f(env)
             return ld
         if op in ("ST", "STN"):
-            w = self.writer(i.operand, cr_in)
-            if op == "STN":
-                nf = std.not_fn(concrete(cr_in))
+            if op == "STN":     # negated in the checker's type (sig)
+                st_t = concrete(i.sig[0])
+                w = self.writer(i.operand, st_t)
+                nf = std.not_fn(st_t)
+                cv = implicit(cr_in, st_t) or (lambda v: v)
 
                 def stn(env):
-                    w(env, nf(env.cr))
+                    w(env, nf(cv(env.cr)))
                 return stn
+            w = self.writer(i.operand, cr_in)
 
             def st(env):
                 w(env, env.cr)
@@ -1048,11 +1070,13 @@ class PouCompiler:
             def fb_input(env):
                 env.v[kv].v[pk] = st_(env.cr)
             return fb_input
-        if op == "NOT":
-            nf = std.not_fn(concrete(cr_in))
+        if op == "NOT":         # in the result's type: a bit string for a literal
+            res = concrete(i.cr_out)
+            nf = std.not_fn(res)
+            cv = implicit(cr_in, res) or (lambda v: v)
 
             def not_(env):
-                env.cr = nf(env.cr)
+                env.cr = nf(cv(env.cr))
             return not_
         if op in ("AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ADD", "SUB", "MUL", "DIV",
                   "MOD", "GT", "GE", "EQ", "NE", "LE", "LT"):

@@ -609,10 +609,12 @@ class Encoder:
 
     def in_context(self, e, t, frame, g):
         if isinstance(e, ast.BinOp) and e.fn is not None:
-            return self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos)
+            return self.from_sig(self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos),
+                                 e.sig, t, frame, e.pos)
         if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) \
                 and isinstance(e.target.result, LiteralT):
-            return self.std_call(e, frame, g, t)
+            # in e.sig: settle gave it t
+            return self.from_sig(self.std_call(e, frame, g), e.sig, t, frame, e.pos)
         return None
 
     def expr(self, e, frame, g):
@@ -644,10 +646,20 @@ class Encoder:
             return self.call_expr(e, frame, g)
         raise AssertionError(f"expression {e!r}")
 
+    def from_sig(self, v, sig, t, frame, pos):
+        """A standard call's value computed in its sig, as type t: one the
+        checker computes exactly on untyped literals where t cannot take it
+        (1 + 2 into a BYTE, stdlib.call_types) is converted as a literal is
+        (the interpreter's _from_sig)."""
+        if isinstance(sig[0], LiteralT) and t is not None and not isinstance(t, LiteralT):
+            return self.conv(v, sig[0], t, frame, pos)
+        return v
+
     def binop(self, e, frame, g):
         op = e.op
         if e.fn is not None:
-            return self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos)
+            return self.from_sig(self.apply_std(e.fn, [e.left, e.right], e.sig, frame, g, e.pos),
+                                 e.sig, e.type, frame, e.pos)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             c = e.sig[1][0]
             a = self.expr_as(e.left, c, frame, g)
@@ -666,6 +678,11 @@ class Encoder:
             v = self.ipc(frame.pou)._literal_unop(e)
             if v is not None:
                 return v if isinstance(t, LiteralT) else const_of(v, t)
+        if e.op == "-" and isinstance(base_of(t), Elementary) and base_of(t).cat in ("bit", "bool") \
+                and e.const is not None:
+            # an untyped -(-3) stored into a bit string or a BOOL: its folded
+            # value (codegen's unop)
+            return self.conv(int(e.const), LiteralT("int", int(e.const)), t, frame, e.pos)
         a = self.expr_as(e.operand, t, frame, g)
         if e.op == "+":
             return a
@@ -690,14 +707,17 @@ class Encoder:
                 eno = a.value
         return en, eno
 
-    def std_call(self, c, frame, g, ctx_t=None):
+    def std_call(self, c, frame, g):
         fres = c.target
-        rt = c.type if ctx_t is None else ctx_t
+        rt = c.sig[0]       # the type the call is computed in (checks/settle.py)
+        if isinstance(rt, LiteralT) and c.type is not None and not isinstance(c.type, LiteralT):
+            rt = c.type     # computed exactly, then converted to it (from_sig)
         args = [a.value for a in c.args
                 if a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO")]
         en, eno = self.en_eno(c, frame, g)
         g2 = land(g, en) if en is not None else g
-        v = self.apply_std(fres, args, c.sig, frame, g2, c.pos)
+        v = self.from_sig(self.apply_std(fres, args, c.sig, frame, g2, c.pos), c.sig, c.type,
+                          frame, c.pos)
         if eno is not None:
             self.write(eno, en if en is not None else TRUE, BOOL, frame, g, c.pos)
         if en is not None:
@@ -1568,10 +1588,12 @@ class Encoder:
             return
         if op in ("ST", "STN"):
             val = self.cr_get(frame, cr_in)
-            if op == "STN":
-                val = self.conv(val, cr_in, concrete(cr_in))
+            st_t = cr_in
+            if op == "STN":     # negated in the checker's type (sig)
+                st_t = concrete(i.sig[0])
+                val = self.conv(val, cr_in, st_t)
                 val = z3.Not(val) if z3.is_bool(val) else ~val
-            self.write(i.operand, val, cr_in, frame, g, i.pos)
+            self.write(i.operand, val, st_t, frame, g, i.pos)
             return
         if op in ("S", "R") and not isinstance(getattr(i.operand, "type", None), FBType):
             cr = self.conv(self.cr_get(frame, cr_in), cr_in, BOOL)
@@ -1587,8 +1609,8 @@ class Encoder:
                 gi = land(g, cond)
                 store_into(inst.v, param.key, gi, val)
             return
-        if op == "NOT":
-            val = self.conv(self.cr_get(frame, cr_in), cr_in, concrete(cr_in))
+        if op == "NOT":         # in the result's type: a bit string for a literal
+            val = self.conv(self.cr_get(frame, cr_in), cr_in, concrete(i.cr_out))
             self.cr_set(frame, rel, z3.Not(val) if z3.is_bool(val) else ~val)
             return
         if op in ("AND", "ANDN", "OR", "ORN", "XOR", "XORN", "ADD", "SUB", "MUL", "DIV",

@@ -118,3 +118,61 @@ def test_a_comparison_carries_the_type_its_operands_are_compared_in():
     got = [_sig(s.value) for s in unit.pous[0].body]
     assert got == [("BOOL", ["INT", "INT"]), ("BOOL", ["LREAL", "LREAL"]),
                    ("BOOL", ["DINT", "DINT"])]
+
+
+def test_a_literal_argument_keeps_its_value_where_every_argument_is_untyped():
+    # MAX(0, 4000000000): the arguments' common type (types.common) has no
+    # value; a literal given that type was made concrete as a DINT by the
+    # interpreter and verify (4000000000 stored as -294967296) while C
+    # computed MAX in LINT.  Each literal keeps its own value, in the common
+    # category (LIMIT(0, 5, 1.5): every argument a real literal)
+    from iec2kmod.checks.types import concrete
+    unit = _checked("PROGRAM p\nVAR l : LINT; r : LREAL; END_VAR\n"
+                    "l := MAX(0, 4000000000);\nr := LIMIT(0, 5, 1.5);\nEND_PROGRAM\n")
+    mx, lim = [s.value for s in unit.pous[0].body]
+    got = [[(type(a.value.type).__name__, a.value.type.cat, a.value.type.value,
+             concrete(a.value.type).name) for a in c.args] for c in (mx, lim)]
+    assert got == [
+        [("LiteralT", "int", 0, "DINT"), ("LiteralT", "int", 4000000000, "LINT")],
+        [("LiteralT", "real", 0.0, "LREAL"), ("LiteralT", "real", 5.0, "LREAL"),
+         ("LiteralT", "real", 1.5, "LREAL")],
+    ], got
+
+
+def test_mux_computes_an_untyped_input_in_its_result_type():
+    # the inputs are of MUX's result type (LINT here), K of its own: the
+    # checker gave 2147483647 * 2 a DINT (-2) where the back ends converted
+    # MUX's inputs to LINT, and verify's encoding failed on the widths
+    unit = _checked("PROGRAM p\nVAR l : LINT; END_VAR\nl := MUX(1, 5, 2147483647 * 2);\n"
+                    "END_PROGRAM\n")
+    calls = _calls(unit.pous[0].body, {})
+    assert {t: _sig(n) for t, n in calls.items()} == {
+        "MUX(1, 5, (2147483647 * 2))": ("LINT", ["DINT", "LINT", "LINT"]),
+        "(2147483647 * 2)": ("LINT", ["LINT", "LINT"]),
+    }
+
+
+def test_an_initial_value_is_the_checkers_fold():
+    # an initial value is never typed by the body checker: its operators have
+    # no sig, and the C emitter stopped on them (AttributeError, an internal
+    # error); it emits the value checks/fold.py gave, as the interpreter does
+    from iec2kmod.codegen import generate
+    diags = Diagnostics()
+    unit = parse_source(SourceFile("t.st", "PROGRAM p\nVAR k : INT := 2 + 3; "
+                                   "l : LINT := 2147483647 + 1; r : LREAL := -(1 + 1); END_VAR\n"
+                                   "k := k + 1;\nEND_PROGRAM\n"), diags)
+    project = check_project([unit], diags)
+    assert not diags.errors
+    inits = [ln.strip() for ln in generate(project).header.splitlines()
+             if ln.strip().startswith("self->v_")]
+    assert inits == ["self->v_k = ((iec_int)5);", "self->v_l = ((iec_lint)2147483648LL);",
+                     "self->v_r = (-((iec_lreal)2.0));"], inits
+
+
+def test_literal_arithmetic_in_a_context_it_cannot_be_computed_in_is_exact():
+    # a bit string, BOOL, MOD into a REAL: no context (stdlib.NUMERIC_CONTEXT);
+    # the call was computed in BYTE / LREAL, which C has no function for
+    unit = _checked("PROGRAM p\nVAR x : BYTE; r : LREAL; b : BOOL; i : INT; END_VAR\n"
+                    "x := 1 + 2;\nr := 7 MOD 2;\nb := 1 + 0;\ni := 1 + 2;\nEND_PROGRAM\n")
+    got = [_sig(s.value) for s in unit.pous[0].body]
+    assert got == [("literal", ["literal", "literal"])] * 3 + [("INT", ["INT", "INT"])], got

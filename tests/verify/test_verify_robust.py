@@ -200,6 +200,51 @@ def test_typed_operand_of_literal_arithmetic(tmp_path, capsys):
     assert not diffs and done == 3, diffs
 
 
+# ---------------------------------------------------------------- calls on untyped literals
+LITERAL_CALLS = """
+    PROGRAM P
+    VAR_INPUT en : BOOL; END_VAR
+    VAR_OUTPUT d : DINT; l, m : LINT; nb : BOOL; END_VAR
+    d := 0;
+    CASE MAX(1, 2, EN := en) OF
+        0: d := 10;
+        2: d := 20;
+    END_CASE;
+    l := MAX(0, 4000000000);
+    m := MUX(1, 5, 2147483647 * 2);
+    nb := -(-1);
+    END_PROGRAM
+    CONFIGURATION C
+        RESOURCE R ON CPU0
+            TASK tk (INTERVAL := T#10ms, PRIORITY := 1);
+            PROGRAM p WITH tk : P (en := %IX0.0);
+        END_RESOURCE
+    END_CONFIGURATION
+"""
+
+
+def test_calls_on_untyped_literals(tmp_path, capsys):
+    # issue 24: a standard call on untyped literals takes its type from its
+    # sig (checks/settle.py), EN's default too: MAX(1, 2, EN := en) as a
+    # CASE selector is computed in DINT as in C, 0 when en is FALSE (verify
+    # refused it: "EN on a function of untyped literals"); 4000000000 in
+    # MAX(0, 4000000000) into a LINT keeps its value (verify and the
+    # interpreter made it a DINT, -294967296, where C gave 4000000000); MUX's
+    # untyped input is computed in MUX's LINT (an internal error: 'Sorts
+    # (_ BitVec 64) and (_ BitVec 32) are incompatible'); -(-1) into a BOOL is
+    # its folded value (an internal error: unary - on a z3 BoolRef)
+    proj = project(tmp_path, LITERAL_CALLS)
+    rc, out, err = run(capsys, "verify", proj, "--instance", "p",
+                       "-p", "en = (d = 20)", "-p", "l = 4000000000", "-p", "m = 4294967294",
+                       "-p", "nb", "--depth", "2", "--cex-dir", tmp_path)
+    assert "internal error" not in err, err
+    assert rc == 0, out + err
+    assert out.count("proved") == 5, out
+    import diffverify
+    diffs, done = diffverify.run(front(proj), 3, 1)
+    assert not diffs and done == 3, diffs
+
+
 # ---------------------------------------------------------------- edge memories not yet created
 EDGE_FB = """
     FUNCTION_BLOCK Det
