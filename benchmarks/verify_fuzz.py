@@ -244,7 +244,7 @@ def _inputs_main(path, n, seed):
     from iec2kmod.cli import front_end
     from iec2kmod.diagnostics import Diagnostics
     from iec2kmod.verify import build
-    from iec2kmod.verify.cex import format_value
+    from iec2kmod.traces import input_literal
     import contextlib
     import io
     with contextlib.redirect_stderr(io.StringIO()):
@@ -255,7 +255,7 @@ def _inputs_main(path, n, seed):
     for leaf, _, _ in out.system.inputs:
         if leaf is None:
             continue        # a faulted task's free values, a stand-in: not trace inputs
-        res.append([leaf.name, [format_value(leaf, random_value(rnd, leaf)) for _ in range(n)]])
+        res.append([leaf.name, [input_literal(leaf.type, random_value(rnd, leaf)) for _ in range(n)]])
     print(json.dumps(res))
 
 
