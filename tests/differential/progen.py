@@ -261,6 +261,13 @@ class Gen:
         # gave before
         self.bd_r = random.Random(f"bd{seed}")
         self.bd = True
+        # constant expressions as initial values (k : INT := (7 - 2)): the
+        # same value as the literal drawn, written as a sum or difference
+        # the checker folds, decided by a generator of its own so a seed's
+        # project keeps its values (issue 24: such an initial value stopped
+        # the C engine and no campaign wrote one)
+        self.ie_r = random.Random(f"ie{seed}")
+        self.init_expr = True
         self.cur_pou = None
         # strings=False (generate_unit): no STRING type, value or function,
         # for engines that have none (the verifier); True leaves every seed's
@@ -569,7 +576,7 @@ class Gen:
             return ""
         if t.scalar:
             self.feat("init")
-            return f" := {self.lit(t)}"
+            return f" := {self.init_expression(t, self.lit(t))}"
         if t.kind == "array":
             n = 1
             for a, b in t.dims:
@@ -588,6 +595,27 @@ class Gen:
             self.feat("init_struct")
             return " := (" + ", ".join(f"{fn} := {self.lit(ft)}" for fn, ft in fs) + ")"
         return ""
+
+    def init_expression(self, t, text):
+        """*text*, an initial value of type t, or now and then an integer
+        literal of it as a constant expression of the same value (untyped
+        literals the checker folds in t's type: no step leaves t's range)."""
+        if not self.init_expr or t.kind not in ("int", "bit") or self.ie_r.random() >= 0.3:
+            return text
+        try:
+            v = int(text.split("#", 1)[1] if text.startswith(t.name + "#") else text)
+        except ValueError:
+            return text                     # 16#.., a boundary literal's other forms
+        lo, hi = rng_of(t)
+        k = self.ie_r.randint(1, 9)
+        if v - k >= lo and (v - k >= 0 or t.signed):
+            a, op = v - k, "+"              # (a + k) = v
+        elif v + k <= hi:
+            a, op = v + k, "-"              # (a - k) = v
+        else:
+            return text
+        self.feat("init_expr")
+        return f"({a} {op} {k})"
 
     def decl(self, v):
         t = v.ty
