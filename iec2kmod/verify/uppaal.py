@@ -623,6 +623,8 @@ class Exporter:
             t = i.operand.type
             v = self.conv(cr, i.cr_in, t) if not _is_bool(i.cr_in) else cr
             if op == "STN":
+                if not _is_bool(i.cr_in):
+                    self._refuse(pou, i.pos, "STN of an integer")
                 v = f"!{v}"
             self.assign(self.place_name(i.operand, frame), v)
             return

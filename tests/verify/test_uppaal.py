@@ -155,3 +155,17 @@ def test_export_refuses_rtc_by_name(capsys, tmp_path):
     assert "r.st:2:5: error: export: 'c' holds an RTC instance (it reads the real-time clock" \
         in err, err
     assert "Traceback" not in err and not (tmp_path / "r.xml").exists()
+
+
+def test_export_refuses_a_negated_integer_store(capsys, tmp_path):
+    # STN of a bit string is a bitwise NOT; UPPAAL's ! is logical (it wrote
+    # b = !cr0, so b was 0 or 1): refused as LDN and NOT of an integer are
+    src = tmp_path / "s.il"
+    src.write_text("PROGRAM P\nVAR a : BYTE; b : BYTE; END_VAR\nLD a\nSTN b\nEND_PROGRAM\n"
+                   "CONFIGURATION C RESOURCE R ON CPU0 TASK t(INTERVAL := T#10ms, PRIORITY := 1);"
+                   " PROGRAM p WITH t : P; END_RESOURCE END_CONFIGURATION\n")
+    rc, out, err = export(capsys, src, tmp_path / "s.xml")
+    assert rc == 1, out + err
+    assert "s.il:4:1: error: export: STN of an integer cannot be exported to UPPAAL exactly" \
+        in err, err
+    assert not (tmp_path / "s.xml").exists()
