@@ -35,6 +35,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -188,6 +189,28 @@ def pct(xs, q):
     return xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
 
 
+def shelf_read_figures(pki: Path, runs: int = 5) -> None:
+    """serve's start reads asyncua's standard address space from a shelf:
+    its index by plc_manager's reader against dbm.dumb's own (ms, on the
+    host; a test checks they give the same records)."""
+    import dbm.dumb
+    from plc_manager.serve.opcua import _DumbShelfReader
+    base = next((str(p) for p in pki.iterdir() if p.name.endswith("-aspace")), None)
+    if base is None or not Path(base + ".dir").is_file():
+        print("shelf index read: not a dbm.dumb shelf here")
+        return
+    for name, opener in (("plc_manager", _DumbShelfReader),
+                         ("dbm.dumb", lambda b: dbm.dumb.open(b, "r"))):
+        xs = []
+        for _ in range(runs):
+            t = time.perf_counter()
+            opener(base).close()
+            xs.append(1000 * (time.perf_counter() - t))
+        xs.sort()
+        print(f"shelf index read, {name}: min {xs[0]:.1f} / median {xs[len(xs) // 2]:.1f} / "
+              f"max {xs[-1]:.1f} ms ({runs} runs)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--vars", type=int, default=1000)
@@ -212,6 +235,7 @@ def main() -> None:
                        capture_output=True, text=True)
     pki = work / "pki"
     ensure_shelf(pki)
+    shelf_read_figures(pki)
     ensure_certificate(pki / "server-cert.der", pki / "server-key.pem", "urn:iec2kmod:Load",
                        "127.0.0.1")
     ensure_certificate(pki / "client-cert.der", pki / "client-key.pem", "urn:bench", "localhost")
