@@ -71,7 +71,10 @@ class Constants:
                 raise ConstError(f"unknown enumeration value {expr.text}")
             return expr.value
         if isinstance(expr, ast.UnOp):
-            return fold.unary(expr.op, self.const_value(expr.operand, src, what))
+            v = self.const_value(expr.operand, src, what)
+            if expr.op == "NOT":
+                _bit_operand("operator NOT", v)
+            return fold.unary(expr.op, v)
         if isinstance(expr, ast.BinOp):
             a = self.const_value(expr.left, src, what)
             b = self.const_value(expr.right, src, what)
@@ -80,6 +83,13 @@ class Constants:
                     return fold.binary(expr.op, a, b)
                 except ZeroDivisionError:
                     raise ConstError("division by zero in a constant expression") from None
+            if expr.op in fold.LOGIC_OPS:
+                if isinstance(a, bool) != isinstance(b, bool):
+                    raise ConstError(f"operator {expr.op} in a constant expression needs two "
+                                     "BOOL or two bit-string values")
+                _bit_operand(f"operator {expr.op}", a)
+                _bit_operand(f"operator {expr.op}", b)
+                return fold.binary(expr.op, a, b)
         if isinstance(expr, ast.Ref) and not expr.accessors:
             key = expr.name.upper()
             found = self._const_scope.entries.get(key)
@@ -259,6 +269,16 @@ class Constants:
             else:
                 self.error(src, init.pos, str(exc))
                 return init
+        bitwise = _bitwise_op(init)
+        if bitwise is not None and not isinstance(v, bool):
+            base = getattr(t, "base", None)
+            if not isinstance(base, Elementary) or base.cat != "bit":
+                self.error(src, init.pos, f"cannot initialize {t.name} with a bit-string "
+                                          f"expression ({bitwise}), which initializes a bit string "
+                                          "(BYTE, WORD, DWORD, LWORD) or a BOOL")
+                return init
+            v &= base.range[1]            # NOT of a bit string: its bits, not a negative
+            init.const = v
         if self.names_constant(init):
             folded = self.folded(v, init, t)
             if folded is None:
@@ -356,3 +376,24 @@ class Constants:
         if isinstance(t, SubrangeT) and not t.low <= v <= t.high:
             self.error(src, expr.pos, f"initial value {v} is outside the subrange "
                                       f"{t.low}..{t.high}")
+
+
+def _bit_operand(what, v):
+    """A value AND, OR, XOR or NOT takes in a constant expression: a BOOL or
+    a bit string's (0 .. 16#FFFF_FFFF_FFFF_FFFF), as in a statement."""
+    if isinstance(v, bool):
+        return
+    if not isinstance(v, int) or not 0 <= v <= 0xFFFF_FFFF_FFFF_FFFF:
+        raise ConstError(f"{what} on untyped literals: {v} is not a bit string value "
+                         "(0 .. 16#FFFF_FFFF_FFFF_FFFF)")
+
+
+def _bitwise_op(e):
+    """The first AND, OR, XOR or NOT in constant expression *e*, or None."""
+    if isinstance(e, ast.UnOp):
+        return "NOT" if e.op == "NOT" else _bitwise_op(e.operand)
+    if isinstance(e, ast.BinOp):
+        if e.op in fold.LOGIC_OPS:
+            return e.op
+        return _bitwise_op(e.left) or _bitwise_op(e.right)
+    return None
