@@ -20,7 +20,7 @@ from contextlib import contextmanager
 from .. import ast
 from . import fold
 from .types import (ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT,
-                    SubrangeT, assignable)
+                    SubrangeT, assignable, not_bit_value)
 
 
 class ConstError(Exception):
@@ -381,11 +381,9 @@ class Constants:
 def _bit_operand(what, v):
     """A value AND, OR, XOR or NOT takes in a constant expression: a BOOL or
     a bit string's (0 .. 16#FFFF_FFFF_FFFF_FFFF), as in a statement."""
-    if isinstance(v, bool):
-        return
-    if not isinstance(v, int) or not 0 <= v <= 0xFFFF_FFFF_FFFF_FFFF:
-        raise ConstError(f"{what} on untyped literals: {v} is not a bit string value "
-                         "(0 .. 16#FFFF_FFFF_FFFF_FFFF)")
+    why = not_bit_value(what, [v])
+    if why is not None:
+        raise ConstError(why)
 
 
 def _bitwise_op(e):

@@ -21,7 +21,7 @@ from . import fold, stdlib
 from .symbols import EnumValue, Var
 from .types import (BOOL, ELEMENTARY, ERROR, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, assignable, cat, common,
-                    concrete, concrete_bits, is_bit, is_int, literal_fits)
+                    concrete, concrete_bits, is_bit, is_int, literal_fits, not_bit_value)
 
 ARITH = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD"}
 COMPARE = {"=": "EQ", "<>": "NE", "<": "LT", ">": "GT", "<=": "LE", ">=": "GE"}
@@ -351,9 +351,7 @@ class ExprChecks:
         types.concrete_bits (DWORD, LWORD beyond 32 bits)."""
         t = concrete_bits(*lits)
         if t is None:
-            bad = next(lit.value for lit in lits if concrete_bits(lit) is None)
-            self.error(e.pos, f"operator {op} on untyped literals: {bad} is not a bit string "
-                              f"value (0 .. 16#FFFF_FFFF_FFFF_FFFF)")
+            self.error(e.pos, not_bit_value(f"operator {op}", lits))
             return ERROR
         return t
 

@@ -7,7 +7,7 @@ from .symbols import POUInfo, Var
 from .types import (BOOL, ELEMENTARY, INT, LREAL, TIME, AnyIntResult, Elementary, ErrorT,
                     LiteralT,
                     StringT, STRING, assignable, cat, common, concrete, concrete_bits, is_bit,
-                    is_bool, is_int, is_num, is_real, is_string, is_elementary)
+                    is_bool, is_int, is_num, is_real, is_string, is_elementary, not_bit_value)
 
 
 class CallError(Exception):
@@ -206,9 +206,7 @@ def _bitwise(name, types):
         lits = [t for t in types if isinstance(t, LiteralT)]
         r = concrete_bits(*lits)
         if r is None:
-            bad = next(t.value for t in lits if concrete_bits(t) is None)
-            raise CallError(f"{name} on untyped literals: {bad} is not a bit string value "
-                            f"(0 .. 16#FFFF_FFFF_FFFF_FFFF)")
+            raise CallError(not_bit_value(name, lits))
     return StdFunc(name, name, [r] * len(types), r)
 
 

@@ -328,6 +328,22 @@ def common(a: Type, b: Type):
     return None
 
 
+def not_bit_value(what: str, lits) -> str | None:
+    """The message for the first of values *lits* (LiteralT, or a folded
+    number) that no bit string holds (a negative, a REAL, over 64 bits) as
+    an operand of *what* ("operator AND", "OR"), or None when all fit: the
+    words of every bitwise operation on untyped literals (statements,
+    standard calls, initial values)."""
+    for lit in lits:
+        v = lit.value if isinstance(lit, LiteralT) else lit
+        if isinstance(v, bool):
+            continue
+        if not isinstance(v, int) or not 0 <= v <= (1 << 64) - 1:
+            return (f"{what} on untyped literals: {v} is not a bit string value "
+                    "(0 .. 16#FFFF_FFFF_FFFF_FFFF)")
+    return None
+
+
 def concrete_bits(*lits: LiteralT):
     """The bit string AND, OR, XOR or NOT on untyped integer literals (``5
     AND 3``, ``NOT 16#FF``) is computed in where nothing else decides: the
