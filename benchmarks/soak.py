@@ -8,7 +8,7 @@
           swap running its new body, swap latency min/median/p99/max;
   cycles  N load/stop cycles of the plant: modules back to zero after each,
           Slab and SUnreclaim (/proc/meminfo) after every stop, their drift
-          from the first cycle to the last;
+          from the first cycle to the last (growth above 1 % fails);
   kills   N times the manager killed with SIGKILL at a random moment of
           `load`, `swap` or `stop` (uniform over the command's measured
           duration, counted once the process has imported what it needs),
@@ -287,8 +287,11 @@ def main():
                               f"Slab first {slab[0]} last {slab[-1]} min {min(slab)} max "
                               f"{max(slab)} kB ({ds:+.2f} %); SUnreclaim first {sun[0]} last "
                               f"{sun[-1]} min {min(sun)} max {max(sun)} kB ({du:+.2f} %)")
-                        if abs(du) > 1.0 or abs(ds) > 1.0:
-                            failed.append("cycles (drift above 1 %)")
+                        # a leak grows: memory given back (a cache the
+                        # kernel shrank between the first and the last
+                        # stop) is no failure; stop 34's CI saw Slab -1.01 %
+                        if du > 1.0 or ds > 1.0:
+                            failed.append("cycles (growth above 1 %)")
                     for x in r["bad"]:
                         print("  " + x)
                     if r["bad"]:
