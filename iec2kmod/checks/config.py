@@ -13,6 +13,7 @@ from __future__ import annotations
 from .. import ast
 from .body import BodyChecker
 from .consts import ConstError
+from .declare import implicit_eno
 from .located import LocatedRules, check_address_type
 from .symbols import Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo
 from .tasks import TaskChecks
@@ -409,6 +410,9 @@ class ConfigChecker(TaskChecks, LocatedRules):
         v = None
         for part in rest[1:]:
             v = pou.var(part) if pou is not None else None
+            if v is None and pou is not None and pou.kind == "FUNCTION_BLOCK" and \
+                    part.upper() == "ENO" and not pou.standard:
+                v = implicit_eno(pou)
             if v is None:
                 self.error(src, pos, f"'{path}': no variable '{part}'")
                 return None

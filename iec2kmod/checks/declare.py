@@ -262,8 +262,13 @@ class Declarer(Constants):
                     self.error(node.src, node.pos, f"'{node.name}' is an elementary type")
                     continue
                 self.p.pous[key] = POUInfo(node.kind, node.name, node=node, src=node.src)
+        self._access = []
         for pou in self.p.pous.values():
             self.declare_interface(pou)
+        # after every interface: a path may name a member of an instance of
+        # a block declared later, or its ENO (implicit_eno)
+        for pou, block in self._access:
+            self.program_access(pou, block)
 
     def declare_interface(self, pou: POUInfo):
         node = pou.node
@@ -288,15 +293,14 @@ class Declarer(Constants):
                     continue
                 self.declare_block(block, pou, src, pou.vars)
         self.mark_used(scope, pou.vars)
-        for block in access:
-            self.program_access(pou, block)
+        self._access += [(pou, block) for block in access]
         self.declare_eno(pou)
         if node.sfc is not None:
             declare_steps(self, pou)
         for v in pou.vars.values():
             if v.section == "VAR_INPUT":
                 pou.inputs.append(v)
-            elif v.section == "VAR_OUTPUT":
+            elif v.section == "VAR_OUTPUT" and v not in pou.outputs:
                 pou.outputs.append(v)
             elif v.section == "VAR_IN_OUT":
                 pou.inouts.append(v)
@@ -339,6 +343,8 @@ class Declarer(Constants):
                     t_cur = v.type
                 elif isinstance(t_cur, FBType):
                     m = t_cur.pou.var(part)
+                    if m is None and part.upper() == "ENO" and not t_cur.pou.standard:
+                        m = implicit_eno(t_cur.pou)
                     if m is None or m.section not in ("VAR_INPUT", "VAR_OUTPUT"):
                         self.error(src, d.pos, f"access path '{d.name}': '{part}' is not an "
                                                f"input or output of {t_cur.name}")
@@ -392,14 +398,11 @@ class Declarer(Constants):
                            "is BOOL; rename the variable")
         v = pou.vars.get("ENO")
         if v is None:
-            if not _mentions([node.body, node.sfc], "ENO"):
-                return
-            v = Var("ENO", BOOL, "VAR_OUTPUT", node.pos, node.src, owner=pou)
-            pou.vars["ENO"] = v
+            if _mentions([node.body, node.sfc], "ENO"):
+                _eno_var(pou)       # its outputs are listed after this
+            return
         if v.section == "VAR_OUTPUT" and v.type is BOOL and v.init is None:
-            lit = ast.Lit(v.pos, "TRUE", "bool", True)
-            lit.type = BOOL
-            v.init = lit
+            v.init = _true(v.pos)
 
     def declare_block(self, block, owner, src, table, allow_located=False):
         constant = "CONSTANT" in block.qualifiers
@@ -514,6 +517,37 @@ class Declarer(Constants):
                                       "(completed by VAR_CONFIG)")
             return
         check_address_type(self, src, decl.pos, addr, t)
+
+
+def _true(pos):
+    lit = ast.Lit(pos, "TRUE", "bool", True)
+    lit.type = BOOL
+    return lit
+
+
+def implicit_eno(pou: POUInfo):
+    """The ENO output (BOOL, initially TRUE) of the user function or
+    function block pou, declared when its body uses ENO without declaring
+    it (declare_eno) or when a caller reads an instance's ENO (``f.ENO``,
+    checks/expr.py): then the instance keeps the ENO of its last call --
+    TRUE when it starts, what the body set, FALSE after a call with EN =
+    FALSE -- as MatIEC's instances do.  A block whose ENO nothing reads
+    gets no member (its layout, and the interface hash, stay as they
+    were).  Returns the (existing or new) variable."""
+    v = pou.vars.get("ENO")
+    if v is None:
+        v = _eno_var(pou)
+    if v not in pou.outputs:
+        pou.outputs.append(v)
+    return v
+
+
+def _eno_var(pou):
+    node = pou.node
+    v = Var("ENO", BOOL, "VAR_OUTPUT", node.pos, node.src, owner=pou)
+    v.init = _true(node.pos)
+    pou.vars["ENO"] = v
+    return v
 
 
 def _mentions(node, name: str) -> bool:

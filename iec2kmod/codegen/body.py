@@ -574,6 +574,11 @@ class BodyEmitter:
         pou = _fb_pou(c)
         lines = []
         sel_end = None
+        v_eno = pou.var("ENO")
+        if v_eno is not None and v_eno.section != "VAR_OUTPUT":
+            v_eno = None
+        eno_member = v_eno is not None and not pou.standard
+        en_arg = any(a.name and a.name.upper() == "EN" and a.kind == "in" for a in c.args)
         if c.ref is not None:
             # an element of an array of instances: its index is computed
             # (and checked) once, before the arguments
@@ -588,6 +593,10 @@ class BodyEmitter:
             base = f"(*{ptr})"
         else:
             base = self.var_access(inst)
+        # an instance that keeps its ENO gets FALSE from a call with EN =
+        # FALSE: the element it is is known before EN is evaluated (the
+        # order of the interpreter and of verify)
+        pre, lines = (lines, []) if eno_member and en_arg else ([], lines)
         eno = None
         en = None
         for a in c.args:
@@ -622,8 +631,7 @@ class BodyEmitter:
         if en is not None and pou.var("EN") is not None and not pou.standard:
             # a block that declares EN sees it TRUE when it runs
             lines.append(f"{base}.{N.member(pou, pou.var('EN').name)} = 1;")
-        v_eno = pou.var("ENO")
-        if v_eno is not None and v_eno.section == "VAR_OUTPUT" and not pou.standard:
+        if eno_member:
             # ENO is TRUE when the body starts; the body may set it FALSE
             lines.append(f"{base}.{N.member(pou, v_eno.name)} = 1;")
         body_fn = N.pou_prefix(pou) + ("" if pou.standard else "_body")
@@ -669,10 +677,12 @@ class BodyEmitter:
         if eno is not None and eno.value is not None and bound.get("ENO") is not eno:
             lines += self.checked_store(f, eno.value, Raw("1", BOOL))
         if en is not None:
-            out = [f"if ({en}) {{"] + self.indent(lines) + ["}"]
+            out = pre + [f"if ({en}) {{"] + self.indent(lines) + ["}"]
+            off = [f"{base}.{N.member(pou, v_eno.name)} = 0;"] if eno_member else []
             if eno is not None and eno.value is not None:
-                out += ["else {"] + self.indent(self.checked_store(f, eno.value, Raw("0", BOOL))) \
-                    + ["}"]
+                off += self.checked_store(f, eno.value, Raw("0", BOOL))
+            if off:
+                out += ["else {"] + self.indent(off) + ["}"]
             return out
         # a selective call that ends the lines has made the statement's check
         f.checked = sel_end == len(lines)

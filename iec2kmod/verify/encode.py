@@ -1072,10 +1072,16 @@ class Encoder:
         eno_key = v_eno.key if v_eno is not None and v_eno.section == "VAR_OUTPUT" else None
         eno_val = None
         for cond, inst in place.instances():
+            iv = inst.v
+            if en is not None and eno_key is not None and not pou.standard:
+                # an instance that keeps its ENO (checks/declare.implicit_eno)
+                # gets FALSE from a call with EN = FALSE
+                off = land(land(g, cond), z3.Not(en))
+                if not z3.is_false(off):
+                    iv[eno_key] = ite(off, FALSE, iv[eno_key])
             gi = land(g2, cond)
             if z3.is_false(gi):
                 continue
-            iv = inst.v
             for k, val in ins:
                 store_into(iv, k, gi, val)
             for k, pl in inouts:
