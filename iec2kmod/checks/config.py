@@ -13,7 +13,7 @@ from __future__ import annotations
 from .. import ast
 from .body import BodyChecker
 from .consts import ConstError
-from .declare import implicit_eno
+from .declare import fb_eno
 from .located import LocatedRules, check_address_type
 from .symbols import Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo
 from .tasks import TaskChecks
@@ -407,16 +407,16 @@ class ConfigChecker(TaskChecks, LocatedRules):
             self.error(src, pos, f"resource '{r.name}' has no program instance '{rest[0]}'")
             return None
         pou = inst.pou
-        v = None
+        v = fbt = None
         for part in rest[1:]:
             v = pou.var(part) if pou is not None else None
-            if v is None and pou is not None and pou.kind == "FUNCTION_BLOCK" and \
-                    part.upper() == "ENO" and not pou.standard:
-                v = implicit_eno(pou)
+            if v is None and fbt is not None and part.upper() == "ENO":
+                v = fb_eno(fbt)
             if v is None:
                 self.error(src, pos, f"'{path}': no variable '{part}'")
                 return None
-            pou = v.type.pou if isinstance(v.type, FBType) else None
+            fbt = v.type if isinstance(v.type, FBType) else None
+            pou = fbt.pou if fbt is not None else None
         return v
 
     def var_config(self, block, cfg):

@@ -110,7 +110,9 @@ class Declarer(Constants):
         if key in self.p.pous and self.p.pous[key].kind == "FUNCTION_BLOCK":
             return FBType(self.p.pous[key].name, self.p.pous[key])
         if key in stdlib.FUNCTION_BLOCKS:
-            return FBType(key, stdlib.FUNCTION_BLOCKS[key])
+            if key not in self.p.std_fbs:
+                self.p.std_fbs[key] = FBType(key, stdlib.FUNCTION_BLOCKS[key])
+            return self.p.std_fbs[key]
         if report:
             if key in self.p.pous:
                 self.error(src, pos, f"'{name}' is a {self.p.pous[key].kind.lower().replace('_', ' ')}"
@@ -343,8 +345,8 @@ class Declarer(Constants):
                     t_cur = v.type
                 elif isinstance(t_cur, FBType):
                     m = t_cur.pou.var(part)
-                    if m is None and part.upper() == "ENO" and not t_cur.pou.standard:
-                        m = implicit_eno(t_cur.pou)
+                    if m is None and part.upper() == "ENO":
+                        m = fb_eno(t_cur)
                     if m is None or m.section not in ("VAR_INPUT", "VAR_OUTPUT"):
                         self.error(src, d.pos, f"access path '{d.name}': '{part}' is not an "
                                                f"input or output of {t_cur.name}")
@@ -540,6 +542,18 @@ def implicit_eno(pou: POUInfo):
     if v not in pou.outputs:
         pou.outputs.append(v)
     return v
+
+
+def fb_eno(t: FBType):
+    """The ENO of instances of the function block type t, read from
+    outside (``f.ENO``): of a user block, implicit_eno; of a standard
+    block, t (the project's one FBType of that block) becomes the copy
+    that keeps it (stdlib.keeping_eno)."""
+    if not t.pou.standard:
+        return implicit_eno(t.pou)
+    if t.pou.var("ENO") is None:
+        t.pou = stdlib.keeping_eno(t.pou)
+    return t.pou.var("ENO")
 
 
 def _eno_var(pou):

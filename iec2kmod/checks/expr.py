@@ -18,7 +18,7 @@ from __future__ import annotations
 from .. import ast
 from ..diagnostics import INPUT_WRITE_RULE
 from . import fold, stdlib
-from .declare import implicit_eno
+from .declare import fb_eno
 from .symbols import EnumValue, Var
 from .types import (BOOL, ELEMENTARY, ERROR, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, assignable, cat, common,
@@ -200,9 +200,9 @@ class ExprChecks:
             return f[1], None
         if isinstance(t, FBType):
             v = t.pou.var(name)
-            if v is None and name.upper() == "ENO" and not t.pou.standard:
+            if v is None and name.upper() == "ENO":
                 # the implicit output, kept in the instance once read
-                v = implicit_eno(t.pou)
+                v = fb_eno(t)
             if v is None or v.section not in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"):
                 if v is None:
                     self.error(pos, f"function block {t.name} has no input or output '{name}'")

@@ -524,6 +524,26 @@ def _fb(name, inputs, outputs, internals=()):
     return pou
 
 
+def keeping_eno(pou):
+    """A copy of the standard FB pou whose instances keep the ENO of their
+    last call (an output, TRUE initially; FALSE after a call with EN =
+    FALSE, TRUE after any other: a standard FB's body never sets it FALSE),
+    for a project that reads ``t.ENO`` (checks/declare.fb_eno).  Its
+    instances are the runtime's struct and an ENO member
+    (codegen/cnames.py)."""
+    from .. import ast
+    copy = POUInfo("FUNCTION_BLOCK", pou.name, standard=True, keeps_eno=True)
+    copy.vars = dict(pou.vars)
+    copy.inputs = list(pou.inputs)
+    copy.outputs = list(pou.outputs)
+    lit = ast.Lit(None, "TRUE", "bool", True)
+    lit.type = BOOL
+    v = Var("ENO", BOOL, "VAR_OUTPUT", init=lit, owner=copy)
+    copy.vars["ENO"] = v
+    copy.outputs.append(v)
+    return copy
+
+
 def _counters():
     out = {}
     for suffix, t in (("", INT), ("_DINT", ELEMENTARY["DINT"]), ("_LINT", ELEMENTARY["LINT"]),

@@ -53,6 +53,9 @@ class POUInfo:
     labels: dict = field(default_factory=dict)   # IL labels
     access: list = field(default_factory=list)   # VAR_ACCESS: [(name, path, Var, direction)]
     sfc: object = None           # checks.sfc.SFCInfo of an SFC body
+    # a standard FB whose instances keep their ENO (stdlib.keeping_eno):
+    # the runtime's struct and body inside one with an ENO member
+    keeps_eno: bool = False
 
     @property
     def key(self) -> str:
@@ -158,6 +161,9 @@ class Project:
     pous: dict = field(default_factory=dict)         # upper name -> POUInfo (user)
     configurations: list = field(default_factory=list)
     units: list = field(default_factory=list)
+    # upper name -> the FBType of a standard FB: one per project, so that a
+    # read of an instance's ENO changes the type of every instance
+    std_fbs: dict = field(default_factory=dict)
 
 
 class EnumValue:

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from jinja2 import Environment, FileSystemLoader, StrictUndefined
 
 from .. import __version__
+from ..checks import stdlib
 from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, concrete
 from . import cnames as N
 from .expr import CodegenError
@@ -130,6 +131,22 @@ def source_list(project):
             for unit, name in source_names(project)]
 
 
+def std_eno_type(pou):
+    """(struct, functions) of a standard FB whose instances keep their ENO
+    (checks/stdlib.keeping_eno): the runtime's struct in member fb, ENO
+    beside it (TRUE initially); the call runs the runtime's body on fb, and
+    sets eno itself (codegen/body.py)."""
+    p, base = N.pou_prefix(pou), N.pou_prefix(stdlib.FUNCTION_BLOCKS[pou.key])
+    struct = "\n".join([f"/* {pou.name} keeping the ENO of its last call (an instance's ENO is "
+                        "read) */",
+                        f"struct {p} {{", f"\tstruct {base} fb;", "\tiec_bool eno;", "};"])
+    funcs = "\n".join([f"static inline void {p}_init(struct {p} *self)", "{",
+                       f"\t{base}_init(&self->fb);", "\tself->eno = 1;", "}", "",
+                       f"static inline void {p}(struct {p} *self, struct iec_ctx *ctx)", "{",
+                       f"\t{base}(&self->fb, ctx);", "}"])
+    return struct, funcs
+
+
 def generate(project, name: str | None = None, selective=None) -> GeneratedC:
     """C for every user POU of the project; *selective* is a
     selective.SelectivePlan (None: plain code) whose rule 8 questions are
@@ -165,6 +182,12 @@ def generate(project, name: str | None = None, selective=None) -> GeneratedC:
             lines.append("};")
             structs.append("\n".join(lines))
     inits = []
+    for t in project.std_fbs.values():
+        if t.pou.keeps_eno:
+            # first: a structure TYPE may hold such an instance
+            struct, init = std_eno_type(t.pou)
+            structs.insert(0, struct)
+            inits.append(init)
     for pou in order:
         if pou.kind == "FUNCTION":
             continue

@@ -577,7 +577,7 @@ class BodyEmitter:
         v_eno = pou.var("ENO")
         if v_eno is not None and v_eno.section != "VAR_OUTPUT":
             v_eno = None
-        eno_member = v_eno is not None and not pou.standard
+        eno_member = v_eno is not None
         en_arg = any(a.name and a.name.upper() == "EN" and a.kind == "in" for a in c.args)
         if c.ref is not None:
             # an element of an array of instances: its index is computed
@@ -638,7 +638,8 @@ class BodyEmitter:
         inline = _INLINE_FB.get(pou.name.upper()) if pou.standard else None
         if inline:
             # the bistables and edge detectors of iec_std_fb.c, written out
-            lines += [ln.format(b=base) for ln in inline]
+            b = f"{base}.fb" if pou.keeps_eno else base
+            lines += [ln.format(b=b) for ln in inline]
         else:
             if self.sel is None:
                 kind = None

@@ -35,18 +35,22 @@ def fn(name: str) -> str:
 
 def pou_struct(pou) -> str:
     if pou.standard:
-        return f"struct iec_fb_{pou.name.lower()}"
+        return f"struct {pou_prefix(pou)}"
     return f"struct {'prog' if pou.kind == 'PROGRAM' else 'fb'}_{pou.name.lower()}"
 
 
 def pou_prefix(pou) -> str:
     if pou.standard:
-        return f"iec_fb_{pou.name.lower()}"
+        # a standard FB whose ENO is read: the runtime's struct (member fb)
+        # and ENO in one (codegen.std_eno_type)
+        return f"iec_fb{'e' if pou.keeps_eno else ''}_{pou.name.lower()}"
     return f"{'prog' if pou.kind == 'PROGRAM' else 'fb'}_{pou.name.lower()}"
 
 
 def member(pou, name: str) -> str:
     """Member of an FB instance struct (standard FBs use plain lower case)."""
+    if pou.standard and pou.keeps_eno:
+        return "eno" if name.upper() == "ENO" else "fb." + name.lower()
     return name.lower() if pou.standard else var(name)
 
 

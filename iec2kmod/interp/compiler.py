@@ -709,9 +709,9 @@ class PouCompiler:
         v_eno = pou.var("ENO")
         eno_key = v_eno.key if v_eno is not None and v_eno.section == "VAR_OUTPUT" else None
 
-        # an instance that keeps its ENO (checks/declare.implicit_eno) gets
-        # FALSE from a call with EN = FALSE
-        eno_off = eno_key if not pou.standard else None
+        # an instance that keeps its ENO (checks/declare.fb_eno) gets FALSE
+        # from a call with EN = FALSE
+        eno_off = eno_key
 
         def call(env):
             inst = get_inst(env)

@@ -162,8 +162,9 @@ class Machine:
         if isinstance(init, ast.StructInit):
             given = {name.upper(): val for name, val, _ in init.fields}
         if pou.standard:
+            # (v.init: the ENO of a block that keeps it, stdlib.keeping_eno)
             for v in pou.vars.values():
-                inst.v[v.key] = self.init.value(v.type, given.get(v.key))
+                inst.v[v.key] = self.init.value(v.type, given.get(v.key, v.init))
             inst.v.update(body_of(pou)[1])
             return inst
         inner = dict(scope)

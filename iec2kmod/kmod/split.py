@@ -188,7 +188,8 @@ def _type_defs(t, out, seen, project, sel=None):
             return
         seen.add(id(pou))
         if pou.standard:
-            out.append(f"standard {pou.name}")
+            # an instance that keeps its ENO is larger (codegen.std_eno_type)
+            out.append(f"standard {pou.name}" + (" ENO" if pou.keeps_eno else ""))
             return
         out.append("\n".join(pou_struct(pou, sel)))
         for v in pou.vars.values():

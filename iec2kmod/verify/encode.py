@@ -1073,8 +1073,8 @@ class Encoder:
         eno_val = None
         for cond, inst in place.instances():
             iv = inst.v
-            if en is not None and eno_key is not None and not pou.standard:
-                # an instance that keeps its ENO (checks/declare.implicit_eno)
+            if en is not None and eno_key is not None:
+                # an instance that keeps its ENO (checks/declare.fb_eno)
                 # gets FALSE from a call with EN = FALSE
                 off = land(land(g, cond), z3.Not(en))
                 if not z3.is_false(off):

@@ -441,6 +441,28 @@ def test_differential_edges_and_faults():
     _check([HERE / "diff" / "edges.st"], 40, [1, 2, 6, 11])
 
 
+def test_differential_eno_read():
+    """f.ENO read from outside: user and standard blocks, an element of an
+    array of instances by a variable index, EN FALSE and TRUE."""
+    _check([HERE / "diff" / "eno_read.st"], 30, [1, 2, 3])
+
+
+def test_eno_of_instances_is_proved(tmp_path, capsys, monkeypatch):
+    """An instance's ENO is that of its last call: FALSE after EN = FALSE
+    (a standard block's too), what the body set after EN = TRUE."""
+    monkeypatch.chdir(tmp_path)
+    src = HERE / "diff" / "eno_read.st"
+    rc, out, err = verify(capsys, src, "--depth", "4",
+                          "-p", "R.e.o1 = R.e.a",
+                          "-p", "R.e.o3 = (R.e.a XOR R.e.b)",
+                          "-p", "R.e.o2 = (R.e.b AND (R.e.i MOD 8) <= 5)",
+                          "-p", "R.e.o2")
+    assert rc == 3, out + err      # a property violated
+    lines = {ln.split()[1]: ln for ln in out.splitlines() if ln.strip().startswith("property")}
+    assert "proved" in lines["1"] and "proved" in lines["2"] and "proved" in lines["3"], out
+    assert "violated at cycle 1" in lines["4"], out
+
+
 def test_differential_event_tasks():
     _check([HERE / "diff" / "events.st"], 40, [1, 2])
 
