@@ -451,7 +451,9 @@ class SelectivePlan:
                 # too; the memory is tried first, then the inputs, so that
                 # what stays is what changes least (R_TRIG: Q, only on a rise)
                 sp = v.type.pou
-                fields = [(f"{member}.{field}", "iec_bool")
+                # (the runtime's struct is member fb of one that keeps ENO)
+                inner = "fb." if sp.keeps_eno else ""
+                fields = [(f"{member}.{inner}{field}", "iec_bool")
                           for _, field in _std_hidden(sp.name.upper())]
                 fields += [(f"{member}.{N.member(sp, f.name)}", f.type)
                            for f in sp.vars.values() if f.section == "VAR_INPUT"]
@@ -463,6 +465,8 @@ class SelectivePlan:
                 head, _, field = member.partition(".")
                 if head in names and field:
                     sp = names[head].type.pou
+                    if sp.keeps_eno and field.startswith("fb."):
+                        field = field[3:]
                     hidden = dict((f, h) for h, f in _std_hidden(sp.name.upper()))
                     leaf = hidden.get(field) or sp.vars[field.upper()].name
                     groups.append([f"$self.{names[head].name}.{leaf}"])

@@ -771,3 +771,39 @@ END_FUNCTION_BLOCK
     plan = SelectivePlan(res.project, "all")
     b = plan.blocks[res.project.pous["F"].key]
     assert plan._settle_refused(b) == "an in-out beside a body that writes its inputs"
+
+
+def test_instances_that_keep_their_eno(tmp_path):
+    """f.ENO read (checks/declare.fb_eno): the instances keep the ENO of
+    their last call, which the caller writes (TRUE before the body, FALSE
+    when EN = FALSE skips it) -- a user block (Latch, whose ENO the program
+    reads) and standard blocks inside it (R_TRIG, SR: the runtime's struct
+    inside one with ENO, compared field by field by rule 8).  Selective and
+    plain traces identical, and blocks skipped while the inputs stand."""
+    text = """
+FUNCTION_BLOCK Latch
+VAR_INPUT x, go : BOOL; END_VAR
+VAR_OUTPUT q, rise_eno, hold_eno : BOOL; END_VAR
+VAR t : R_TRIG; hold : SR; END_VAR
+t(EN := go, CLK := x);
+hold(EN := go, S1 := t.Q, R := NOT x);
+q := hold.Q1;
+rise_eno := t.ENO;
+hold_eno := hold.ENO;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL a, e : BOOL; le : BOOL; END_VAR
+VAR l : Latch; END_VAR
+l(EN := e, x := a, go := a OR e);
+le := l.ENO;
+END_PROGRAM
+""" + CONFIG.format(globals="a, e, le : BOOL;")
+    rows = [(0, "e", "TRUE"), (40, "a", "TRUE"), (150, "e", "FALSE"), (260, "e", "TRUE"),
+            (330, "a", "FALSE"), (420, "e", "FALSE")]
+    a, b = _both(tmp_path, text, rows, 500)
+    assert [b.values_at(t * MS)["le"] for t in (30, 200, 300, 490)] == \
+        [True, False, True, False]
+    assert b.values_at(100 * MS)["r.p.l.q"] is True, b.names
+    assert b.values_at(360 * MS)["r.p.l.rise_eno"] is True
+    assert _skipped(b) > 10, b.selective
