@@ -475,6 +475,11 @@ class Exporter:
         for param, value in ins:
             self.assign(self.name_of(inst.v[param.key], pou, value.pos),
                         self.expr(value, frame, param.type))
+        v_eno = fpou.var("ENO")
+        if v_eno is not None and v_eno.section == "VAR_OUTPUT":
+            # ENO is TRUE when the body starts (the body may set it FALSE);
+            # calls with EN are refused, so a standard block's stays TRUE
+            self.assign(self.name_of(inst.v[v_eno.key], pou, c.pos), "true")
         if fpou.standard:
             self.std_fb(fpou, inst, pou, c.pos)
         else:

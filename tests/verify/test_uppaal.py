@@ -43,6 +43,7 @@ CASES = {
     "traffic_light": (ROOT / "examples" / "traffic_light", 4, {"TON", "Task"}),
     "crossing_short_phases": (HERE / "broken" / "crossing_latched_green", 4, {"TON", "Task"}),
     "press_il": (HERE / "diff" / "press.il", 2, {"TON", "TP", "Task"}),
+    "eno_read": (HERE / "diff" / "eno_uppaal.st", 1, {"TON", "Task"}),
 }
 
 
