@@ -709,15 +709,12 @@ class PouCompiler:
         v_eno = pou.var("ENO")
         eno_key = v_eno.key if v_eno is not None and v_eno.section == "VAR_OUTPUT" else None
 
-        # an instance that keeps its ENO (checks/declare.fb_eno) gets FALSE
-        # from a call with EN = FALSE
-        eno_off = eno_key
-
         def call(env):
             inst = get_inst(env)
             if en is not None and not en(env):
-                if eno_off is not None:
-                    inst.v[eno_off] = False
+                if eno_key is not None:
+                    # an instance keeps its ENO (checks/declare.fb_eno)
+                    inst.v[eno_key] = False
                 if eno is not None:
                     eno(env, False)
                 return None
