@@ -184,7 +184,7 @@ def generate(project, name: str | None = None, selective=None) -> GeneratedC:
     inits = []
     for t in project.std_fbs.values():
         if t.pou.keeps_eno:
-            # first: a structure TYPE may hold such an instance
+            # before every struct: those of the POUs hold such instances
             struct, init = std_eno_type(t.pou)
             structs.insert(0, struct)
             inits.append(init)
