@@ -593,10 +593,11 @@ class BodyEmitter:
             base = f"(*{ptr})"
         else:
             base = self.var_access(inst)
-        # an instance that keeps its ENO gets FALSE from a call with EN =
-        # FALSE: the element it is is known before EN is evaluated (the
-        # order of the interpreter and of verify)
-        pre, lines = (lines, []) if eno_member and en_arg else ([], lines)
+        # the element of an array of instances is known (and its index
+        # checked) before EN is evaluated, whatever EN is: an index out of
+        # range faults with EN = FALSE too, and an instance that keeps its
+        # ENO gets FALSE (the order of the interpreter and of verify)
+        pre, lines = (lines, []) if en_arg else ([], lines)
         eno = None
         en = None
         for a in c.args:
