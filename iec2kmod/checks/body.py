@@ -22,7 +22,7 @@ from .. import ast
 from .calls import CallChecks
 from .expr import ExprChecks
 from .il import ILChecks
-from .settle import settle
+from .settle import settle_root
 from .sfc import SFCChecker
 from .symbols import EnumValue, POUInfo, Var
 from .types import ERROR, Elementary, EnumT, ErrorT, SubrangeT, is_bool, is_int
@@ -59,7 +59,7 @@ class BodyChecker(ExprChecks, CallChecks, ILChecks):
         (checks/settle.py): once the statements around them are checked,
         for check_assign gives an untyped value its target's type."""
         for e in self.roots:
-            settle(e)
+            settle_root(e)
         self.roots = []
 
     def _check(self):

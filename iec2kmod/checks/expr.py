@@ -184,8 +184,7 @@ class ExprChecks:
             v = _literal_value(e)
             if v is not None and not lo <= v <= hi:
                 self.error(e.pos, f"index {v} is out of bounds {lo}..{hi}")
-            if isinstance(it, LiteralT):
-                e.type = concrete(it)
+            # an untyped index takes its own type when settled (settle.settle_root)
         for e in indexes[len(t.dims):]:
             self.expr(e)
         return t.elem
