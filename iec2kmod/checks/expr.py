@@ -185,6 +185,7 @@ class ExprChecks:
             if v is not None and not lo <= v <= hi:
                 self.error(e.pos, f"index {v} is out of bounds {lo}..{hi}")
             # an untyped index takes its own type when settled (settle.settle_root)
+            self.own_roots.add(id(e))
         for e in indexes[len(t.dims):]:
             self.expr(e)
         return t.elem

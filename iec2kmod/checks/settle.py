@@ -38,6 +38,13 @@ default), each decided once in checks/ and read by every engine:
   * each literal argument of a call whose arguments are all untyped keeps
     its own value (``MAX(0, 4000000000)``: 4000000000 is a LINT where the
     call is computed without context: body._literal_arg_type);
+  * IL: a current result computed from untyped literals (``LD 2147483647
+    ADD 1``) takes the type of the variable it is stored in (``ST x``, x a
+    LINT: 2147483648), as the ST assignment ``x := 2147483647 + 1`` and
+    MatIEC's IL do, where the ST instructions that read it store into one
+    integer or real type (a comparison with a literal after them compares
+    in it); read by anything else it keeps the literal's own type
+    (il._type_literal_chains);
   * AND, OR, XOR and NOT (IL's too, LDN, STN) on untyped integer literals
     are computed in a bit string, DWORD, LWORD beyond 32 bits
     (types.concrete_bits), as SHL on a literal is: the integer default DINT
