@@ -48,10 +48,22 @@ default), each decided once in checks/ and read by every engine:
   * AND, OR, XOR and NOT (IL's too, LDN, STN) on untyped integer literals
     are computed in a bit string, DWORD, LWORD beyond 32 bits
     (types.concrete_bits), as SHL on a literal is: the integer default DINT
-    has no bitwise operations;
-  * an initial value is never typed here: its value is checks/fold.py's on
-    the literals, converted to the variable's type (interp/model.py;
-    codegen emits the folded constant)."""
+    has no bitwise operations; stored into a bit string, they and SHL, SHR,
+    ROL, ROR on an untyped literal are computed in it (``l := SHL(1, 40)``
+    into an LWORD: 2**40; ``b := NOT 0`` into a BYTE: 255), as MatIEC
+    computes them, and a literal the bit string cannot hold is refused
+    (expr.check_assign);
+  * ABS of an untyped literal is the literal of its absolute value (ABS(-5)
+    into a BYTE: 5, computed exactly as 1 + 2 into a BYTE is);
+  * an initial value is the value the assignment of the same expression to
+    the variable stores: checks/consts.py types a copy of it as that
+    statement (the variable's type its context), settles it here and folds
+    it in its types (fold.settled); where that differs from the exact fold
+    of its literals (``r : LREAL := 7 / 2``: 3.5; ``t : TIME := T#1s * 2``)
+    the declaration holds the literal of the value, which every back end
+    initialises from.  An initial value that names a constant is folded
+    exactly; a call in an initial value is refused (a constant expression
+    has none; MatIEC refuses any expression there)."""
 
 from __future__ import annotations
 
