@@ -9,6 +9,7 @@ from __future__ import annotations
 from .. import ast
 from ..diagnostics import Diagnostics
 from . import stdlib
+from .settle import value_type, widest
 from .symbols import Var
 from .types import (BOOL, ERROR, Elementary, ErrorT, FBType, LiteralT, Type, common, concrete,
                     is_bit, literal_fits)
@@ -252,6 +253,11 @@ class ILChecks:
                 i.std, i.sig = f, stdlib.call_types(f, BOOL)
             except stdlib.CallError:     # not elementary: compared as values (interp)
                 i.sig = (BOOL, [concrete(common(cr, t))] * 2)
+            if type(cr) is LiteralT and type(t) is LiteralT:
+                # two literals (LD 3000000000 GT 0): compared in a type that
+                # holds both, as in ST (settle.widest)
+                w = widest([value_type(cr.value), value_type(t.value)])
+                i.sig = (BOOL, [w, w])
             return BOOL
         self.error(pos, f"{op}( ... ) is not a deferrable operation")
         return ERROR
