@@ -302,7 +302,7 @@ def _type_literal_chains(instrs):
 
     def close():
         types = {id(concrete(st.operand.type)): concrete(st.operand.type) for st in stores}
-        if chain and len(types) == 1:
+        if len(chain) > 1 and len(types) == 1:     # LD 99 ST i alone computes nothing
             tt = next(iter(types.values()))
             if isinstance(tt, Elementary) and tt.cat in ("sint", "uint", "real") and all(
                     c.op == "LD" or tt.cat in stdlib.NUMERIC_CONTEXT.get(c.std.family, ())
