@@ -275,7 +275,7 @@ class Constants:
                 self.error(src, init.pos, str(exc))
                 return init
         if typed is not None and not isinstance(typed[1], LiteralT) and (
-                not _same_value(typed[0], v, t) or t.base.cat in ("time", "date", "tod", "dt")):
+                not same_value(typed[0], v, t) or t.base.cat in ("time", "date", "tod", "dt")):
             # a typed expression (T#1s * 2, REAL#1.0 / 3.0): its value in its
             # type, stored as the assignment stores it
             v = typed[0]
@@ -301,7 +301,7 @@ class Constants:
             init = folded
         before = len(self.diags.errors)
         self.check_const_fits(v, init, t, src)
-        if typed is not None and not _same_value(typed[0], v, t) and \
+        if typed is not None and not same_value(typed[0], v, t) and \
                 len(self.diags.errors) == before:
             # untyped literals (7 / 2 into an LREAL: 3.5, not 3): the exact
             # value fits, the variable holds the assignment's
@@ -439,7 +439,7 @@ def _bit_operand(what, v):
         raise ConstError(why)
 
 
-def _same_value(typed, v, t):
+def same_value(typed, v, t):
     """Whether the exact fold *v* stored into *t* is the assignment's value
     *typed* (-2.9 into a REAL: its binary32 value either way): the
     declaration then keeps its expression, and the generated code its text."""
