@@ -7,7 +7,10 @@ bounds subranges, numbers enumerations and gives CASE labels and FOR steps
 their value; a named constant is looked up in the scope of the POU or the
 configuration being checked (``ConstScope``).  An initial value is such an
 expression (folded to a literal when it names a constant) or an array or
-structure initializer, checked against the declared type.
+structure initializer, checked against the declared type; its value is the
+one the assignment of the same expression to the variable stores
+(``assigned``, checks/settle.py's rules: ``r : LREAL := 7 / 2`` is 3.5), a
+program input's constant connection's too (checks/config.py).
 
 ``Constants`` is mixed into checks.declare.Declarer, whose ``error``,
 ``warning``, ``lookup_type`` and ``enum_values`` it uses; its own state is

@@ -61,7 +61,8 @@ default), each decided once in checks/ and read by every engine:
     it in its types (fold.settled); where that differs from the exact fold
     of its literals (``r : LREAL := 7 / 2``: 3.5; ``t : TIME := T#1s * 2``)
     the declaration holds the literal of the value, which every back end
-    initialises from.  An initial value that names a constant is folded
+    initialises from; a program input's constant connection (``PROGRAM p
+    WITH t : P (r := 7 / 2)``) likewise.  An initial value that names a constant is folded
     exactly; a call in an initial value is refused (a constant expression
     has none; MatIEC refuses any expression there)."""
 
