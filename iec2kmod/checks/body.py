@@ -22,7 +22,7 @@ from .. import ast
 from .calls import CallChecks
 from .expr import ExprChecks
 from .il import ILChecks
-from .settle import settle
+from .settle import settle, settle_root
 from .sfc import SFCChecker
 from .symbols import EnumValue, POUInfo, Var
 from .types import ERROR, Elementary, EnumT, ErrorT, SubrangeT, is_bool, is_int
@@ -39,6 +39,7 @@ class BodyChecker(ExprChecks, CallChecks, ILChecks):
         self.loop_depth = 0
         self.depth = 0          # of expr() calls under way
         self.roots: list = []   # expressions checked at depth 0, settled at the end
+        self.own_roots: set = set()     # ids of those used in their own type (settle_root)
 
     def error(self, pos, msg):
         self.diags.error(self.src, pos, msg)
@@ -59,8 +60,12 @@ class BodyChecker(ExprChecks, CallChecks, ILChecks):
         (checks/settle.py): once the statements around them are checked,
         for check_assign gives an untyped value its target's type."""
         for e in self.roots:
-            settle(e)
+            if id(e) in self.own_roots:
+                settle_root(e)      # a CASE selector, an index: no context types it
+            else:
+                settle(e)
         self.roots = []
+        self.own_roots = set()
 
     def _check(self):
         node = self.pou.node
@@ -122,6 +127,7 @@ class BodyChecker(ExprChecks, CallChecks, ILChecks):
 
     def case(self, s):
         st = self.expr(s.selector)
+        self.own_roots.add(id(s.selector))
         if not isinstance(st, ErrorT) and not (is_int(st) or isinstance(st, EnumT)):
             self.error(s.selector.pos, f"CASE selector must be an integer or an enumeration, "
                                        f"not {st.name}")

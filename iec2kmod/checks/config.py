@@ -12,12 +12,13 @@ from __future__ import annotations
 
 from .. import ast
 from .body import BodyChecker
-from .consts import ConstError
+from . import fold
+from .consts import ConstError, same_value
 from .declare import fb_eno
 from .located import LocatedRules, check_address_type
 from .symbols import Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo
 from .tasks import TaskChecks
-from .types import ERROR, ArrayT, ErrorT, FBType, StructT, assignable, identical
+from .types import ERROR, ArrayT, ErrorT, FBType, StructT, SubrangeT, assignable, identical
 
 
 class _Scope:
@@ -272,6 +273,17 @@ class ConfigChecker(TaskChecks, LocatedRules):
             if not isinstance(t, ErrorT) and not assignable(t, param.type):
                 self.error(src, value.pos, f"input '{param.name}' is {param.type.name}; the "
                                            f"value is {t.name}")
+            elif isinstance(value, (ast.UnOp, ast.BinOp)):
+                # a constant expression: the value its assignment to the input
+                # stores (p (r := 7 / 2), r an LREAL: 3.5), as an initial value
+                typed = self.decl.assigned(value, param.type, src)
+                if typed is not None and not same_value(typed[0], value.const, param.type):
+                    lit = self.decl.folded(typed[0], value, param.type)
+                    if lit is not None:
+                        lit.type = param.type.base if isinstance(param.type, SubrangeT) \
+                            else param.type
+                        lit.const = fold.literal(lit)
+                        value = conn.value = lit
         (inst.inputs if conn.direction == "in" else inst.outputs).append((param, value))
 
     def connection_value_type(self, value, r, cfg):

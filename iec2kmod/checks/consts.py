@@ -7,7 +7,10 @@ bounds subranges, numbers enumerations and gives CASE labels and FOR steps
 their value; a named constant is looked up in the scope of the POU or the
 configuration being checked (``ConstScope``).  An initial value is such an
 expression (folded to a literal when it names a constant) or an array or
-structure initializer, checked against the declared type.
+structure initializer, checked against the declared type; its value is the
+one the assignment of the same expression to the variable stores
+(``assigned``, checks/settle.py's rules: ``r : LREAL := 7 / 2`` is 3.5), a
+program input's constant connection's too (checks/config.py).
 
 ``Constants`` is mixed into checks.declare.Declarer, whose ``error``,
 ``warning``, ``lookup_type`` and ``enum_values`` it uses; its own state is
@@ -15,12 +18,14 @@ the scope of the constants in view."""
 
 from __future__ import annotations
 
+import copy
 from contextlib import contextmanager
 
 from .. import ast
 from . import fold
-from .types import (ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, FBType, StringT, StructT,
-                    SubrangeT, assignable, not_bit_value)
+from .expr import _literal_bits
+from .types import (ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, ErrorT, FBType, LiteralT,
+                    StringT, StructT, SubrangeT, assignable, not_bit_value)
 
 
 class ConstError(Exception):
@@ -258,6 +263,7 @@ class Constants:
                 init.fields[i] = (fname, self.check_initializer(fval, f[1], src), fpos)
             return init
         # an expression: a constant of an assignable type
+        typed = self.assigned(init, t, src)
         try:
             v = self.const_value(init, src, "initial value")
         except ConstError as exc:
@@ -266,9 +272,19 @@ class Constants:
                 return init
             if isinstance(init, ast.Lit) and init.kind in ("string", "wstring"):
                 v = init.value
+            elif typed is not None and not isinstance(typed[1], LiteralT):
+                v = None        # NOT 16#0F AND 16#3C into a BYTE: only its bits are a value
             else:
                 self.error(src, init.pos, str(exc))
                 return init
+        if typed is not None and not isinstance(typed[1], LiteralT) and (
+                not same_value(typed[0], v, t) or t.base.cat in ("time", "date", "tod", "dt")):
+            # a typed expression (T#1s * 2, REAL#1.0 / 3.0): its value in its
+            # type, stored as the assignment stores it
+            v = typed[0]
+            init = self.folded(v, init, t) or init
+            self.check_const_fits(v, init, t, src)
+            return init
         bitwise = _bitwise_op(init)
         if bitwise is not None and not isinstance(v, bool):
             base = getattr(t, "base", None)
@@ -286,8 +302,48 @@ class Constants:
                                           f"cannot initialize {t.name}")
                 return init
             init = folded
+        before = len(self.diags.errors)
         self.check_const_fits(v, init, t, src)
+        if typed is not None and not same_value(typed[0], v, t) and \
+                len(self.diags.errors) == before:
+            # untyped literals (7 / 2 into an LREAL: 3.5, not 3): the exact
+            # value fits, the variable holds the assignment's
+            init = self.folded(typed[0], init, t) or init
         return init
+
+    def assigned(self, init, t, src):
+        """(value, type) of initial value *init* of a variable of type *t*
+        as the assignment of the same expression stores it (*init* itself
+        untouched: check_initializer replaces it by the literal of that
+        value where it differs from the exact fold): typed by the
+        statement checker, an untyped one with *t* as its context, settled
+        (checks/settle.py) and folded in its types (fold.settled); None for
+        a single literal, an expression that names a constant or an
+        enumeration value (folded exactly: its value does not depend on a
+        context) or one the checker refuses (the errors are this class's)."""
+        if not isinstance(init, (ast.UnOp, ast.BinOp)) or not _literals_only(init) or \
+                not isinstance(t.base, Elementary):
+            return None
+        from ..diagnostics import Diagnostics
+        from .body import BodyChecker
+        from .settle import settle
+        from .symbols import POUInfo
+        silent = Diagnostics()
+        checker = BodyChecker(self.p, self, silent, POUInfo("PROGRAM", "<initial value>", src=src))
+        init = copy.deepcopy(init)      # typed aside: the declaration keeps its own
+        vt = checker.expr(init)
+        if silent.errors or isinstance(vt, ErrorT):
+            return None
+        checker.check_assign(vt, t, init, None)     # the statement's rule, its typing
+        if silent.errors:
+            return None
+        vt = init.type if _literal_bits(init) else vt
+        settle(init)
+        v = fold.settled(init)
+        if v is None:
+            return None
+        v = fold.convert(v, t)
+        return (v, vt) if v is not None else None
 
     def names_constant(self, expr) -> bool:
         """Whether a constant expression names a constant of the scope."""
@@ -384,6 +440,29 @@ def _bit_operand(what, v):
     why = not_bit_value(what, [v])
     if why is not None:
         raise ConstError(why)
+
+
+def same_value(typed, v, t):
+    """Whether the exact fold *v* stored into *t* is the assignment's value
+    *typed* (-2.9 into a REAL: its binary32 value either way): the
+    declaration then keeps its expression, and the generated code its text."""
+    if v is None:
+        return False
+    try:
+        return fold.convert(v, t) == typed
+    except (ArithmeticError, TypeError, ValueError):
+        return False
+
+
+def _literals_only(e):
+    """Constant expression *e* is made of literals and operators only."""
+    if isinstance(e, ast.Lit):
+        return e.kind in fold.NUMERIC
+    if isinstance(e, ast.UnOp):
+        return _literals_only(e.operand)
+    if isinstance(e, ast.BinOp):
+        return _literals_only(e.left) and _literals_only(e.right)
+    return False
 
 
 def _bitwise_op(e):

@@ -37,6 +37,19 @@ class ExprChecks:
         if isinstance(tt, FBType) or isinstance(vt, FBType):
             self.error(value.pos, "function block instances cannot be assigned")
             return
+        if isinstance(tt.base, Elementary) and tt.base.cat == "bit" and \
+                isinstance(value, (ast.UnOp, ast.BinOp, ast.Call)) and _literal_bits(value):
+            # NOT, AND, OR, XOR, SHL, SHR, ROL, ROR on untyped literals into a
+            # bit string: computed in it (l := SHL(1, 40) into an LWORD,
+            # b := NOT 0 into a BYTE: 255), as MatIEC computes them
+            # (SHL__LWORD__LWORD__SINT), where every literal fits it
+            hi = tt.base.range[1]
+            bad = next((v for v in _bit_literal_values(value) if not 0 <= v <= hi), None)
+            if bad is not None:
+                self.error(value.pos, f"{bad} is out of range for {tt.name}")
+                return
+            _bits_in(value, tt.base)
+            return
         bcd = stdlib.bcd_by_context(getattr(value, "target", None), tt)
         if bcd is not None and isinstance(value, ast.Call):
             value.target = bcd
@@ -185,8 +198,8 @@ class ExprChecks:
             v = _literal_value(e)
             if v is not None and not lo <= v <= hi:
                 self.error(e.pos, f"index {v} is out of bounds {lo}..{hi}")
-            if isinstance(it, LiteralT):
-                e.type = concrete(it)
+            # an untyped index takes its own type when settled (settle.settle_root)
+            self.own_roots.add(id(e))
         for e in indexes[len(t.dims):]:
             self.expr(e)
         return t.elem
@@ -387,6 +400,66 @@ class ExprChecks:
             self.error(e.pos, f"unary {e.op} needs a number or TIME, not {t.name}")
             return ERROR
         return t.base if isinstance(t, SubrangeT) else t
+
+
+_SHIFTS = ("SHL", "SHR", "ROL", "ROR")
+
+
+def _untyped_int(e):
+    return isinstance(e, ast.Lit) and e.kind == "int" and not e.type_name
+
+
+def _shift_args(e):
+    """(IN, N) of a call of SHL, SHR, ROL or ROR, else None."""
+    if isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) and \
+            e.target.family in _SHIFTS:
+        pos = [a.value for a in e.args if a.kind == "pos" or
+               (a.name or "").upper() not in ("EN", "ENO")]
+        if len(pos) == 2 and len(pos) == len(e.args):     # no EN, no ENO
+            return pos
+    return None
+
+
+def _literal_bits(e, root=True):
+    """Whether e is NOT, AND, OR, XOR, SHL, SHR, ROL or ROR on untyped integer
+    literals (the bit string it is computed in is its context's)."""
+    if not root and _untyped_int(e):
+        return True
+    if isinstance(e, ast.UnOp):
+        return e.op == "NOT" and _literal_bits(e.operand, False)
+    if isinstance(e, ast.BinOp):
+        return e.op in LOGIC and _literal_bits(e.left, False) and _literal_bits(e.right, False)
+    args = _shift_args(e)
+    return args is not None and _literal_bits(args[0], False)
+
+
+def _bit_literal_values(e):
+    """The values of the literals a bit string computes _literal_bits' e on
+    (a shift's N is a count, not one)."""
+    if _untyped_int(e):
+        return [e.value]
+    if isinstance(e, ast.UnOp):
+        return _bit_literal_values(e.operand)
+    if isinstance(e, ast.BinOp):
+        return _bit_literal_values(e.left) + _bit_literal_values(e.right)
+    return _bit_literal_values(_shift_args(e)[0])
+
+
+def _bits_in(e, t):
+    """Types _literal_bits' e in bit string t."""
+    if _untyped_int(e):
+        e.type = t          # a shift's IN (a DWORD by the call's parameter type)
+        return
+    e.type = t
+    if isinstance(e, ast.UnOp):
+        _bits_in(e.operand, t)
+    elif isinstance(e, ast.BinOp):
+        _bits_in(e.left, t)
+        _bits_in(e.right, t)
+    else:
+        arg, n = _shift_args(e)
+        _bits_in(arg, t)
+        e.target = stdlib.resolve(e.target.name, [t, n.type])
 
 
 def _literal_value(e):

@@ -9,8 +9,10 @@ from __future__ import annotations
 from .. import ast
 from ..diagnostics import Diagnostics
 from . import stdlib
+from .settle import value_type, widest
 from .symbols import Var
-from .types import BOOL, ERROR, ErrorT, FBType, LiteralT, common, concrete, is_bit, literal_fits
+from .types import (BOOL, ERROR, Elementary, ErrorT, FBType, LiteralT, Type, common, concrete,
+                    is_bit, literal_fits)
 
 IL_LOGIC = {"AND": "AND", "ANDN": "AND", "OR": "OR", "ORN": "OR", "XOR": "XOR", "XORN": "XOR"}
 IL_ARITH = {"ADD": "ADD", "SUB": "SUB", "MUL": "MUL", "DIV": "DIV", "MOD": "MOD"}
@@ -30,6 +32,7 @@ class ILChecks:
         self.il_list(instrs, None)
         self.diags = real_diags
         self.il_list(instrs, None)
+        _type_literal_chains(instrs)
 
     def _collect_labels(self, instrs, labels):
         for i in instrs:
@@ -250,6 +253,11 @@ class ILChecks:
                 i.std, i.sig = f, stdlib.call_types(f, BOOL)
             except stdlib.CallError:     # not elementary: compared as values (interp)
                 i.sig = (BOOL, [concrete(common(cr, t))] * 2)
+            if type(cr) is LiteralT and type(t) is LiteralT:
+                # two literals (LD 3000000000 GT 0): compared in a type that
+                # holds both, as in ST (settle.widest)
+                w = widest([value_type(cr.value), value_type(t.value)])
+                i.sig = (BOOL, [w, w])
             return BOOL
         self.error(pos, f"{op}( ... ) is not a deferrable operation")
         return ERROR
@@ -273,6 +281,78 @@ class ILChecks:
             return self.call(c, statement=False)
         self.error(i.pos, f"unknown IL operator or function '{i.fn}'")
         return ERROR
+
+
+def _type_literal_chains(instrs):
+    """An untyped current result takes the type of the variable it is stored
+    in, as an untyped ST expression takes its target's (settle.py): ``LD
+    2147483647 ADD 1 ST x`` into a LINT adds in LINT (2147483648), as
+    ``x := 2147483647 + 1`` does and as MatIEC computes it (its IL default
+    variable of the store's type); it was computed in the literal's own type
+    (DINT: -2147483648).  A chain is an LD of an untyped literal and the
+    arithmetic on untyped operands after it, on a straight line (no label);
+    it takes the type when every ST that reads it stores into the same
+    integer or real type and nothing else reads it but a comparison with an
+    untyped literal after the stores (compared in that type, as MatIEC
+    does); read by anything else (a function, a jump, a label's other
+    paths) it keeps the literal's own type."""
+    chain = []
+    stores = []
+    compare = []
+
+    def close():
+        types = {id(concrete(st.operand.type)): concrete(st.operand.type) for st in stores}
+        if len(chain) > 1 and len(types) == 1:     # LD 99 ST i alone computes nothing
+            tt = next(iter(types.values()))
+            if isinstance(tt, Elementary) and tt.cat in ("sint", "uint", "real") and all(
+                    c.op == "LD" or tt.cat in stdlib.NUMERIC_CONTEXT.get(c.std.family, ())
+                    for c in chain):
+                try:        # a comparison after the stores compares in their type
+                    cmp = [(c, stdlib.resolve(c.op, [tt, c.operand.type])) for c in compare]
+                except stdlib.CallError:
+                    cmp = None
+                if cmp is not None:
+                    for c in chain:
+                        c.cr_out = tt
+                        if c.op != "LD":
+                            c.sig = stdlib.call_types(c.std, tt)
+                    for c in chain[1:] + stores:
+                        c.cr_in = tt
+                    for c in stores:
+                        c.cr_out = tt
+                    for c, f in cmp:
+                        c.cr_in = tt
+                        c.std, c.sig = f, stdlib.call_types(f, BOOL)
+        chain.clear()
+        stores.clear()
+        compare.clear()
+
+    for i in instrs:
+        if i.op == "LD" and not i.deferred and type(i.cr_out) is LiteralT and \
+                i.operand is not None and type(i.operand.type) is LiteralT:
+            close()
+            chain.append(i)
+        elif chain and not stores and not i.label and i.op in IL_ARITH and not i.deferred \
+                and type(i.cr_in) is LiteralT and type(i.cr_out) is LiteralT and \
+                i.operand is not None and type(i.operand.type) is LiteralT and \
+                getattr(i, "std", None) is not None:
+            chain.append(i)
+        elif chain and not i.label and i.op == "ST" and \
+                isinstance(getattr(i.operand, "type", None), Type):
+            stores.append(i)
+        elif chain and stores and not i.label and i.op in IL_COMPARE and not i.deferred \
+                and i.operand is not None and type(i.operand.type) is LiteralT:
+            compare.append(i)       # LD 1 ADD 2 ST x GT 0: compared in x's type (MatIEC)
+            close()
+        elif i.op == "LD" and not i.label:
+            close()             # a new current result: the chain's stores are all
+        else:
+            # anything else reads or carries the current result (a
+            # comparison, a function, a jump, a label's other paths): the
+            # chain keeps the literal's own type
+            chain.clear()
+            stores.clear()
+    close()
 
 
 def _join_cr(label, a, b):

@@ -24,33 +24,61 @@ default), each decided once in checks/ and read by every engine:
     context's type (``l := 2147483647 + 1`` into a LINT: 2147483648);
     MUX's inputs in its result's type, K in its own (stdlib.call_types);
   * without one (a comparison of two untyped expressions, an index, a CASE
-    selector, a FOR bound of an untyped control expression), ADD, SUB, MUL,
-    DIV, MOD and EXPT are computed exactly on the values, any other family
-    in the literal's own type: DINT, LINT beyond DINT's range, LREAL for a
-    real literal (types.concrete); two untyped operands compared are
-    compared in DINT (their common type carries no value), LREAL if one is
-    real;
+    selector), ADD, SUB, MUL, DIV, MOD and EXPT are computed exactly on the
+    values, any other family in the type that holds its literals' values
+    (``own_type``: the narrowest of DINT, LINT, ULINT, LREAL for a real;
+    ``MAX(0, 4000000000)`` in LINT); an untyped index or CASE selector is
+    used in its own type (``settle_root``); two untyped operands are
+    compared in the type that holds both (``3000000000 > 0`` in LINT,
+    ``-1 < 16#FFFFFFFFFFFFFFFF`` in LREAL: no integer type holds both), as
+    MatIEC compares them (C on the values; LWORD for MAX, LIMIT);
   * a context the family cannot compute in (a bit string, BOOL, MOD into a
     REAL: stdlib.NUMERIC_CONTEXT) is no context: the exact value is
     converted to it as a literal is (``b := 1 + 2`` into a BYTE: 3);
   * each literal argument of a call whose arguments are all untyped keeps
     its own value (``MAX(0, 4000000000)``: 4000000000 is a LINT where the
     call is computed without context: body._literal_arg_type);
+  * IL: a current result computed from untyped literals (``LD 2147483647
+    ADD 1``) takes the type of the variable it is stored in (``ST x``, x a
+    LINT: 2147483648), as the ST assignment ``x := 2147483647 + 1`` and
+    MatIEC's IL do, where the ST instructions that read it store into one
+    integer or real type (a comparison with a literal after them compares
+    in it); read by anything else it keeps the literal's own type
+    (il._type_literal_chains);
   * AND, OR, XOR and NOT (IL's too, LDN, STN) on untyped integer literals
     are computed in a bit string, DWORD, LWORD beyond 32 bits
     (types.concrete_bits), as SHL on a literal is: the integer default DINT
-    has no bitwise operations;
-  * an initial value is never typed here: its value is checks/fold.py's on
-    the literals, converted to the variable's type (interp/model.py;
-    codegen emits the folded constant)."""
+    has no bitwise operations; stored into a bit string, they and SHL, SHR,
+    ROL, ROR on an untyped literal are computed in it (``l := SHL(1, 40)``
+    into an LWORD: 2**40; ``b := NOT 0`` into a BYTE: 255), as MatIEC
+    computes them, and a literal the bit string cannot hold is refused
+    (expr.check_assign);
+  * ABS of an untyped literal is the literal of its absolute value (ABS(-5)
+    into a BYTE: 5, computed exactly as 1 + 2 into a BYTE is);
+  * an initial value is the value the assignment of the same expression to
+    the variable stores: checks/consts.py types a copy of it as that
+    statement (the variable's type its context), settles it here and folds
+    it in its types (fold.settled); where that differs from the exact fold
+    of its literals (``r : LREAL := 7 / 2``: 3.5; ``t : TIME := T#1s * 2``)
+    the declaration holds the literal of the value, which every back end
+    initialises from; a program input's constant connection (``PROGRAM p
+    WITH t : P (r := 7 / 2)``) likewise.  An initial value that names a constant is folded
+    exactly; a call in an initial value is refused (a constant expression
+    has none; MatIEC refuses any expression there)."""
 
 from __future__ import annotations
 
 from .. import ast
 from . import stdlib
-from .types import BOOL, LiteralT, common, concrete
+from .types import BOOL, ELEMENTARY, LREAL, AnyIntResult, LiteralT, common, concrete
 
 COMPARE = ("=", "<>", "<", ">", "<=", ">=")
+# the integer types an untyped value is computed in where no context decides,
+# the narrowest that holds it first
+_OWN_INTS = [ELEMENTARY[n] for n in ("DINT", "LINT", "ULINT")]
+# the standard functions whose result is one of their (untyped) arguments'
+# values, or made of them: computed in a type that holds them all
+VALUE_FAMILIES = ("ABS", "MAX", "MIN", "LIMIT", "SEL", "MUX", "MOVE") + stdlib.LITERAL_FAMILIES
 
 
 def settle(e, want=None) -> None:
@@ -62,7 +90,10 @@ def settle(e, want=None) -> None:
             return
         if e.op in COMPARE:
             c = common(e.left.type, e.right.type)
-            w = concrete(c) if c is not None else None
+            if isinstance(c, LiteralT):     # two untyped operands: a type that holds both
+                w = widest([own_type(e.left), own_type(e.right)])
+            else:
+                w = concrete(c) if c is not None else None
             e.sig = (BOOL, [w, w])      # the operands compared in their common type
         else:                           # AND OR XOR
             w = concrete(e.type) if e.type is not None else None
@@ -90,13 +121,74 @@ def settle(e, want=None) -> None:
         for kind, val, _ in e.accessors:
             if kind == "index":
                 for i in val:
-                    settle(i)
+                    settle_root(i)
+
+
+def settle_root(e) -> None:
+    """Settles an expression no context types (a statement's value, an
+    index, a CASE selector): an untyped one takes its own type
+    (``own_type``), the type the back ends compute and use it in."""
+    if isinstance(e.type, LiteralT):
+        e.type = own_type(e)
+    settle(e)
+
+
+def own_type(e):
+    """The type an untyped expression is computed in where no context
+    decides: the narrowest of DINT, LINT and ULINT that holds its value
+    (LREAL for a real), its operands' where the checker has no value (a
+    standard call on literals, ``MAX(0, 4000000000)``: LINT); a typed
+    expression's own type."""
+    t = e.type
+    if not isinstance(t, LiteralT):
+        return t
+    v = e.const
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        return value_type(v)
+    args = []
+    if isinstance(e, ast.BinOp):
+        args = [e.left, e.right]
+    elif isinstance(e, ast.UnOp):
+        args = [e.operand]
+    elif isinstance(e, ast.Call) and isinstance(e.target, stdlib.StdFunc) and \
+            e.target.family in VALUE_FAMILIES:
+        args = [a.value for a in e.args if a.value is not None and (
+            a.kind == "pos" or (a.name or "").upper() not in ("EN", "ENO"))]
+        if e.target.family == "MUX":
+            args = args[1:]         # K selects, its value is not the result's
+    own = [own_type(a) for a in args if isinstance(a.type, LiteralT)]
+    if t.cat == "real":
+        return LREAL
+    return widest(own) if own and not isinstance(t, AnyIntResult) else concrete(t)
+
+
+def value_type(v):
+    """The type an untyped literal value is computed in by itself: LREAL
+    for a real, else the narrowest of DINT, LINT, ULINT that holds it (LREAL
+    where none does)."""
+    if isinstance(v, float):
+        return LREAL
+    return next((t for t in _OWN_INTS if t.range[0] <= v <= t.range[1]), LREAL)
+
+
+def widest(types):
+    """The type that holds values of all *types* (DINT, LINT, ULINT, LREAL:
+    own_type's): LREAL for a real or where no integer type holds them all
+    (a negative and a ULINT beyond LINT)."""
+    if any(t.cat == "real" for t in types):
+        return LREAL
+    lo = min(t.range[0] for t in types)
+    hi = max(t.range[1] for t in types)
+    return next((t for t in _OWN_INTS if t.range[0] <= lo and hi <= t.range[1]), LREAL)
 
 
 def _settle_call(e, fn, args, want) -> None:
     ctx = e.type if e.type is not None and not isinstance(e.type, LiteralT) else want
     if ctx is not None and isinstance(ctx, LiteralT):
         ctx = None
+    if ctx is None and isinstance(fn.result, LiteralT) and fn.family in VALUE_FAMILIES and \
+            fn.family not in stdlib.LITERAL_FAMILIES:
+        ctx = own_type(e)       # MAX(0, 4000000000) alone: in LINT, which holds its values
     res, ptypes = stdlib.call_types(fn, ctx)
     e.sig = (res, ptypes)
     exact = isinstance(res, LiteralT)

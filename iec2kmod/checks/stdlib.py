@@ -165,6 +165,8 @@ def _expt(name, types):
 def _abs(name, types):
     t = types[0]
     _need(is_num, t, "a number (ANY_NUM)", 0, name)
+    if type(t) is LiteralT:     # ABS(-5): the literal 5, which a BYTE holds
+        return StdFunc(name, name, [t], LiteralT(t.cat, abs(t.value)))
     return StdFunc(name, name, [t], t)
 
 

@@ -550,7 +550,7 @@ class ExprEmitter:
                 out = f"({sel} == {i} ? {vs[i]} : {out})"
             return out
         if fam in stdlib.COMPARE_FAMILIES:
-            c = concrete(pts[0])
+            c = concrete(sig[1][0])     # the checker's (two literals: a type holding both)
             sym = {"GT": ">", "GE": ">=", "EQ": "==", "LE": "<=", "LT": "<", "NE": "!="}[fam]
             if isinstance(c, StringT):
                 vs = [self.strv(f, a) for a in args]

@@ -318,8 +318,11 @@ class PouCompiler:
             return e.value
         else:
             v = e.value
+        # an untyped literal is its exact value (16#FFFFFFFFFFFFFFFF is no
+        # LINT): its context converts it (expr_as)
         c = implicit(LiteralT("real" if isinstance(v, float) else "int", v)
-                     if k in ("int", "real") else t, t) if t is not None else None
+                     if k in ("int", "real") else t, t) \
+            if t is not None and not isinstance(t, LiteralT) else None
         if k in ("int", "real") and t is not None and not isinstance(t, LiteralT):
             b = base_of(t)
             if isinstance(b, Elementary) and b.cat == "real":

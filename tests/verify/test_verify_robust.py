@@ -245,6 +245,64 @@ def test_calls_on_untyped_literals(tmp_path, capsys):
     assert not diffs and done == 3, diffs
 
 
+UNTYPED_IN_CONTEXT = """
+    FUNCTION_BLOCK Il
+    VAR_OUTPUT x : LINT; END_VAR
+        LD 2147483647
+        ADD 1
+        ST x
+    END_FUNCTION_BLOCK
+    PROGRAM P
+    VAR_OUTPUT
+        b1, b2, b3 : BOOL; j : DINT; x : LINT; w : WORD; l : LWORD; y : BYTE;
+        r0 : LREAL := 7 / 2; t0 : TIME := T#1s * 2; l0 : LWORD := NOT 0;
+    END_VAR
+    VAR f : Il; END_VAR
+    b1 := 3000000000 > 0;
+    b2 := 4294967296 = 0;
+    b3 := -1 < 16#FFFFFFFFFFFFFFFF;
+    CASE MAX(4294967297, 0) OF
+        1: j := 1;
+    ELSE
+        j := 2;
+    END_CASE;
+    f();
+    x := f.x;
+    w := SHL(1, 20);
+    l := SHL(1, 40);
+    y := NOT 0;
+    END_PROGRAM
+    CONFIGURATION C
+        RESOURCE R ON CPU0
+            TASK tk (INTERVAL := T#10ms, PRIORITY := 1);
+            PROGRAM p WITH tk : P;
+        END_RESOURCE
+    END_CONFIGURATION
+"""
+
+
+def test_untyped_literals_in_context(tmp_path, capsys):
+    # issue 24 item 3 (types3): verify follows the checker's types as C and
+    # the interpreter do: untyped comparisons in a type that holds both
+    # (3000000000 > 0 was FALSE: DINT), MAX of literals alone as a CASE
+    # selector in LINT, an IL current result of literals in its store's
+    # type, SHL and NOT of literals in the bit string they are stored in,
+    # initial values as the assignment of the same expression
+    proj = project(tmp_path, UNTYPED_IN_CONTEXT)
+    props = ["b1 AND NOT b2 AND b3", "j = 2", "x = 2147483648", "w = 0", "l = 1099511627776",
+             "y = 255", "r0 = 3.5", "t0 = T#2s", "l0 = 16#FFFFFFFFFFFFFFFF"]
+    args = ["verify", proj, "--instance", "p", "--depth", "2", "--cex-dir", tmp_path]
+    for p in props:
+        args += ["-p", p]
+    rc, out, err = run(capsys, *args)
+    assert "internal error" not in err, err
+    assert rc == 0, out + err
+    assert out.count("proved") == len(props) + 1, out
+    import diffverify
+    diffs, done = diffverify.run(front(proj), 3, 1)
+    assert not diffs and done == 3, diffs
+
+
 # ---------------------------------------------------------------- edge memories not yet created
 EDGE_FB = """
     FUNCTION_BLOCK Det
