@@ -14,7 +14,7 @@ from .. import ast
 from .body import BodyChecker
 from . import fold
 from .consts import ConstError, same_value
-from .declare import fb_eno
+from .eno import fb_eno
 from .located import LocatedRules, check_address_type
 from .symbols import Binding, ConfigInfo, Each, POUInfo, ProgramInstance, ResourceInfo
 from .tasks import TaskChecks

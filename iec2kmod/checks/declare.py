@@ -14,6 +14,7 @@ from __future__ import annotations
 from .. import ast
 from . import stdlib
 from .consts import Constants
+from .eno import _eno_var, _true, fb_eno
 from .located import check_address_type
 from .sfc import declare_steps
 from .symbols import POUInfo, Project, Var
@@ -519,49 +520,6 @@ class Declarer(Constants):
                                       "(completed by VAR_CONFIG)")
             return
         check_address_type(self, src, decl.pos, addr, t)
-
-
-def _true(pos):
-    lit = ast.Lit(pos, "TRUE", "bool", True)
-    lit.type = BOOL
-    return lit
-
-
-def implicit_eno(pou: POUInfo):
-    """The ENO output (BOOL, initially TRUE) of the user function or
-    function block pou, declared when its body uses ENO without declaring
-    it (declare_eno) or when a caller reads an instance's ENO (``f.ENO``,
-    checks/expr.py): then the instance keeps the ENO of its last call --
-    TRUE when it starts, what the body set, FALSE after a call with EN =
-    FALSE -- as MatIEC's instances do.  A block whose ENO nothing reads
-    gets no member (its layout, and the interface hash, stay as they
-    were).  Returns the (existing or new) variable."""
-    v = pou.vars.get("ENO")
-    if v is None:
-        v = _eno_var(pou)
-    if v not in pou.outputs:
-        pou.outputs.append(v)
-    return v
-
-
-def fb_eno(t: FBType):
-    """The ENO of instances of the function block type t, read from
-    outside (``f.ENO``): of a user block, implicit_eno; of a standard
-    block, t (the project's one FBType of that block) becomes the copy
-    that keeps it (stdlib.keeping_eno)."""
-    if not t.pou.standard:
-        return implicit_eno(t.pou)
-    if t.pou.var("ENO") is None:
-        t.pou = stdlib.keeping_eno(t.pou)
-    return t.pou.var("ENO")
-
-
-def _eno_var(pou):
-    node = pou.node
-    v = Var("ENO", BOOL, "VAR_OUTPUT", node.pos, node.src, owner=pou)
-    v.init = _true(node.pos)
-    pou.vars["ENO"] = v
-    return v
 
 
 def _mentions(node, name: str) -> bool:

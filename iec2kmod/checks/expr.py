@@ -18,7 +18,7 @@ from __future__ import annotations
 from .. import ast
 from ..diagnostics import INPUT_WRITE_RULE
 from . import fold, stdlib
-from .declare import fb_eno
+from .eno import fb_eno
 from .symbols import EnumValue, Var
 from .types import (BOOL, ELEMENTARY, ERROR, AnyIntResult, ArrayT, Elementary, EnumT, ErrorT, FBType,
                     LiteralT, StringT, StructT, SubrangeT, assignable, cat, common,

@@ -530,7 +530,7 @@ def keeping_eno(pou):
     """A copy of the standard FB pou whose instances keep the ENO of their
     last call (an output, TRUE initially; FALSE after a call with EN =
     FALSE, TRUE after any other: a standard FB's body never sets it FALSE),
-    for a project that reads ``t.ENO`` (checks/declare.fb_eno).  Its
+    for a project that reads ``t.ENO`` (checks/eno.fb_eno).  Its
     instances are the runtime's struct and an ENO member
     (codegen/cnames.py)."""
     from .. import ast

@@ -716,7 +716,7 @@ class PouCompiler:
             inst = get_inst(env)
             if en is not None and not en(env):
                 if eno_key is not None:
-                    # an instance keeps its ENO (checks/declare.fb_eno)
+                    # an instance keeps its ENO (checks/eno.fb_eno)
                     inst.v[eno_key] = False
                 if eno is not None:
                     eno(env, False)

@@ -1074,7 +1074,7 @@ class Encoder:
         for cond, inst in place.instances():
             iv = inst.v
             if en is not None and eno_key is not None:
-                # an instance that keeps its ENO (checks/declare.fb_eno)
+                # an instance that keeps its ENO (checks/eno.fb_eno)
                 # gets FALSE from a call with EN = FALSE
                 off = land(land(g, cond), z3.Not(en))
                 if not z3.is_false(off):
