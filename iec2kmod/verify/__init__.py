@@ -118,10 +118,11 @@ import z3
 from ..checks.types import BOOL as _BOOL, StringT, concrete
 from ..diagnostics import Diagnostics
 from .clockfb import clock_user
-from .encode import FALSE, TRUE, Encoder, Frame, Refuse, const_of, land
+from .encode import Encoder
 from .engine import System, check
 from .model import SymbolicMachine
 from .ranges import partition_candidates, range_candidates
+from .terms import FALSE, TRUE, Frame, Refuse, const_of, land
 from .props import (PropChecker, collect, config_scope, instance_of_path,
                     parse_expr)
 

@@ -150,7 +150,8 @@ class Prover:
             return None, msg
 
     def _prove(self, z3, m, pou, externals, inouts, groups):
-        from .encode import TRUE, Encoder, land, lnot, lor, smt_eq
+        from .encode import Encoder
+        from .terms import TRUE, land, lnot, lor, smt_eq
         from .model import SymbolicMachine
         sym = SymbolicMachine.__new__(SymbolicMachine)
         sym.project = self.project

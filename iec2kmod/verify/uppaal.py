@@ -48,7 +48,7 @@ from ..checks.symbols import Var
 from ..checks.types import (BOOL, Elementary, EnumT, FBType, LiteralT, StructT, SubrangeT,
                             common, concrete)
 from ..interp.values import base_of
-from .encode import TRUE, Frame, Refuse
+from .terms import TRUE, Frame, Refuse
 
 MS = 1_000_000
 
