@@ -27,7 +27,8 @@ import z3
 from .. import ast
 from ..checks.symbols import Var
 from ..checks.types import ArrayT, BOOL, EnumT, FBType, LiteralT, StringT, concrete
-from ..interp.compiler import PouCompiler, implicit
+from ..interp.closures import implicit
+from ..interp.compiler import PouCompiler
 from ..interp.errors import ENUM, LOOP
 from ..execmodel import LOOP_BUDGET
 from ..interp.model import Instance
