@@ -1,4 +1,15 @@
-"""What the parts of the compiler share."""
+"""What every part of the interpreter's compiler (compiler.py and its
+mixins compile_*.py) builds its closures from: the results of a statement
+closure (``EXIT``, ``RETURN``, ``CONTINUE``), the sections reached by
+reference, the constant closure, the implicit conversions between types
+(``implicit``: the widenings of the standard and of untyped literals, also
+the z3 encoder's, verify/encode.py), a standard call's value in its
+context's type (``_from_sig``), and ``_Slot``, an argument standing for a
+value handed over at run time.
+
+A leaf of the compiler: it imports the checker's types and the
+interpreter's value modules (conv.py, values.py), never compiler.py or a
+compile_*.py."""
 
 from __future__ import annotations
 
@@ -10,16 +21,10 @@ EXIT = 1
 RETURN = 2
 CONTINUE = 3        # the rest of the loop's iteration is skipped (ed.3)
 REF_SECTIONS = ("VAR_EXTERNAL", "VAR_IN_OUT")
-ARITH = {"+": "ADD", "-": "SUB", "*": "MUL", "/": "DIV", "MOD": "MOD"}
 
 
 def _const(v):
     return lambda env: v
-
-
-def _type_of(e):
-    t = getattr(e, "type", None)
-    return t
 
 
 # ------------------------------------------------------------ conversions

@@ -1,4 +1,14 @@
-"""PouCompiler: calls."""
+"""PouCompiler, calls: a standard function call (EN/ENO; its value in
+the types settle gave it, ``apply_std`` over std.py and conv.py; exact
+arithmetic on untyped literals), a user FUNCTION (a new frame, every
+variable at its initial value), an FB instance (a standard one runs
+fbs.py's body), the binding of their arguments.
+
+``CallCompiler`` is mixed into compiler.PouCompiler, whose state it uses
+(``m``: the machine's bodies, frames and initial values; ``rt``) and whose
+variable access and expressions it calls: ``cell``, ``expr``, ``expr_as``,
+``storer``, ``writer`` (compile_expr.py).  It imports closures.py and the
+interpreter's library modules, never compiler.py."""
 
 from __future__ import annotations
 

@@ -1,4 +1,15 @@
-"""PouCompiler: variable access and expressions."""
+"""PouCompiler, variable access and expressions: a variable access as a
+reader, a writer (converted, truncated, range-checked, copied: ``storer``)
+or a cell (container, key) for VAR_IN_OUT bindings, its accessors checked
+(an index out of range is a fault); every expression as ``f(env)`` in its
+own type's representation (``expr``) or converted to another's
+(``expr_as``; an untyped expression typed by its context), literals,
+comparison and logic operators, unary operators.
+
+``ExprCompiler`` is mixed into compiler.PouCompiler, whose state it uses
+(``pou``) and whose calls it reaches through ``call_expr``, ``std_call``,
+``apply_std`` (compile_calls.py).  It imports closures.py and the
+interpreter's value modules, never compiler.py."""
 
 from __future__ import annotations
 

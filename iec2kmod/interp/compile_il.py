@@ -1,4 +1,13 @@
-"""PouCompiler: instruction lists."""
+"""PouCompiler, instruction lists: the instructions as closures run by a
+program counter, the current result held in ``env.cr``, deferred
+operators ``OP(``, S/R, the FB input operators, CAL/CALC/CALCN, jumps (a
+backward jump costs one unit of the loop budget) and RET.
+
+``ILCompiler`` is mixed into compiler.PouCompiler and calls its methods:
+``line``, ``_tick`` (compiler.py), ``expr``, ``expr_as``, ``storer``,
+``writer`` (compile_expr.py), ``call_expr``, ``fb_call``, ``apply_std``
+(compile_calls.py).  It imports closures.py and the interpreter's library
+modules, never compiler.py."""
 
 from __future__ import annotations
 

@@ -6,9 +6,23 @@ the running POU.  This is still an interpreter of the AST -- one closure per
 node, built once, run every cycle -- only without re-dispatching on node
 types at every evaluation.
 
-Sections, in the order a reader meets them: conversions between types,
-variable access (read, write, cell), expressions, standard function calls,
-user POU calls, statements, IL, POU bodies."""
+``PouCompiler`` is one class written in four files, one mixin per part, in
+the order a reader meets them:
+
+    compiler.py       PouCompiler: statements (blocks with their fault
+                      locations, IF, CASE, the loops and their budget), a
+                      POU body (SFC, IL or ST; VAR_TEMP, edge inputs)
+    compile_expr.py   ExprCompiler: variable access (read, write, cell)
+                      and expressions
+    compile_calls.py  CallCompiler: standard functions, user functions and
+                      FB instances (EN/ENO, argument binding)
+    compile_il.py     ILCompiler: IL, its current result and its jumps
+
+What they share -- statement results, implicit conversions -- is
+closures.py.  The mixins reach each other and the compiler's state
+(``m``, ``rt``, ``pou``, ``src``, ``name``) through ``self``; they import
+closures.py and the interpreter's other modules, never compiler.py (which
+imports them).  SFC bodies are sfc.py's, run with the same compiler."""
 
 from __future__ import annotations
 

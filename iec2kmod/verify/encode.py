@@ -6,18 +6,29 @@ z3 term.  Statements are executed once, symbolically; a write happens under
 the path condition that reaches it (``If(guard, new, old)``), so one store
 represents every path through IF/CASE/EXIT/RETURN/IL jumps at once and the
 references the interpreter binds (VAR_EXTERNAL, VAR_IN_OUT) stay valid.
+How each IEC type's values are terms, and what works on terms without an
+Encoder, is terms.py.
 
-Value representation (the sort follows the IEC type):
-    BOOL                                   Bool
-    SINT..ULINT, BYTE..LWORD, TIME, DATE,   BitVec(width), two's complement
-    TOD, DT, enumerations, subranges
-    REAL / LREAL                           FP(8, 24) / FP(11, 53), RNE
-    untyped literal values                 Python int/float (exact), or a
-                                           z3 Int when a guarded IL current
-                                           result must hold one
-    ARRAY / STRUCT / FB instance           list / dict / Instance of terms
+``Encoder`` is one class written in five files, one mixin per part, in the
+order a reader meets them:
 
-Every construct this module cannot encode exactly raises Refuse naming it.
+    encode.py        Encoder: its state (fault sites, unrolling counts, the
+                     lazy strings' stand-ins), implicit conversions
+                     (``conv``), a POU body (VAR_TEMP, edge inputs),
+                     statements, loops unrolled a bounded number of times
+    encode_expr.py   ExprEncoding: variable access (indexes, members, bits)
+                     and expressions
+    encode_calls.py  CallEncoding: calls, EN/ENO, argument binding, user
+                     functions and FB instances
+    encode_std.py    StdEncoding: the standard functions and function
+                     blocks (the timers' automata)
+    encode_il.py     ILEncoding: IL, its current result, forward jumps
+
+The mixins reach each other and the Encoder's state through ``self``; they
+import terms.py and the checker's and interpreter's modules, never
+encode.py (which imports them).  model.py runs the Encoder over a cycle.
+
+Every construct the encoder cannot encode exactly raises Refuse naming it.
 """
 
 from __future__ import annotations

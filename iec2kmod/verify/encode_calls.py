@@ -1,4 +1,15 @@
-"""Encoder: calls."""
+"""Encoder, calls: a call expression to a standard function (EN/ENO,
+its value in the type settle gave it) or a user FUNCTION (a fresh frame);
+an FB call statement, of an instance or of an element of an array of
+instances picked by a symbolic index; the binding of arguments
+(VAR_INPUT, VAR_IN_OUT places, outputs, negated outputs).
+
+``CallEncoding`` is mixed into encode.Encoder, whose state it uses (``m``:
+initial values, ``sym``: fresh values) and whose methods it calls:
+``conv``, ``refuse``, ``run_body`` (encode.py), ``expr``, ``expr_as``,
+``from_sig``, ``place``, ``store_value``, ``write`` (encode_expr.py),
+``apply_std``, ``std_fb`` (encode_std.py).  It imports terms.py, the
+checker and the interpreter, not encode.py."""
 
 from __future__ import annotations
 
@@ -11,7 +22,7 @@ from .terms import (FALSE, TRUE, Ref_of, const_of, ite, kind, land, lnot, store_
 
 
 class CallEncoding:
-    # ------------------------------------------------ standard functions
+    # ------------------------------------------------------------ calls
     def call_expr(self, c, frame, g):
         if isinstance(c.target, stdlib.StdFunc):
             return self.std_call(c, frame, g)

@@ -1,4 +1,16 @@
-"""Encoder: variable access and expressions."""
+"""Encoder, variable access and expressions: the Place of a variable
+access (constant or symbolic indexes, each index out of range a fault;
+structure and FB members; bits), reading it and writing it
+(``store_value``: converted, subrange-checked, copied), and the term of
+every expression: literals, references, operators (an untyped expression
+typed by its context, as the interpreter types it).
+
+``ExprEncoding`` is mixed into encode.Encoder, whose state it uses
+(``sym``, ``lazy_strings``) and whose methods it calls: ``conv``, ``fault``,
+``refuse``, ``stand_in``, ``ipc`` (encode.py), ``call_expr``, ``std_call``
+(encode_calls.py), ``apply_std`` (encode_std.py), ``cr_get``
+(encode_il.py).  It imports terms.py, the checker and the interpreter, not
+encode.py."""
 
 from __future__ import annotations
 

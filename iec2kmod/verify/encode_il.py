@@ -1,4 +1,13 @@
-"""Encoder: instruction lists."""
+"""Encoder, instruction lists: the current result (one term per sort, or
+an untyped literal value; set on the paths that reach it), forward jumps
+and RET as path conditions (a backward jump, a loop, is refused),
+deferred operators ``OP(``, S/R, the FB input operators, CAL/CALC/CALCN.
+
+``ILEncoding`` is mixed into encode.Encoder and calls its methods:
+``conv``, ``refuse`` (encode.py), ``expr``, ``expr_as``, ``place``,
+``store_value``, ``write`` (encode_expr.py), ``call_expr``, ``fb_call``
+(encode_calls.py), ``apply_std`` (encode_std.py).  It imports terms.py and
+the checker, not encode.py."""
 
 from __future__ import annotations
 

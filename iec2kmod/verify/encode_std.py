@@ -1,4 +1,18 @@
-"""Encoder: standard functions and function blocks."""
+"""Encoder, the standard library: every standard function family on its
+arguments' terms in the call's types (arithmetic with its division faults,
+time and date arithmetic, shifts, bitwise, selection, comparison,
+conversions; exact integer arithmetic on untyped literals), the string
+functions as stand-ins (lazy strings), and the standard function blocks:
+SR, RS, R_TRIG, F_TRIG, the counters and the timers TON, TOF, TP as
+seed 002's automata (the elapsed time advances in model.py, by the task's
+period).  EXPT, the transcendental functions and the conversions the
+encoding cannot make exactly are refused.
+
+``StdEncoding`` is mixed into encode.Encoder, whose state it uses
+(``lazy_strings``) and whose methods it calls: ``conv``, ``fault``,
+``refuse``, ``stand_in`` (encode.py), ``expr``, ``expr_as``
+(encode_expr.py).  It imports terms.py, the checker and the interpreter
+(interp.std for exact literal arithmetic), not encode.py."""
 
 from __future__ import annotations
 
@@ -18,6 +32,7 @@ ELEM_LINT = _E["LINT"]
 
 
 class StdEncoding:
+    # ------------------------------------------------ standard functions
     def apply_std(self, fres, args, sig, frame, g, pos):
         fam = fres.family
         pou = frame.pou

@@ -1,10 +1,10 @@
 """`iec2kmod verify --engine explicit`: explicit-state exploration of a
 configuration over the reference interpreter, the referee of the z3 engine.
 
-It shares nothing with the z3 encoder (encode.py, model.py, engine.py,
-ranges.py): the runs are the interpreter's own (iec2kmod.interp), one
-scheduler instant at a time (Machine._instant, the code `sim --engine interp`
-runs), from states saved and restored canonically.
+It shares nothing with the z3 encoder (encode*.py, terms.py, model.py,
+engine.py, ranges.py): the runs are the interpreter's own (iec2kmod.interp),
+one scheduler instant at a time (Machine._instant, the code `sim --engine
+interp` runs), from states saved and restored canonically.
 
 The time point (the same as the z3 engine's): the configuration advances in
 steps of the gcd of the periodic tasks' periods.  At step k (1-based, time

@@ -145,7 +145,7 @@ class Prover:
             return self._prove(z3, m, pou, externals, inouts, groups)
         except _Refused as exc:
             return None, str(exc)
-        except Exception as exc:               # encode.Refuse and the rest
+        except Exception as exc:               # terms.Refuse and the rest
             msg = getattr(exc, "message", None) or f"{type(exc).__name__}: {exc}"
             return None, msg
 

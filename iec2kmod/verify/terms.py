@@ -1,4 +1,27 @@
-"""Terms of the z3 encoding of a cycle."""
+"""The terms of the z3 encoding, and what works on them without an Encoder.
+
+Value representation (the sort follows the IEC type):
+    BOOL                                   Bool
+    SINT..ULINT, BYTE..LWORD, TIME, DATE,   BitVec(width), two's complement
+    TOD, DT, enumerations, subranges
+    REAL / LREAL                           FP(8, 24) / FP(11, 53), RNE
+    untyped literal values                 Python int/float (exact), or a
+                                           z3 Int when a guarded IL current
+                                           result must hold one
+    ARRAY / STRUCT / FB instance           list / dict / Instance of terms
+
+Here: the encoding's constants (the unrolling bounds, the timers' automaton
+locations, the UNROLL and REFUSED markers), ``Refuse``; connectives that
+simplify as they build (``land``, ``lor``, ``lnot``, ``ite``) and
+``smt_eq``; an IEC type's sort (``kind``, ``width``, ``signed``,
+``sort_of``) and constants to and from the interpreter's Python values
+(``const_of``, ``py_value``); where a value lives (``store_into``,
+``Cell``, ``Place``) and the running POU (``Frame``); the comparison and
+logic operators on terms.
+
+A leaf of verify/: it imports z3, the checker's types and the
+interpreter's storage (interp.model, interp.values), and every other module
+of verify/ may import it (encode*.py, model.py, engine.py, cex.py, ...)."""
 
 from __future__ import annotations
 
@@ -10,7 +33,6 @@ from .. import ast
 from ..checks.types import BOOL, Elementary, EnumT
 from ..interp.model import Instance
 from ..interp.values import base_of
-
 
 TRUE = z3.BoolVal(True)
 FALSE = z3.BoolVal(False)
