@@ -48,7 +48,10 @@ cycle and its longest path is K steps); too large (more states than
 --max-states, or more input valuations per step than --max-inputs).
 
 Refused (VerifyError naming it): configurations without a periodic task,
-SFC bodies (their steps' times are absolute), properties that fault."""
+SFC bodies (their steps' times are absolute), properties that fault.
+
+The inputs, their domains and the saved states are explicit_state.py's;
+the search, the properties, counterexamples and the command are here."""
 
 from __future__ import annotations
 

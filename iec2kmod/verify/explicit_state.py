@@ -1,4 +1,12 @@
-"""verify --engine explicit: inputs and states."""
+"""`verify --engine explicit`, inputs and states: which variables are the
+free inputs (``input_entries``: computed from the checked AST, on its own,
+as explicit.py's docstring states) and the values each takes (``domain``),
+and ``Snapshots``: a machine state saved canonically (a running timer by
+its elapsed time, REAL by its bit pattern) and restored for the next step.
+``VerifyError`` names a construct the explicit engine does not explore.
+
+It imports the checker's types and the interpreter's storage, nothing of
+the z3 encoder, and not explicit.py (which imports it)."""
 
 from __future__ import annotations
 

@@ -29,6 +29,10 @@ The network (seed 004 for the program logic, seed 002 for the timers):
     and assumptions (the state after step K with the inputs step K read;
     the initial state, before the first scan, is not checked by either).
 
+Here: the automata and their locations, the Exporter's types, variables
+and the network, the timers' templates, the XML; the bodies are
+uppaal_body.py's (the mixin BodyExport).
+
 What cannot be exported is refused with an error naming the construct (the
 model is exact or not written): REAL, 32/64-bit integers, strings, arrays
 and structures accessed with a variable index, user FUNCTIONs, times that

@@ -1,4 +1,20 @@
-"""export --uppaal: bodies."""
+"""`export --uppaal`, the program bodies as edges of the Task automaton:
+expressions as UPPAAL expressions over the exported variables (each
+arithmetic result wrapped into its type), the standard functions exported;
+ST statements as edges with guards (IF, CASE), unrolled FOR loops, RETURN;
+function block instances inlined (the timers called through their
+channels, the other standard FBs as updates on the calling edge); IL one
+edge per instruction, the current result in one variable per nesting
+level, jumps and RET as edges to their targets.  What cannot be exported
+exactly is refused naming it.  ``ident`` names a variable in the model.
+
+``BodyExport`` is mixed into uppaal.Exporter, whose state it uses (``sym``,
+``enc``: the z3 encoder, asked for places only; ``task``, ``cur``: the
+automaton and its current location; ``timers``, ``timer_paths``,
+``extra``, ``dead``, ``ret_target``, ``depth``, ``_crs``) and whose
+methods it calls: ``wrap``, ``ms``, ``name_of``, ``_refuse`` (uppaal.py).
+It imports terms.py, the checker and the interpreter's values, never
+uppaal.py (which imports it)."""
 
 from __future__ import annotations
 
