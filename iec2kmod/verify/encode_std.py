@@ -26,8 +26,6 @@ from ..interp.values import base_of
 from .terms import (INIT, NS_PER_DAY, ON, TOUT, TRUE, WORK, _representable, bv_lit, compare,
                     const_of, ite, kind, land, lnot, lor, signed, width)
 
-
-
 ELEM_LINT = _E["LINT"]
 
 

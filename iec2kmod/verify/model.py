@@ -20,10 +20,8 @@ from ..checks.types import BOOL as _BOOL, TIME as _TIME, Elementary
 from ..interp.machine import Machine
 from ..interp.model import Instance
 from .encode import Encoder
-from .terms import (FALSE, TRUE, UNROLL, WORK, Frame, Opaque, Refuse, bv_lit, const_of, ite,
-                    kind, land, lnot, lor, signed, sort_of, store_into)
-
-INT64_MAX = (1 << 63) - 1
+from .terms import (FALSE, INT64_MAX, TRUE, UNROLL, WORK, Frame, Opaque, Refuse, bv_lit,
+                    const_of, ite, kind, land, lnot, lor, signed, sort_of, store_into)
 
 
 @dataclass

@@ -218,14 +218,6 @@ def bv_lit(v, w):
     return z3.BitVecVal(v % (1 << w), w)
 
 
-def to_bv(x, w):
-    if isinstance(x, int):
-        return bv_lit(x, w)
-    if z3.is_int(x):
-        return z3.Int2BV(x, w)
-    return x
-
-
 class Opaque:
     """A value the encoding does not represent (a STRING): reading it refuses."""
 
