@@ -59,7 +59,9 @@ AREAS = {
     "selective": (["iec2kmod/codegen/selective.py"],
                   ["tests/differential/test_selective_settle.py",
                    "tests/execution/test_selective.py"], 600),
-    "verify": (["iec2kmod/verify/encode.py"],
+    "verify": (["iec2kmod/verify/encode.py", "iec2kmod/verify/encode_expr.py",
+                "iec2kmod/verify/encode_calls.py", "iec2kmod/verify/encode_std.py",
+                "iec2kmod/verify/encode_il.py", "iec2kmod/verify/terms.py"],
                ["tests/verify/test_encode_diff.py", "tests/verify/test_verify.py",
                 "-k", "differential or encoding or unsigned"], 600),
 }

@@ -57,7 +57,7 @@ def main(argv=None):
     from iec2kmod.parse.frontend import run
     from iec2kmod.verify import build
     from iec2kmod.verify.engine import check
-    from iec2kmod.verify.encode import Refuse
+    from iec2kmod.verify.terms import Refuse
     only = set(args.only.split(",")) if args.only else None
     print(f"iec2kmod verify benchmark, depth {args.depth}; load average "
           + " ".join(f"{x:.2f}" for x in os.getloadavg()))

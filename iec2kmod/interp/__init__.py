@@ -20,7 +20,10 @@ A pipeline a person can read, one module per stage:
                  timers after seed 002's automata)
     sfc.py       SFC bodies: steps, transitions, ACTION_CONTROL, actions
     compiler.py  expressions, statements, calls and IL (with its current
-                 result) turned into closures, once
+                 result) turned into closures, once: statements and POU
+                 bodies there, variable access and expressions in
+                 compile_expr.py, calls in compile_calls.py, IL in
+                 compile_il.py, what they share in closures.py
     machine.py   configuration, variable table, input traces and the
                  scheduler on the simulated clock (the cycle model)
     errors.py    runtime faults

@@ -19,7 +19,7 @@ interpreter's storage layout and initial values):
     reported undecided).  The inputs change at the step instants only, so
     an event task triggered between two steps is not modelled (printed as
     a note).  One step is one transition T(state, inputs) over z3 terms
-    (model.py, encode.py);
+    (model.py, encode.py and its parts encode_*.py, terms.py);
   * state: every variable a cycle can change -- globals, %Q/%M addresses,
     program and FB instance variables at every depth, the hidden state of
     the standard FBs (edge memories, counters' edges, the timers' automaton
@@ -118,12 +118,13 @@ import z3
 from ..checks.types import BOOL as _BOOL, StringT, concrete
 from ..diagnostics import Diagnostics
 from .clockfb import clock_user
-from .encode import FALSE, TRUE, Encoder, Frame, Refuse, const_of, land
+from .encode import Encoder
 from .engine import System, check
 from .model import SymbolicMachine
 from .ranges import partition_candidates, range_candidates
 from .props import (PropChecker, collect, config_scope, instance_of_path,
                     parse_expr)
+from .terms import FALSE, TRUE, Frame, Refuse, const_of, land
 
 __all__ = ["verify", "Refuse", "Outcome", "UsageError"]
 

@@ -17,7 +17,7 @@ import z3
 
 from ..interp.model import Instance
 from ..traces import input_literal, write_inputs
-from .encode import const_of, py_value
+from .terms import const_of, py_value
 
 
 def input_values(out, result):

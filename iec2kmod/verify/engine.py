@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import z3
 
-from .encode import FALSE, REFUSED, TRUE, UNROLL, Refuse, land, lnot, lor, smt_eq
+from .terms import FALSE, REFUSED, TRUE, UNROLL, Refuse, land, lnot, lor, smt_eq
 
 
 @dataclass

@@ -145,12 +145,13 @@ class Prover:
             return self._prove(z3, m, pou, externals, inouts, groups)
         except _Refused as exc:
             return None, str(exc)
-        except Exception as exc:               # encode.Refuse and the rest
+        except Exception as exc:               # terms.Refuse and the rest
             msg = getattr(exc, "message", None) or f"{type(exc).__name__}: {exc}"
             return None, msg
 
     def _prove(self, z3, m, pou, externals, inouts, groups):
-        from .encode import TRUE, Encoder, land, lnot, lor, smt_eq
+        from .encode import Encoder
+        from .terms import TRUE, land, lnot, lor, smt_eq
         from .model import SymbolicMachine
         sym = SymbolicMachine.__new__(SymbolicMachine)
         sym.project = self.project

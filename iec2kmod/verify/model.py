@@ -19,10 +19,9 @@ from ..checks.types import ArrayT, EnumT, FBType, StringT, StructT, SubrangeT, c
 from ..checks.types import BOOL as _BOOL, TIME as _TIME, Elementary
 from ..interp.machine import Machine
 from ..interp.model import Instance
-from .encode import (FALSE, Opaque, store_into, TRUE, WORK, Encoder, Frame, Refuse, bv_lit, const_of, ite, kind,
-                     land, lnot, lor, sort_of)
-
-INT64_MAX = (1 << 63) - 1
+from .encode import Encoder
+from .terms import (FALSE, INT64_MAX, TRUE, UNROLL, WORK, Frame, Opaque, Refuse, bv_lit,
+                    const_of, ite, kind, land, lnot, lor, signed, sort_of, store_into)
 
 
 @dataclass
@@ -339,7 +338,6 @@ class SymbolicMachine:
             mine = [pi for pi in self.programs if pi.task is task]
             for pi in mine:
                 self.run_program(enc, pi, insts[id(pi)], g)
-            from .encode import UNROLL
             real = [c for c, kind, *_ in enc.faults[n0:] if not kind.startswith(UNROLL)]
             if not real:
                 return
@@ -405,7 +403,6 @@ class SymbolicMachine:
                 pending[id(t)] = land(pending[id(t)], lnot(run))
         detect()
         left = z3.Or(*[pending[id(t)] for t in self.tasks])
-        from .encode import UNROLL
         enc.faults.append((left, f"{UNROLL}more than {rounds} task runs in one instant (the "
                                  "encoding's unrolling of the scheduler)", "scheduler",
                            self.cfg.src, self.tasks[0].pos))
@@ -458,7 +455,6 @@ class SymbolicMachine:
         if isinstance(t, SubrangeT):
             w = var.size()
             if kind(t) == "bv":
-                from .encode import signed
                 lo, hi = bv_lit(t.low, w), bv_lit(t.high, w)
                 if signed(t):
                     return z3.And(var >= lo, var <= hi)

@@ -17,7 +17,7 @@ from iec2kmod.checks.types import EnumT, SubrangeT, concrete
 from iec2kmod.interp.machine import LOOP_BUDGET, Machine
 from iec2kmod.verify import build
 from iec2kmod.verify.cex import leaf_value, lookup
-from iec2kmod.verify.encode import smt_eq, base_of, const_of, kind, py_value, signed, width
+from iec2kmod.verify.terms import smt_eq, base_of, const_of, kind, py_value, signed, width
 from iec2kmod.diagnostics import Diagnostics
 
 

@@ -50,7 +50,7 @@ def boundary_value(rnd, leaf, fallback):
     """The differential's input values: boundaries with probability 0.6,
     the rest from diffverify's own generator."""
     from iec2kmod.checks.types import concrete
-    from iec2kmod.verify.encode import base_of, kind
+    from iec2kmod.verify.terms import base_of, kind
     t = concrete(leaf.type)
     k = kind(t)
     if rnd.random() >= 0.6 or k not in ("bv", "fp"):
