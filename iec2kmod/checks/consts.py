@@ -326,7 +326,7 @@ class Constants:
         from ..diagnostics import Diagnostics
         from .body import BodyChecker
         from .expr import _literal_bits     # expr imports declare, which imports this
-        from .settle import settle
+        from .settle import overflows, settle
         from .symbols import POUInfo
         silent = Diagnostics()
         checker = BodyChecker(self.p, self, silent, POUInfo("PROGRAM", "<initial value>", src=src))
@@ -339,6 +339,11 @@ class Constants:
             return None
         vt = init.type if _literal_bits(init) else vt
         settle(init)
+        wraps = overflows(init)
+        for pos, msg in wraps:      # k : SINT := (100 + 100) / 2: 100 + 100 in SINT
+            self.error(src, pos, msg)
+        if wraps:
+            return None
         v = fold.settled(init)
         if v is None:
             return None
