@@ -65,18 +65,22 @@ default), each decided once in checks/ and read by every engine:
     WITH t : P (r := 7 / 2)``) likewise.  An initial value that names a constant is folded
     exactly; a call in an initial value is refused (a constant expression
     has none; MatIEC refuses any expression there);
-  * a computation made of constants only never wraps silently: an ADD,
-    SUB, MUL, DIV, MOD or EXPT (operator or call) whose operands all have a
-    value (``const``: literals and operators on them; the folder does not
-    see a named constant in a statement) and which is computed in an
-    integer or bit-string type that cannot hold its exact result, or one of
-    its operands, is refused (``overflows``): ``s := (100 + 100) / 2`` into
+  * a computation made of untyped constants only never wraps silently: an
+    ADD, SUB, MUL, DIV, MOD or EXPT (operator or call) whose operands are
+    untyped and all have a value (``const``: literals and operators on
+    them; the folder does not see a named constant in a statement) and
+    which its context computes in an integer or bit-string type that
+    cannot hold its exact result, or one of its operands, is refused
+    (``overflows``): ``s := (100 + 100) / 2`` into
     a SINT would add in SINT (200 wraps to -56: -28 where MatIEC and
     CODESYS give 100), ``200 / 2`` would divide -56; in a statement, an
     initial value, a constant connection and an IL chain typed by its
     store alike (il._chain_overflow).  The exact result is IEC's (integer
     division truncates: no error); a REAL's rounding is no error; an
-    expression with a variable is run-time arithmetic and wraps.  SHL,
+    expression with a variable is run-time arithmetic and wraps, and so
+    does one with a typed literal operand (``SINT#-127 * SINT#19``,
+    ``DINT#2147483647 + 8``: computed in the type its author wrote, as
+    on variables of that type).  SHL,
     SHR, ROL, ROR and NOT on literals are not checked: shifting drops the
     bits it shifts out by definition (``SHL(1, 40)`` into a DWORD is 0) and
     NOT sets the bits the bit string has (``NOT 0`` into a BYTE: 255); AND,
@@ -223,9 +227,9 @@ _RANGED = ("sint", "uint", "bit")
 def overflows(e) -> list:
     """The constant computations of settled expression *e* that wrap: each
     an error message for (position, text).  An ADD, SUB, MUL, DIV, MOD or
-    EXPT (operator or call) whose operands are all constants (``const``:
-    literals and operators on them) and whose sig is an integer or bit
-    string type reports, the innermost first and its ancestors not again,
+    EXPT (operator or call) whose operands are all untyped constants
+    (``const``: literals and operators on them) and whose sig, the type its
+    context gives it, is an integer or bit string type reports, the innermost first and its ancestors not again,
     an operand constant the parameter type cannot hold (``200 / 2`` into a
     SINT: 200) or an exact result its result type cannot hold (``(100 +
     100) / 2`` into a SINT: 100 + 100 is 200); the exact result is IEC's
@@ -268,13 +272,14 @@ def _overflows(e, out) -> bool:
     res, ptypes = sig
     if isinstance(res, LiteralT):
         return False        # computed exactly
-    untyped = all(isinstance(getattr(a, "type", None), LiteralT) for a in args)
-    whose = "the type of its context" if untyped else "the type of its operands"
+    if not all(isinstance(getattr(a, "type", None), LiteralT) for a in args):
+        return False        # SINT#-127 * SINT#19: computed in the type its author wrote
     for a, v, pt in zip(args, vals, ptypes):
         lo_hi = _range(pt)
         if lo_hi is not None and isinstance(v, int) and not lo_hi[0] <= v <= lo_hi[1]:
             out.append((a.pos, f"{text(a)} is out of range for {pt.name}, the type {text(e)} is "
-                               f"computed in ({whose}); write the value or convert explicitly"))
+                               "computed in (the type of its context); write the value or "
+                               "convert explicitly"))
             return True
     lo_hi = _range(res)
     if lo_hi is None:
@@ -286,15 +291,15 @@ def _overflows(e, out) -> bool:
     except (ArithmeticError, ValueError):
         return False        # a division by zero: the checker's own error
     if isinstance(v, float):      # EXPT into an integer type
-        if v == v and abs(v) != float("inf") and lo_hi[0] <= v <= lo_hi[1]:
+        if lo_hi[0] <= v <= lo_hi[1]:
             return False
         shown = repr(v)
     elif lo_hi[0] <= v <= lo_hi[1]:
         return False
     else:
         shown = str(v)
-    out.append((e.pos, f"{text(e)} is {shown}, out of range for {res.name} ({whose}); "
-                       "write the value or convert explicitly"))
+    out.append((e.pos, f"{text(e)} is {shown}, out of range for {res.name} (the type of its "
+                       "context); write the value or convert explicitly"))
     return True
 
 
