@@ -225,17 +225,18 @@ _RANGED = ("sint", "uint", "bit")
 
 
 def overflows(e) -> list:
-    """The constant computations of settled expression *e* that wrap: each
-    an error message for (position, text).  An ADD, SUB, MUL, DIV, MOD or
+    """The constant computations of settled expression *e* that would
+    wrap, as (position, error message) pairs.  An ADD, SUB, MUL, DIV, MOD or
     EXPT (operator or call) whose operands are all untyped constants
     (``const``: literals and operators on them) and whose sig, the type its
-    context gives it, is an integer or bit string type reports, the innermost first and its ancestors not again,
-    an operand constant the parameter type cannot hold (``200 / 2`` into a
-    SINT: 200) or an exact result its result type cannot hold (``(100 +
-    100) / 2`` into a SINT: 100 + 100 is 200); the exact result is IEC's
-    (integer division truncates: no error).  *e* itself is reported too:
-    the caller leaves out a position check_assign already refused (``s :=
-    100 + 100``: 200 is out of range for SINT)."""
+    context gives it, is an integer or bit string type reports, the
+    innermost first and its ancestors not again, an operand constant the
+    parameter type cannot hold (``200 / 2`` into a SINT: 200) or an exact
+    result its result type cannot hold (``(100 + 100) / 2`` into a SINT:
+    100 + 100 is 200); the exact result is IEC's (integer division
+    truncates: no error).  *e* itself is reported too: the caller leaves
+    out a position check_assign already refused (``s := 100 + 100``: 200 is
+    out of range for SINT)."""
     out: list = []
     _overflows(e, out)
     return out
