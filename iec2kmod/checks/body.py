@@ -22,7 +22,7 @@ from .. import ast
 from .calls import CallChecks
 from .expr import ExprChecks
 from .il import ILChecks
-from .settle import settle, settle_root
+from .settle import overflows, settle, settle_root
 from .sfc import SFCChecker
 from .symbols import EnumValue, POUInfo, Var
 from .types import ERROR, Elementary, EnumT, ErrorT, SubrangeT, is_bool, is_int
@@ -44,6 +44,17 @@ class BodyChecker(ExprChecks, CallChecks, ILChecks):
     def error(self, pos, msg):
         self.diags.error(self.src, pos, msg)
 
+    def error_once(self, pos, msg):
+        """An error, unless one is reported at *pos* already (check_assign's
+        '200 is out of range for SINT' where the checker's own says 100 +
+        100 is 200)."""
+        if self.src is not None:
+            line, col = self.src.linecol(pos or 0)
+            if any(d.path == self.src.path and (d.line, d.col) == (line, col)
+                   for d in self.diags.errors):
+                return
+        self.error(pos, msg)
+
     def warning(self, pos, msg):
         self.diags.warning(self.src, pos, msg)
 
@@ -64,6 +75,8 @@ class BodyChecker(ExprChecks, CallChecks, ILChecks):
                 settle_root(e)      # a CASE selector, an index: no context types it
             else:
                 settle(e)
+            for pos, msg in overflows(e):   # 100 + 100 settled into a SINT
+                self.error_once(pos, msg)
         self.roots = []
         self.own_roots = set()
 

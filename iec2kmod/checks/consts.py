@@ -23,7 +23,6 @@ from contextlib import contextmanager
 
 from .. import ast
 from . import fold
-from .expr import _literal_bits
 from .types import (ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, ErrorT, FBType, LiteralT,
                     StringT, StructT, SubrangeT, assignable, not_bit_value)
 
@@ -326,7 +325,8 @@ class Constants:
             return None
         from ..diagnostics import Diagnostics
         from .body import BodyChecker
-        from .settle import settle
+        from .expr import _literal_bits     # expr imports declare, which imports this
+        from .settle import overflows, settle
         from .symbols import POUInfo
         silent = Diagnostics()
         checker = BodyChecker(self.p, self, silent, POUInfo("PROGRAM", "<initial value>", src=src))
@@ -339,6 +339,11 @@ class Constants:
             return None
         vt = init.type if _literal_bits(init) else vt
         settle(init)
+        wraps = overflows(init)
+        for pos, msg in wraps:      # k : SINT := (100 + 100) / 2: 100 + 100 in SINT
+            self.error(src, pos, msg)
+        if wraps:
+            return None
         v = fold.settled(init)
         if v is None:
             return None

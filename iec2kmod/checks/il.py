@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from .. import ast
 from ..diagnostics import Diagnostics
-from . import stdlib
-from .settle import value_type, widest
+from . import fold, stdlib
+from .settle import text, value_type, widest
 from .symbols import Var
 from .types import (BOOL, ERROR, Elementary, ErrorT, FBType, LiteralT, Type, common, concrete,
                     is_bit, literal_fits)
@@ -32,7 +32,7 @@ class ILChecks:
         self.il_list(instrs, None)
         self.diags = real_diags
         self.il_list(instrs, None)
-        _type_literal_chains(instrs)
+        _type_literal_chains(instrs, self.error)
 
     def _collect_labels(self, instrs, labels):
         for i in instrs:
@@ -283,7 +283,7 @@ class ILChecks:
         return ERROR
 
 
-def _type_literal_chains(instrs):
+def _type_literal_chains(instrs, error):
     """An untyped current result takes the type of the variable it is stored
     in, as an untyped ST expression takes its target's (settle.py): ``LD
     2147483647 ADD 1 ST x`` into a LINT adds in LINT (2147483648), as
@@ -295,13 +295,17 @@ def _type_literal_chains(instrs):
     integer or real type and nothing else reads it but a comparison with an
     untyped literal after the stores (compared in that type, as MatIEC
     does); read by anything else (a function, a jump, a label's other
-    paths) it keeps the literal's own type."""
+    paths) it keeps the literal's own type.  A chain whose exact value
+    leaves the integer type it takes (``LD 100 ADD 100 ST s``, s a SINT) is
+    refused through *error*, as the ST assignment of the same expression
+    is (_chain_overflow)."""
     chain = []
     stores = []
     compare = []
 
     def close():
         types = {id(concrete(st.operand.type)): concrete(st.operand.type) for st in stores}
+        typed = False
         if len(chain) > 1 and len(types) == 1:     # LD 99 ST i alone computes nothing
             tt = next(iter(types.values()))
             if isinstance(tt, Elementary) and tt.cat in ("sint", "uint", "real") and all(
@@ -323,6 +327,18 @@ def _type_literal_chains(instrs):
                     for c, f in cmp:
                         c.cr_in = tt
                         c.std, c.sig = f, stdlib.call_types(f, BOOL)
+                    typed = True
+                    wrap = _chain_overflow(chain, tt)
+                    if wrap is not None:
+                        error(*wrap)
+        if len(chain) > 1 and not typed:
+            # computed in the literal's own type, then stored (LD 0 SUB 1 ST
+            # w, w a WORD; LD 100 ADD 100 ST s ST i): the value each store
+            # keeps must be the exact one, as for w := 0 - 1 in ST
+            for st in stores:
+                wrap = _chain_overflow(chain, concrete(st.operand.type), st)
+                if wrap is not None:
+                    error(*wrap)
         chain.clear()
         stores.clear()
         compare.clear()
@@ -353,6 +369,46 @@ def _type_literal_chains(instrs):
             chain.clear()
             stores.clear()
     close()
+
+
+def _chain_overflow(chain, tt, store=None):
+    """(position, message) of the first value of IL chain *chain* (an LD of
+    an untyped literal and arithmetic on untyped literals) that integer
+    type *tt*, the type it is computed in, cannot hold, exactly computed
+    (integer division truncates); None where every value fits or *tt* is
+    a real (rounding is no error).  With *store*, an ST of the chain
+    computed in the literal's own type: only the value it stores into a
+    variable of integer or bit-string type *tt*."""
+    ranged = ("sint", "uint", "bit") if store is not None else ("sint", "uint")
+    if not isinstance(tt, Elementary) or tt.cat not in ranged:
+        return None
+    lo, hi = tt.range
+    shown = f"LD {chain[0].operand.text}" if isinstance(chain[0].operand, ast.Lit) else "LD"
+    v = getattr(chain[0].operand, "const", None)
+    for c in chain:
+        w = getattr(c.operand, "const", None)
+        if not isinstance(w, int) or isinstance(w, bool):
+            return None
+        if store is None and not lo <= w <= hi:
+            return (c.operand.pos, f"{w} is out of range for {tt.name}, the type the current "
+                                   "result is computed in (the type of the variable it is stored "
+                                   "in); write the value or convert explicitly")
+        if c.op == "LD":
+            continue
+        shown += f" {c.op} {getattr(c.operand, 'text', w)}"
+        try:
+            v = fold.binary({"ADD": "+", "SUB": "-", "MUL": "*", "DIV": "/", "MOD": "MOD"}[c.op],
+                            v, w)
+        except (ArithmeticError, KeyError):
+            return None
+        if store is None and not lo <= v <= hi:
+            return (c.pos, f"{shown} is {v}, out of range for {tt.name} (the type of the variable "
+                           "it is stored in); write the value or convert explicitly")
+    if store is not None and not lo <= v <= hi:
+        return (store.pos, f"{shown} is {v}, out of range for {tt.name}, the type of "
+                           f"'{text(store.operand)}' it is stored in; write the value or convert "
+                           "explicitly")
+    return None
 
 
 def _join_cr(label, a, b):

@@ -64,13 +64,33 @@ default), each decided once in checks/ and read by every engine:
     initialises from; a program input's constant connection (``PROGRAM p
     WITH t : P (r := 7 / 2)``) likewise.  An initial value that names a constant is folded
     exactly; a call in an initial value is refused (a constant expression
-    has none; MatIEC refuses any expression there)."""
+    has none; MatIEC refuses any expression there);
+  * a computation made of untyped constants only never wraps silently: an
+    ADD, SUB, MUL, DIV, MOD or EXPT (operator or call) whose operands are
+    untyped and all have a value (``const``: literals and operators on
+    them; the folder does not see a named constant in a statement) and
+    which its context computes in an integer or bit-string type that
+    cannot hold its exact result, or one of its operands, is refused
+    (``overflows``): ``s := (100 + 100) / 2`` into
+    a SINT would add in SINT (200 wraps to -56: -28 where MatIEC and
+    CODESYS give 100), ``200 / 2`` would divide -56; in a statement, an
+    initial value, a constant connection and an IL chain typed by its
+    store alike (il._chain_overflow).  The exact result is IEC's (integer
+    division truncates: no error); a REAL's rounding is no error; an
+    expression with a variable is run-time arithmetic and wraps, and so
+    does one with a typed literal operand (``SINT#-127 * SINT#19``,
+    ``DINT#2147483647 + 8``: computed in the type its author wrote, as
+    on variables of that type).  SHL,
+    SHR, ROL, ROR and NOT on literals are not checked: shifting drops the
+    bits it shifts out by definition (``SHL(1, 40)`` into a DWORD is 0) and
+    NOT sets the bits the bit string has (``NOT 0`` into a BYTE: 255); AND,
+    OR and XOR cannot leave their operands' bits."""
 
 from __future__ import annotations
 
 from .. import ast
-from . import stdlib
-from .types import BOOL, ELEMENTARY, LREAL, AnyIntResult, LiteralT, common, concrete
+from . import fold, stdlib
+from .types import BOOL, ELEMENTARY, LREAL, AnyIntResult, Elementary, LiteralT, common, concrete
 
 COMPARE = ("=", "<>", "<", ">", "<=", ">=")
 # the integer types an untyped value is computed in where no context decides,
@@ -195,3 +215,124 @@ def _settle_call(e, fn, args, want) -> None:
     for a, pt in zip(args, ptypes):
         if a is not None:
             settle(a, None if exact else concrete(pt))
+
+
+# ------------------------------------------------------- literal overflow
+# the arithmetic families whose result on constants can leave the type they
+# are settled into, and the operator the folder computes each with
+_ARITH = {"ADD": "+", "SUB": "-", "MUL": "*", "DIV": "/", "MOD": "MOD", "EXPT": "**"}
+_RANGED = ("sint", "uint", "bit")
+
+
+def overflows(e) -> list:
+    """The constant computations of settled expression *e* that would
+    wrap, as (position, error message) pairs.  An ADD, SUB, MUL, DIV, MOD or
+    EXPT (operator or call) whose operands are all untyped constants
+    (``const``: literals and operators on them) and whose sig, the type its
+    context gives it, is an integer or bit string type reports, the
+    innermost first and its ancestors not again, an operand constant the
+    parameter type cannot hold (``200 / 2`` into a SINT: 200) or an exact
+    result its result type cannot hold (``(100 + 100) / 2`` into a SINT:
+    100 + 100 is 200); the exact result is IEC's (integer division
+    truncates: no error).  *e* itself is reported too: the caller leaves
+    out a position check_assign already refused (``s := 100 + 100``: 200 is
+    out of range for SINT)."""
+    out: list = []
+    _overflows(e, out)
+    return out
+
+
+def _overflows(e, out) -> bool:
+    """Appends the wraps under and at *e* to *out*; whether it found one."""
+    kids = []
+    if isinstance(e, ast.BinOp):
+        kids = [e.left, e.right]
+    elif isinstance(e, ast.UnOp):
+        kids = [e.operand]
+    elif isinstance(e, ast.Call):
+        kids = [a.value for a in e.args if a.value is not None]
+    found = False
+    for k in kids:
+        found = _overflows(k, out) or found
+    if found:
+        return True
+    fn = getattr(e, "fn", None) if isinstance(e, ast.BinOp) else \
+        e.target if isinstance(e, ast.Call) else None
+    sig = getattr(e, "sig", None)
+    if not isinstance(fn, stdlib.StdFunc) or fn.family not in _ARITH or sig is None:
+        return False
+    if isinstance(e, ast.Call):
+        if any(a.kind != "pos" and (a.name or "").upper() in ("EN", "ENO") for a in e.args):
+            return False
+        args = [a.value for a in e.args]
+    else:
+        args = [e.left, e.right]
+    vals = [getattr(a, "const", None) for a in args]
+    if not args or any(not _number(v) for v in vals):
+        return False        # a variable among them: run-time arithmetic, it wraps
+    res, ptypes = sig
+    if isinstance(res, LiteralT):
+        return False        # computed exactly
+    if not all(isinstance(getattr(a, "type", None), LiteralT) for a in args):
+        return False        # SINT#-127 * SINT#19: computed in the type its author wrote
+    for a, v, pt in zip(args, vals, ptypes):
+        lo_hi = _range(pt)
+        if lo_hi is not None and isinstance(v, int) and not lo_hi[0] <= v <= lo_hi[1]:
+            out.append((a.pos, f"{text(a)} is out of range for {pt.name}, the type {text(e)} is "
+                               "computed in (the type of its context); write the value or "
+                               "convert explicitly"))
+            return True
+    lo_hi = _range(res)
+    if lo_hi is None:
+        return False
+    v = vals[0]
+    try:
+        for w in vals[1:]:
+            v = fold.binary(_ARITH[fn.family], v, w)
+    except (ArithmeticError, ValueError):
+        return False        # a division by zero: the checker's own error
+    if isinstance(v, float):      # EXPT into an integer type
+        if lo_hi[0] <= v <= lo_hi[1]:
+            return False
+        shown = repr(v)
+    elif lo_hi[0] <= v <= lo_hi[1]:
+        return False
+    else:
+        shown = str(v)
+    out.append((e.pos, f"{text(e)} is {shown}, out of range for {res.name} (the type of its "
+                       "context); write the value or convert explicitly"))
+    return True
+
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _range(t):
+    base = getattr(t, "base", t)
+    if isinstance(base, Elementary) and base.cat in _RANGED and base.range is not None:
+        return base.range
+    return None
+
+
+def text(e) -> str:
+    """Expression *e* written back as source (for a message)."""
+    if isinstance(e, ast.Lit):
+        return f"{e.type_name}#{e.text}" if e.type_name and "#" not in e.text else e.text
+    if isinstance(e, ast.UnOp):
+        sep = " " if e.op.isalpha() else ""
+        return f"{e.op}{sep}{_paren(e.operand)}"
+    if isinstance(e, ast.BinOp):
+        return f"{_paren(e.left)} {e.op} {_paren(e.right)}"
+    if isinstance(e, ast.Call):
+        args = ", ".join(text(a.value) if a.kind == "pos" else
+                         f"{a.name} {'=>' if a.kind == 'out' else ':='} {text(a.value)}"
+                         for a in e.args if a.value is not None)
+        return f"{e.name}({args})"
+    if isinstance(e, ast.Ref):
+        return e.name
+    return "this expression"
+
+
+def _paren(e) -> str:
+    return f"({text(e)})" if isinstance(e, ast.BinOp) else text(e)
