@@ -23,6 +23,7 @@ from contextlib import contextmanager
 
 from .. import ast
 from . import fold
+from .expr import _literal_bits
 from .types import (ELEMENTARY, ERROR, ArrayT, Elementary, EnumT, ErrorT, FBType, LiteralT,
                     StringT, StructT, SubrangeT, assignable, not_bit_value)
 
@@ -325,7 +326,6 @@ class Constants:
             return None
         from ..diagnostics import Diagnostics
         from .body import BodyChecker
-        from .expr import _literal_bits     # expr imports declare, which imports this
         from .settle import overflows, settle
         from .symbols import POUInfo
         silent = Diagnostics()
